@@ -1,0 +1,158 @@
+/* sabodem: 3-D DEM of debris flow with boulders and driftwood against a grid-type sabo dam.
+ * The one public header. Units: SI everywhere. Frame: SPEC §8 (x downstream, z normal to bed).
+ * The API hands out stable global ids (gid), never pointers into arrays that get re-sorted. */
+#ifndef SABODEM_H
+#define SABODEM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef SD_VEC_TYPES_DEFINED
+#define SD_VEC_TYPES_DEFINED
+typedef struct {
+    double x, y, z;
+} sd_vec3;
+
+typedef struct {
+    double w, x, y, z; /* unit quaternion, w scalar part */
+} sd_quat;
+#endif
+
+/* Status codes: one table, with messages. */
+#define SD_STATUS_TABLE(X)                                                       \
+    X(SD_OK, "ok")                                                               \
+    X(SD_ERR_NOMEM, "out of memory")                                             \
+    X(SD_ERR_ARG, "invalid argument")                                            \
+    X(SD_ERR_IO, "input/output error")                                           \
+    X(SD_ERR_PARSE, "invalid scenario")                                          \
+    X(SD_ERR_UNSTABLE, "time step too large for the stiffness and smallest mass") \
+    X(SD_ERR_NONFINITE, "non-finite state (simulation blew up)")                 \
+    X(SD_ERR_OVERLAP, "overlap beyond half a radius (time step or stiffness)")   \
+    X(SD_ERR_NOTFOUND, "no such element")                                        \
+    X(SD_ERR_FORMAT, "corrupt or foreign file")                                  \
+    X(SD_ERR_INTERRUPTED, "interrupted")
+
+typedef enum {
+#define SD_X_ENUM(name, msg) name,
+    SD_STATUS_TABLE(SD_X_ENUM)
+#undef SD_X_ENUM
+        SD_STATUS_COUNT
+} sd_status;
+
+const char *sd_status_message(sd_status s);
+
+enum { SD_SHAPE_SPHERE = 0, SD_SHAPE_CYLINDER = 1 };
+
+/* Contact springs (SPEC §3). */
+typedef struct {
+    double k_n;      /* normal spring, N/m */
+    double k_s;      /* tangential spring, N/m */
+    double damping;  /* damping ratio h (dimensionless); c = 2h sqrt(m* k) */
+    double tan_phi;  /* friction coefficient tan(phi) */
+    double cohesion; /* c in the Mohr–Coulomb limit, N */
+} sd_contact_def;
+
+typedef struct {
+    sd_vec3 gravity;      /* m/s^2 */
+    double dt;            /* time step, s */
+    double margin;        /* candidate margin r_dam, m */
+    double t_reset;       /* candidate list rebuild interval, s */
+    sd_contact_def contact;
+    int threads;          /* OpenMP threads, 0 = runtime default */
+    int check_dt;         /* 1: refuse a dt that is unstable for k_n and the smallest mass */
+} sd_world_def;
+
+sd_world_def sd_world_def_default(void);
+
+typedef struct {
+    sd_vec3 pos;     /* m */
+    sd_vec3 vel;     /* m/s */
+    sd_vec3 omega;   /* rad/s */
+    double radius;   /* m */
+    double density;  /* kg/m^3 */
+    int fixed;       /* 1: never integrated (bed roughness) */
+    int tag;         /* user class (size class, 0..); reported back, no physics */
+} sd_sphere_def;
+
+typedef struct {
+    sd_vec3 pos;     /* centre, m */
+    sd_vec3 axis;    /* axis direction (normalised by the library) */
+    sd_vec3 vel;     /* m/s */
+    sd_vec3 omega;   /* rad/s */
+    double radius;   /* m */
+    double length;   /* full length 2l, m */
+    double density;  /* kg/m^3 */
+    int fixed;       /* 1: dam pipe */
+    int tag;
+} sd_cylinder_def;
+
+sd_sphere_def sd_sphere_def_default(void);
+sd_cylinder_def sd_cylinder_def_default(void);
+
+typedef struct {
+    int gid;
+    int shape;       /* SD_SHAPE_* */
+    int fixed, tag;
+    sd_vec3 pos, vel, omega, axis;
+    sd_vec3 force;   /* total contact force of the last step, N */
+    sd_vec3 torque;  /* total contact torque of the last step, N m */
+    double radius, length, mass;
+} sd_body_state;
+
+typedef struct sd_world sd_world;
+
+sd_status sd_world_create(const sd_world_def *def, sd_world **out);
+void sd_world_destroy(sd_world *w);
+
+/* Add elements; return the new gid (>= 0) or -(sd_status) on bad input. */
+int sd_world_add_sphere(sd_world *w, const sd_sphere_def *d);
+int sd_world_add_cylinder(sd_world *w, const sd_cylinder_def *d);
+/* Static triangle wall; group names a set (floor, walls, gate...) that can be disabled. */
+int sd_world_add_triangle(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, int group);
+sd_status sd_world_set_group_active(sd_world *w, int group, int active);
+sd_status sd_world_remove_body(sd_world *w, int gid);
+
+/* Validate settings against the elements present (time-step stability); called by step. */
+sd_status sd_world_check(const sd_world *w);
+sd_status sd_world_step(sd_world *w);
+sd_status sd_world_run(sd_world *w, long steps);
+
+double sd_world_time(const sd_world *w);
+long sd_world_step_count(const sd_world *w);
+int sd_world_body_count(const sd_world *w);
+int sd_world_triangle_count(const sd_world *w);
+/* Body by position in the store (0..count-1); the order may change between steps. */
+sd_status sd_world_body_at(const sd_world *w, int index, sd_body_state *out);
+sd_status sd_world_body(const sd_world *w, int gid, sd_body_state *out);
+/* Sum of contact forces on the active triangles of a group in the last step, N. */
+sd_vec3 sd_world_group_force(const sd_world *w, int group);
+/* Number of active contacts (manifold points) in the last step. */
+long sd_world_contact_count(const sd_world *w);
+/* Kinetic energy (translation + rotation) of the moving bodies, J. */
+double sd_world_kinetic_energy(const sd_world *w);
+/* Elastic energy stored in the normal and tangential springs, J. */
+double sd_world_spring_energy(const sd_world *w);
+/* Gravitational potential energy of the moving bodies (-m g.x), J. */
+double sd_world_potential_energy(const sd_world *w);
+/* Set an external force (fluid) on a body for the next steps, N. */
+sd_status sd_world_set_external_force(sd_world *w, int gid, sd_vec3 f);
+/* Force candidate lists to be rebuilt at every step (for tests). */
+void sd_world_set_rebuild_every_step(sd_world *w, int on);
+/* Hash of the full dynamic state (positions, velocities, attitudes, history). */
+uint64_t sd_world_state_hash(const sd_world *w);
+
+/* Phase timers (seconds, cumulative). */
+typedef struct {
+    double integrate, neighbor, contact, gather, other;
+    long rebuilds;
+} sd_world_timers;
+sd_world_timers sd_world_get_timers(const sd_world *w);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,105 @@
+/* The body store: one array per field, driven by a field table. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "world_internal.h"
+
+#define SD_BODY_FIELDS(X)            \
+    X(gid, int32_t)                  \
+    X(shape, uint8_t)                \
+    X(fixed, uint8_t)                \
+    X(tag, int32_t)                  \
+    X(pos, sd_vec3)                  \
+    X(vel, sd_vec3)                  \
+    X(omega, sd_vec3)                \
+    X(angmom, sd_vec3)               \
+    X(quat, sd_quat)                 \
+    X(axis, sd_vec3)                 \
+    X(force, sd_vec3)                \
+    X(torque, sd_vec3)               \
+    X(ext_force, sd_vec3)            \
+    X(pos_ref, sd_vec3)              \
+    X(axis_ref, sd_vec3)             \
+    X(radius, double)                \
+    X(hl, double)                    \
+    X(mass, double)                  \
+    X(inv_mass, double)              \
+    X(inv_i_ax, double)              \
+    X(inv_i_tr, double)              \
+    X(bound_r, double)
+
+void sd_bodies_for_each_field(sd_bodies *b, sd_field_fn fn, void *ctx)
+{
+#define SD_X_FIELD(name, type) fn((void *)&b->name, sizeof(type), #name, ctx);
+    SD_BODY_FIELDS(SD_X_FIELD)
+#undef SD_X_FIELD
+}
+
+typedef struct {
+    int cap;
+    int failed;
+} grow_ctx;
+
+static void grow_field(void *array, size_t elem, const char *name, void *ctx)
+{
+    (void)name;
+    grow_ctx *g = ctx;
+    void **p = array;
+    if (g->failed) return;
+    void *q = realloc(*p, (size_t)g->cap * elem);
+    if (!q) {
+        g->failed = 1;
+        return;
+    }
+    *p = q;
+}
+
+sd_status sd_bodies_reserve(sd_bodies *b, int cap)
+{
+    if (cap <= b->cap) return SD_OK;
+    int nc = b->cap > 0 ? b->cap : 64;
+    while (nc < cap) nc *= 2;
+    grow_ctx g = {nc, 0};
+    sd_bodies_for_each_field(b, grow_field, &g);
+    if (g.failed) return SD_ERR_NOMEM;
+    b->cap = nc;
+    return SD_OK;
+}
+
+static void free_field(void *array, size_t elem, const char *name, void *ctx)
+{
+    (void)elem;
+    (void)name;
+    (void)ctx;
+    void **p = array;
+    free(*p);
+    *p = NULL;
+}
+
+void sd_bodies_free(sd_bodies *b)
+{
+    sd_bodies_for_each_field(b, free_field, NULL);
+    b->n = b->cap = 0;
+}
+
+typedef struct {
+    int dst, src;
+} move_ctx;
+
+static void move_field(void *array, size_t elem, const char *name, void *ctx)
+{
+    (void)name;
+    move_ctx *m = ctx;
+    char *p = *(char **)array;
+    memcpy(p + (size_t)m->dst * elem, p + (size_t)m->src * elem, elem);
+}
+
+void sd_bodies_swap_remove(sd_bodies *b, int i)
+{
+    int last = b->n - 1;
+    if (i != last) {
+        move_ctx m = {i, last};
+        sd_bodies_for_each_field(b, move_field, &m);
+    }
+    b->n--;
+}

@@ -1,0 +1,238 @@
+/* Per-step contact evaluation: narrow phase through a shape-pair dispatch, history matched by
+ * feature, force per pair into the pair's own slot (race-free), then a per-body gather in a
+ * fixed order so that 1 and N threads give the same bits. */
+#include <string.h>
+
+#include "world_internal.h"
+
+void sd_pairlist_free(sd_pairlist *l)
+{
+    free(l->p);
+    free(l->out);
+    free(l->hist);
+    memset(l, 0, sizeof(*l));
+}
+
+static int narrow_bb(const sd_bodies *b, const sd_pair *p, sd_manifold *m)
+{
+    int a = p->a, c = p->b;
+    switch (p->kind) {
+    case SD_PAIR_SS:
+        return sd_geom_sphere_sphere(b->pos[a], b->radius[a], b->pos[c], b->radius[c], m);
+    case SD_PAIR_SC: {
+        sd_cyl cb = sd_body_cyl(b, c);
+        return sd_geom_sphere_cyl(b->pos[a], b->radius[a], &cb, m);
+    }
+    default: {
+        sd_cyl ca = sd_body_cyl(b, a), cb = sd_body_cyl(b, c);
+        return sd_geom_cyl_cyl(&ca, &cb, m);
+    }
+    }
+}
+
+static int narrow_bt(const sd_bodies *b, const sd_walls *wl, const sd_pair *p, sd_manifold *m)
+{
+    const sd_tri *t = &wl->tri[p->b];
+    if (!wl->active[p->b]) {
+        m->n = 0;
+        return 0;
+    }
+    if (p->kind == SD_PAIR_ST) return sd_geom_sphere_tri(b->pos[p->a], b->radius[p->a], t, m);
+    sd_cyl c = sd_body_cyl(b, p->a);
+    return sd_geom_cyl_tri(&c, t, m);
+}
+
+/* Apply the law to every point of a manifold, matching history slots by feature. */
+static int apply_manifold(const sd_world *w, const sd_law *law, const sd_manifold *m, int ia, int ib,
+                          int b_is_static, sd_hist *slots, int cap, sd_pair_out *out)
+{
+    const sd_bodies *b = &w->b;
+    sd_hist old[SD_MANIFOLD_MAX];
+    int nold = cap < SD_MANIFOLD_MAX ? cap : SD_MANIFOLD_MAX;
+    for (int s = 0; s < nold; s++) {
+        old[s] = slots[s];
+        slots[s].feature = -1;
+    }
+    sd_vec3 fa = v3(0, 0, 0), ta = v3(0, 0, 0), tb = v3(0, 0, 0);
+    double ma = b->mass[ia];
+    double m_eff;
+    if (b_is_static || b->fixed[ib]) m_eff = ma;
+    else if (b->fixed[ia]) m_eff = b->mass[ib];
+    else m_eff = ma * b->mass[ib] / (ma + b->mass[ib]);
+    int used = 0;
+    for (int k = 0; k < m->n && used < cap; k++) {
+        sd_vec3 ra = v3_sub(m->point[k], b->pos[ia]);
+        sd_vec3 va = v3_add(b->vel[ia], v3_cross(b->omega[ia], ra));
+        sd_vec3 vb = v3(0, 0, 0), rb = v3(0, 0, 0);
+        if (!b_is_static) {
+            rb = v3_sub(m->point[k], b->pos[ib]);
+            vb = v3_add(b->vel[ib], v3_cross(b->omega[ib], rb));
+        }
+        sd_vec3 shear = v3(0, 0, 0);
+        for (int s = 0; s < nold; s++)
+            if (old[s].feature == m->feature[k]) {
+                shear = old[s].shear;
+                break;
+            }
+        sd_vec3 f;
+        sd_contact_law(law, m_eff, m->normal[k], m->overlap[k], v3_sub(va, vb), w->def.dt, &shear, &f);
+        slots[used].feature = m->feature[k];
+        slots[used].shear = shear;
+        used++;
+        fa = v3_add(fa, f);
+        ta = v3_add(ta, v3_cross(ra, f));
+        if (!b_is_static) tb = v3_sub(tb, v3_cross(rb, f));
+    }
+    out->f_a = fa;
+    out->t_a = ta;
+    out->t_b = tb;
+    return used;
+}
+
+/* Global id of a triangle feature: kind in the low 2 bits (0 face, 1 edge, 2 vertex). */
+static int64_t tri_feature_gid(const sd_walls *wl, int t, int f)
+{
+    int tf = f & ((1 << SD_TRI_FEATURE_BITS) - 1);
+    int64_t part = (int64_t)(f >> SD_TRI_FEATURE_BITS) << 40;
+    if (tf == SD_TRI_FACE) return part | ((int64_t)t << 2);
+    if (tf < SD_TRI_VERT0) return part | ((int64_t)wl->edge_id[t][tf - SD_TRI_EDGE0] << 2) | 1;
+    return part | ((int64_t)wl->vert_id[t][tf - SD_TRI_VERT0] << 2) | 2;
+}
+
+static int tri_has_edge(const sd_walls *wl, int t, int32_t e)
+{
+    return wl->edge_id[t][0] == e || wl->edge_id[t][1] == e || wl->edge_id[t][2] == e;
+}
+
+static int tri_has_vert(const sd_walls *wl, int t, int32_t v)
+{
+    return wl->vert_id[t][0] == v || wl->vert_id[t][1] == v || wl->vert_id[t][2] == v;
+}
+
+/* Mesh rule: an edge contact is dropped when the same body part has a face contact on a
+ * triangle owning that edge, or the same edge was already taken; a vertex contact when a face
+ * or edge contact touches that vertex, or the vertex was already taken. A sphere rolling across
+ * a shared edge of a flat mesh thus always feels exactly one contact. */
+static void mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to)
+{
+    for (int p = from; p < to; p++) {
+        sd_manifold *m = &man[p];
+        for (int k = 0; k < m->n; k++) {
+            int f = m->feature[k];
+            int tf = f & ((1 << SD_TRI_FEATURE_BITS) - 1);
+            if (tf == SD_TRI_FACE) continue;
+            int part = f >> SD_TRI_FEATURE_BITS;
+            int t = pairs[p].b;
+            int64_t gid = tri_feature_gid(wl, t, f);
+            int is_edge = tf < SD_TRI_VERT0;
+            int32_t id = is_edge ? wl->edge_id[t][tf - SD_TRI_EDGE0] : wl->vert_id[t][tf - SD_TRI_VERT0];
+            int drop = 0;
+            for (int q = from; q < to && !drop; q++) {
+                const sd_manifold *o = &man[q];
+                int tq = pairs[q].b;
+                for (int kk = 0; kk < o->n && !drop; kk++) {
+                    if (q == p && kk == k) continue;
+                    int fo = o->feature[kk];
+                    if ((fo >> SD_TRI_FEATURE_BITS) != part) continue;
+                    int tfo = fo & ((1 << SD_TRI_FEATURE_BITS) - 1);
+                    if (tfo == SD_TRI_FACE) {
+                        drop = is_edge ? tri_has_edge(wl, tq, id) : tri_has_vert(wl, tq, id);
+                    } else if (tfo < SD_TRI_VERT0) {
+                        if (is_edge) {
+                            /* the same edge seen from the other triangle: keep the first */
+                            drop = (q < p || (q == p && kk < k)) && tri_feature_gid(wl, tq, fo) == gid;
+                        } else {
+                            int32_t e = wl->edge_id[tq][tfo - SD_TRI_EDGE0];
+                            drop = wl->edge_vert[e][0] == id || wl->edge_vert[e][1] == id;
+                        }
+                    } else if (!is_edge) {
+                        drop = (q < p || (q == p && kk < k)) && tri_feature_gid(wl, tq, fo) == gid;
+                    }
+                }
+            }
+            if (drop) {
+                /* mark dropped with overlap 0; compacted below */
+                m->overlap[k] = -1.0;
+            }
+        }
+    }
+    for (int p = from; p < to; p++) {
+        sd_manifold *m = &man[p];
+        int j = 0;
+        for (int k = 0; k < m->n; k++) {
+            if (m->overlap[k] < 0.0) continue;
+            if (j != k) {
+                m->normal[j] = m->normal[k];
+                m->point[j] = m->point[k];
+                m->overlap[j] = m->overlap[k];
+                m->feature[j] = m->feature[k];
+            }
+            j++;
+        }
+        m->n = j;
+    }
+}
+
+sd_status sd_contact_compute(sd_world *w)
+{
+    const sd_bodies *b = &w->b;
+    sd_law law = sd_law_make(&w->def.contact);
+    long count = 0;
+    const int nbb = w->bb.n;
+#pragma omp parallel for schedule(static) reduction(+ : count)
+    for (int k = 0; k < nbb; k++) {
+        const sd_pair *p = &w->bb.p[k];
+        sd_manifold m;
+        narrow_bb(b, p, &m);
+        count += apply_manifold(w, &law, &m, p->a, p->b, 0, &w->bb.hist[p->off], p->cap, &w->bb.out[k]);
+    }
+    const int nb = b->n;
+#pragma omp parallel for schedule(static) reduction(+ : count)
+    for (int i = 0; i < nb; i++) {
+        int from = w->csr.bt_start[i], to = w->csr.bt_start[i + 1];
+        if (from == to) continue;
+        int multi = 0;
+        for (int k = from; k < to; k++) multi += narrow_bt(b, &w->w, &w->bt.p[k], &w->bt_man[k]) > 0;
+        if (multi > 1) mesh_dedup(&w->w, w->bt.p, w->bt_man, from, to);
+        for (int k = from; k < to; k++) {
+            const sd_pair *p = &w->bt.p[k];
+            count += apply_manifold(w, &law, &w->bt_man[k], p->a, -1, 1, &w->bt.hist[p->off], p->cap,
+                                    &w->bt.out[k]);
+        }
+    }
+    w->contacts = count;
+    return SD_OK;
+}
+
+void sd_contact_gather(sd_world *w)
+{
+    sd_bodies *b = &w->b;
+    const int n = b->n;
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; i++) {
+        sd_vec3 f = v3(0, 0, 0), t = v3(0, 0, 0);
+        for (int k = w->csr.start[i]; k < w->csr.start[i + 1]; k++) {
+            int e = w->csr.idx[k];
+            const sd_pair_out *o = &w->bb.out[e >> 1];
+            if (e & 1) {
+                f = v3_sub(f, o->f_a);
+                t = v3_add(t, o->t_b);
+            } else {
+                f = v3_add(f, o->f_a);
+                t = v3_add(t, o->t_a);
+            }
+        }
+        for (int k = w->csr.bt_start[i]; k < w->csr.bt_start[i + 1]; k++) {
+            f = v3_add(f, w->bt.out[k].f_a);
+            t = v3_add(t, w->bt.out[k].t_a);
+        }
+        b->force[i] = f;
+        b->torque[i] = t;
+    }
+    /* loads on the walls, in pair order (serial: few pairs, fixed order) */
+    for (int t = 0; t < w->w.n; t++) w->w.force[t] = v3(0, 0, 0);
+    for (int k = 0; k < w->bt.n; k++) {
+        int t = w->bt.p[k].b;
+        w->w.force[t] = v3_sub(w->w.force[t], w->bt.out[k].f_a);
+    }
+}

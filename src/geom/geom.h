@@ -1,0 +1,72 @@
+/* Narrow-phase contact kernels (SPEC §4, Table 1).
+ *
+ * Every kernel is a pure function of two shapes. It fills a small manifold and returns the
+ * number of contacts (0 when the solids do not overlap). Conventions shared by all kernels:
+ *  - the pair is (A, B) in the order of the function name;
+ *  - normal[k] is a unit vector pointing from B towards A: the normal force on A is
+ *    +F_n normal[k], on B it is -F_n normal[k];
+ *  - overlap[k] > 0 is the penetration depth along normal[k] (deepest point);
+ *  - point[k] is the contact point, midway between the two surfaces along the normal;
+ *  - feature[k] is a small non-negative integer naming the pair of features in contact
+ *    (e.g. which end rim touches), stable while the configuration changes continuously,
+ *    so that tangential spring history can be matched from one step to the next.
+ *    Features of one manifold are distinct.
+ * No kernel may return NaN or Inf for finite input; degenerate configurations (parallel or
+ * coincident axes, a sphere centre on an axis, a disk flat on a plane) give finite answers.
+ */
+#ifndef SD_GEOM_H
+#define SD_GEOM_H
+
+#include "../core/vmath.h"
+
+#define SD_MANIFOLD_MAX 4
+
+typedef struct {
+    int n;
+    sd_vec3 normal[SD_MANIFOLD_MAX];
+    sd_vec3 point[SD_MANIFOLD_MAX];
+    double overlap[SD_MANIFOLD_MAX];
+    int feature[SD_MANIFOLD_MAX];
+} sd_manifold;
+
+/* Cylinder with flat end faces: centre c, unit axis a, radius r, half length hl. */
+typedef struct {
+    sd_vec3 c;
+    sd_vec3 a;
+    double r;
+    double hl;
+} sd_cyl;
+
+/* Triangle: vertices v[0..2] and unit normal n = normalize((v1-v0) x (v2-v0)).
+ * Triangles are two-sided: the normal of a face contact points to the side of A. */
+typedef struct {
+    sd_vec3 v[3];
+    sd_vec3 n;
+} sd_tri;
+
+/* Triangle feature codes returned by kernels against a triangle (low 3 bits of feature):
+ * 0 face, 1..3 edge k-1 (from v[k-1] to v[k % 3]), 4..6 vertex k-4. */
+enum { SD_TRI_FACE = 0, SD_TRI_EDGE0 = 1, SD_TRI_VERT0 = 4 };
+#define SD_TRI_FEATURE_BITS 3
+
+static inline void sd_tri_init(sd_tri *t, sd_vec3 a, sd_vec3 b, sd_vec3 c)
+{
+    t->v[0] = a;
+    t->v[1] = b;
+    t->v[2] = c;
+    t->n = v3_normalize(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+}
+
+/* Closest point on triangle t to p; *feature receives the triangle feature code of the
+ * region it lies in (face, edge or vertex). */
+sd_vec3 sd_geom_closest_on_tri(const sd_tri *t, sd_vec3 p, int *feature);
+
+int sd_geom_sphere_sphere(sd_vec3 ca, double ra, sd_vec3 cb, double rb, sd_manifold *m);
+/* feature = triangle feature code of the closest point. */
+int sd_geom_sphere_tri(sd_vec3 c, double r, const sd_tri *t, sd_manifold *m);
+int sd_geom_sphere_cyl(sd_vec3 c, double r, const sd_cyl *b, sd_manifold *m);
+int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m);
+/* feature = (cylinder feature << SD_TRI_FEATURE_BITS) | triangle feature code. */
+int sd_geom_cyl_tri(const sd_cyl *a, const sd_tri *t, sd_manifold *m);
+
+#endif

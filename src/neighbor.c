@@ -1,0 +1,405 @@
+/* Candidate search (SPEC §4, sec. 2.4 (9)): uniform cell grids, margin r_dam, rebuild every
+ * t_reset or when an element moved more than r_dam/2. Bodies and triangles have one grid each;
+ * an element is registered in every cell its margin-expanded box covers, and a pair is taken
+ * only in the lowest cell its two boxes share, so each pair is found once. Cost O(N). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "world_internal.h"
+
+static const int hist_cap_of_kind[SD_PAIR_KINDS] = {1, 1, SD_MANIFOLD_MAX, 1, SD_MANIFOLD_MAX};
+
+void sd_grid_free(sd_grid *g)
+{
+    free(g->cell_start);
+    free(g->items);
+    memset(g, 0, sizeof(*g));
+}
+
+static void body_box(const sd_bodies *b, int i, double half_margin, sd_vec3 *lo, sd_vec3 *hi)
+{
+    sd_vec3 c = b->pos[i];
+    double r = b->radius[i];
+    sd_vec3 e;
+    if (b->shape[i] == SD_SHAPE_SPHERE) {
+        e = v3(r, r, r);
+    } else {
+        /* exact box of a cylinder: hl|a_k| + r sqrt(1 - a_k^2) per axis */
+        sd_vec3 a = b->axis[i];
+        double hl = b->hl[i];
+        e = v3(hl * fabs(a.x) + r * sqrt(fmax(0.0, 1.0 - a.x * a.x)),
+               hl * fabs(a.y) + r * sqrt(fmax(0.0, 1.0 - a.y * a.y)),
+               hl * fabs(a.z) + r * sqrt(fmax(0.0, 1.0 - a.z * a.z)));
+    }
+    e = v3_add(e, v3(half_margin, half_margin, half_margin));
+    *lo = v3_sub(c, e);
+    *hi = v3_add(c, e);
+}
+
+static void tri_box(const sd_tri *t, double half_margin, sd_vec3 *lo, sd_vec3 *hi)
+{
+    sd_vec3 l = t->v[0], h = t->v[0];
+    for (int k = 1; k < 3; k++) {
+        l = v3(fmin(l.x, t->v[k].x), fmin(l.y, t->v[k].y), fmin(l.z, t->v[k].z));
+        h = v3(fmax(h.x, t->v[k].x), fmax(h.y, t->v[k].y), fmax(h.z, t->v[k].z));
+    }
+    *lo = v3_sub(l, v3(half_margin, half_margin, half_margin));
+    *hi = v3_add(h, v3(half_margin, half_margin, half_margin));
+}
+
+static int clampi(long v, int lo, int hi) { return v < lo ? lo : (v > hi ? hi : (int)v); }
+
+static void cell_range(const sd_grid *g, sd_vec3 lo, sd_vec3 hi, int32_t r[6])
+{
+    r[0] = clampi((long)floor((lo.x - g->lo.x) / g->cell), 0, g->nx - 1);
+    r[1] = clampi((long)floor((lo.y - g->lo.y) / g->cell), 0, g->ny - 1);
+    r[2] = clampi((long)floor((lo.z - g->lo.z) / g->cell), 0, g->nz - 1);
+    r[3] = clampi((long)floor((hi.x - g->lo.x) / g->cell), 0, g->nx - 1);
+    r[4] = clampi((long)floor((hi.y - g->lo.y) / g->cell), 0, g->ny - 1);
+    r[5] = clampi((long)floor((hi.z - g->lo.z) / g->cell), 0, g->nz - 1);
+}
+
+/* Size the grid over [lo, hi] with cells of at least `cell`, enlarged if the count would
+ * exceed max_cells (an element flung far away must not make the grid explode). */
+static sd_status grid_layout(sd_grid *g, sd_vec3 lo, sd_vec3 hi, double cell, long max_cells)
+{
+    sd_vec3 ext = v3_sub(hi, lo);
+    for (;;) {
+        double nx = floor(ext.x / cell) + 1, ny = floor(ext.y / cell) + 1, nz = floor(ext.z / cell) + 1;
+        if (nx * ny * nz <= (double)max_cells) {
+            g->nx = (int)nx;
+            g->ny = (int)ny;
+            g->nz = (int)nz;
+            break;
+        }
+        cell *= 1.5;
+    }
+    g->cell = cell;
+    g->lo = lo;
+    int ncell = g->nx * g->ny * g->nz;
+    if (sd_grow((void **)&g->cell_start, &g->cap_cells, ncell + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    memset(g->cell_start, 0, (size_t)(ncell + 1) * sizeof(int32_t));
+    return SD_OK;
+}
+
+/* Counting sort of items into cells given each item's range. */
+static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const uint8_t *skip)
+{
+    int ncell = g->nx * g->ny * g->nz;
+    long total = 0;
+    for (int i = 0; i < n; i++) {
+        if (skip && skip[i]) continue;
+        const int32_t *r = range[i];
+        for (int z = r[2]; z <= r[5]; z++)
+            for (int y = r[1]; y <= r[4]; y++)
+                for (int x = r[0]; x <= r[3]; x++) g->cell_start[(z * g->ny + y) * g->nx + x + 1]++;
+        total += (long)(r[3] - r[0] + 1) * (r[4] - r[1] + 1) * (r[5] - r[2] + 1);
+    }
+    for (int c = 0; c < ncell; c++) g->cell_start[c + 1] += g->cell_start[c];
+    if (sd_grow((void **)&g->items, &g->cap_items, (int)total + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    /* fill using cell_start as a cursor, then shift back */
+    for (int i = 0; i < n; i++) {
+        if (skip && skip[i]) continue;
+        const int32_t *r = range[i];
+        for (int z = r[2]; z <= r[5]; z++)
+            for (int y = r[1]; y <= r[4]; y++)
+                for (int x = r[0]; x <= r[3]; x++) g->items[g->cell_start[(z * g->ny + y) * g->nx + x]++] = i;
+    }
+    for (int c = ncell; c > 0; c--) g->cell_start[c] = g->cell_start[c - 1];
+    g->cell_start[0] = 0;
+    return SD_OK;
+}
+
+static uint64_t pair_key(int32_t gid_a, int kind, int32_t id_b)
+{
+    return ((uint64_t)(uint32_t)gid_a << 32) | ((uint64_t)(uint32_t)kind << 29) | (uint64_t)(uint32_t)id_b;
+}
+
+typedef struct {
+    uint64_t key;
+    sd_hist h;
+} keyed_hist;
+
+static int cmp_keyed(const void *pa, const void *pb)
+{
+    const keyed_hist *a = pa, *b = pb;
+    if (a->key != b->key) return a->key < b->key ? -1 : 1;
+    return a->h.feature - b->h.feature;
+}
+
+static uint64_t key_of(const sd_world *w, const sd_pair *p)
+{
+    int32_t ida = w->b.gid[p->a];
+    int32_t idb = (p->kind == SD_PAIR_ST || p->kind == SD_PAIR_CT) ? p->b : w->b.gid[p->b];
+    return pair_key(ida, p->kind, idb);
+}
+
+sd_status sd_neighbor_collect_history(sd_world *w)
+{
+    if (w->keys_collected) return SD_OK;
+    int count = 0;
+    const sd_pairlist *lists[2] = {&w->bb, &w->bt};
+    for (int l = 0; l < 2; l++)
+        for (int k = 0; k < lists[l]->nh; k++) count += lists[l]->hist[k].feature >= 0;
+    keyed_hist *kh = malloc((size_t)(count > 0 ? count : 1) * sizeof(*kh));
+    if (!kh) return SD_ERR_NOMEM;
+    int m = 0;
+    for (int l = 0; l < 2; l++) {
+        const sd_pairlist *pl = lists[l];
+        for (int k = 0; k < pl->n; k++) {
+            const sd_pair *p = &pl->p[k];
+            uint64_t key = key_of(w, p);
+            for (int s = 0; s < p->cap; s++) {
+                const sd_hist *h = &pl->hist[p->off + s];
+                if (h->feature < 0) continue;
+                kh[m].key = key;
+                kh[m].h = *h;
+                m++;
+            }
+        }
+    }
+    qsort(kh, (size_t)m, sizeof(*kh), cmp_keyed);
+    if (sd_grow((void **)&w->old_keys, &w->old_cap, m + 1, sizeof(uint64_t)) ||
+        sd_grow((void **)&w->old_hist, &w->old_hist_cap, m + 1, sizeof(sd_hist))) {
+        free(kh);
+        return SD_ERR_NOMEM;
+    }
+    for (int i = 0; i < m; i++) {
+        w->old_keys[i] = kh[i].key;
+        w->old_hist[i] = kh[i].h;
+    }
+    free(kh);
+    w->n_old = m;
+    w->keys_collected = 1;
+    w->bb.n = w->bt.n = 0;
+    w->bb.nh = w->bt.nh = 0;
+    return SD_OK;
+}
+
+static sd_status push_pair(sd_pairlist *l, int32_t a, int32_t b, int kind)
+{
+    if (sd_grow((void **)&l->p, &l->cap, l->n + 1, sizeof(sd_pair))) return SD_ERR_NOMEM;
+    sd_pair *p = &l->p[l->n++];
+    p->a = a;
+    p->b = b;
+    p->kind = (int16_t)kind;
+    p->cap = (int16_t)hist_cap_of_kind[kind];
+    p->off = l->nh;
+    l->nh += p->cap;
+    return SD_OK;
+}
+
+/* Put carried history into the new lists' slots. */
+static sd_status restore_history(sd_world *w, sd_pairlist *l)
+{
+    if (sd_grow((void **)&l->hist, &l->hcap, l->nh + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
+    if (sd_grow((void **)&l->out, &l->out_cap, l->n + 1, sizeof(sd_pair_out))) return SD_ERR_NOMEM;
+    for (int k = 0; k < l->n; k++) {
+        const sd_pair *p = &l->p[k];
+        for (int s = 0; s < p->cap; s++) l->hist[p->off + s].feature = -1;
+        if (w->n_old == 0) continue;
+        uint64_t key = key_of(w, p);
+        int lo = 0, hi = w->n_old; /* first index with old_keys >= key */
+        while (lo < hi) {
+            int mid = (lo + hi) / 2;
+            if (w->old_keys[mid] < key) lo = mid + 1;
+            else hi = mid;
+        }
+        for (int s = 0; lo < w->n_old && w->old_keys[lo] == key && s < p->cap; lo++, s++)
+            l->hist[p->off + s] = w->old_hist[lo];
+    }
+    return SD_OK;
+}
+
+static int boxes_overlap(const int32_t *a, const int32_t *b)
+{
+    return a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] && a[2] <= b[5] && b[2] <= a[5];
+}
+
+static sd_status rebuild_triangle_grid(sd_world *w, double cell)
+{
+    sd_walls *wl = &w->w;
+    double hm = 0.5 * w->def.margin;
+    sd_vec3 lo = v3(1e300, 1e300, 1e300), hi = v3(-1e300, -1e300, -1e300);
+    int any = 0;
+    for (int t = 0; t < wl->n; t++) {
+        if (!wl->active[t]) continue;
+        sd_vec3 l, h;
+        tri_box(&wl->tri[t], hm, &l, &h);
+        lo = v3(fmin(lo.x, l.x), fmin(lo.y, l.y), fmin(lo.z, l.z));
+        hi = v3(fmax(hi.x, h.x), fmax(hi.y, h.y), fmax(hi.z, h.z));
+        any = 1;
+    }
+    if (!any) lo = hi = v3(0, 0, 0);
+    sd_status st = grid_layout(&w->tgrid, lo, hi, cell, 2000000);
+    if (st) return st;
+    if (sd_grow((void **)&w->trange, &w->trange_cap, wl->n + 1, sizeof(*w->trange))) return SD_ERR_NOMEM;
+    for (int t = 0; t < wl->n; t++) {
+        sd_vec3 l, h;
+        tri_box(&wl->tri[t], hm, &l, &h);
+        cell_range(&w->tgrid, l, h, w->trange[t]);
+    }
+    uint8_t *skip = malloc((size_t)(wl->n + 1));
+    if (!skip) return SD_ERR_NOMEM;
+    for (int t = 0; t < wl->n; t++) skip[t] = !wl->active[t];
+    st = grid_fill(&w->tgrid, wl->n, (const int32_t(*)[6])w->trange, skip);
+    free(skip);
+    if (st) return st;
+    st = sd_walls_weld(wl);
+    wl->dirty = 0;
+    return st;
+}
+
+int sd_neighbor_needs_rebuild(const sd_world *w)
+{
+    return w->need_rebuild || w->rebuild_every_step || w->w.dirty ||
+           w->time - w->last_rebuild_time >= w->def.t_reset - 0.5 * w->def.dt;
+}
+
+sd_status sd_neighbor_rebuild(sd_world *w)
+{
+    sd_bodies *b = &w->b;
+    sd_status st = sd_neighbor_collect_history(w);
+    if (st) return st;
+    w->keys_collected = 0;
+    double hm = 0.5 * w->def.margin;
+
+    /* cell size: the largest sphere diameter plus the margin; cylinders span several cells */
+    double dmax = 0.0;
+    for (int i = 0; i < b->n; i++) dmax = fmax(dmax, 2.0 * b->radius[i]);
+    if (dmax <= 0.0) dmax = 0.01;
+    double cell = dmax + w->def.margin;
+
+    if (w->w.dirty) {
+        st = rebuild_triangle_grid(w, cell);
+        if (st) return st;
+    }
+
+    sd_vec3 lo = v3(1e300, 1e300, 1e300), hi = v3(-1e300, -1e300, -1e300);
+    for (int i = 0; i < b->n; i++) {
+        sd_vec3 l, h;
+        body_box(b, i, hm, &l, &h);
+        lo = v3(fmin(lo.x, l.x), fmin(lo.y, l.y), fmin(lo.z, l.z));
+        hi = v3(fmax(hi.x, h.x), fmax(hi.y, h.y), fmax(hi.z, h.z));
+    }
+    if (b->n == 0) lo = hi = v3(0, 0, 0);
+    long max_cells = 8L * b->n + 4096;
+    st = grid_layout(&w->grid, lo, hi, cell, max_cells);
+    if (st) return st;
+    if (sd_grow((void **)&w->range, &w->range_cap, b->n + 1, sizeof(*w->range))) return SD_ERR_NOMEM;
+    for (int i = 0; i < b->n; i++) {
+        sd_vec3 l, h;
+        body_box(b, i, hm, &l, &h);
+        cell_range(&w->grid, l, h, w->range[i]);
+    }
+    st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL);
+    if (st) return st;
+
+    /* body–body candidates, generated in body order */
+    sd_grid *g = &w->grid;
+    w->bb.n = 0;
+    w->bb.nh = 0;
+    for (int i = 0; i < b->n; i++) {
+        const int32_t *ri = w->range[i];
+        for (int z = ri[2]; z <= ri[5]; z++)
+            for (int y = ri[1]; y <= ri[4]; y++)
+                for (int x = ri[0]; x <= ri[3]; x++) {
+                    int c = (z * g->ny + y) * g->nx + x;
+                    for (int k = g->cell_start[c]; k < g->cell_start[c + 1]; k++) {
+                        int j = g->items[k];
+                        if (j <= i) continue;
+                        if (b->fixed[i] && b->fixed[j]) continue;
+                        const int32_t *rj = w->range[j];
+                        /* take the pair only in the lowest cell the two ranges share */
+                        if (x != (ri[0] > rj[0] ? ri[0] : rj[0]) || y != (ri[1] > rj[1] ? ri[1] : rj[1]) ||
+                            z != (ri[2] > rj[2] ? ri[2] : rj[2]))
+                            continue;
+                        double reach = b->bound_r[i] + b->bound_r[j] + w->def.margin;
+                        if (v3_norm2(v3_sub(b->pos[i], b->pos[j])) > reach * reach) continue;
+                        sd_vec3 li, hi_, lj, hj;
+                        body_box(b, i, hm, &li, &hi_);
+                        body_box(b, j, hm, &lj, &hj);
+                        if (li.x > hj.x || lj.x > hi_.x || li.y > hj.y || lj.y > hi_.y || li.z > hj.z || lj.z > hi_.z)
+                            continue;
+                        int a = i, bb = j;
+                        if (b->shape[a] > b->shape[bb] || (b->shape[a] == b->shape[bb] && b->gid[a] > b->gid[bb])) {
+                            a = j;
+                            bb = i;
+                        }
+                        int kind = b->shape[a] == SD_SHAPE_SPHERE
+                                       ? (b->shape[bb] == SD_SHAPE_SPHERE ? SD_PAIR_SS : SD_PAIR_SC)
+                                       : SD_PAIR_CC;
+                        if ((st = push_pair(&w->bb, a, bb, kind))) return st;
+                    }
+                }
+    }
+
+    /* body–triangle candidates, grouped by body (the mesh dedup in contact.c relies on it) */
+    if (sd_grow((void **)&w->csr.bt_start, &w->csr.cap_bt_start, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    w->bt.n = 0;
+    w->bt.nh = 0;
+    sd_grid *tg = &w->tgrid;
+    for (int i = 0; i < b->n; i++) {
+        w->csr.bt_start[i] = w->bt.n;
+        if (b->fixed[i] || w->w.n == 0) continue;
+        sd_vec3 l, h;
+        body_box(b, i, hm, &l, &h);
+        sd_vec3 tlo = tg->lo;
+        sd_vec3 thi = v3_add(tg->lo, v3(tg->nx * tg->cell, tg->ny * tg->cell, tg->nz * tg->cell));
+        if (h.x < tlo.x || h.y < tlo.y || h.z < tlo.z || l.x > thi.x || l.y > thi.y || l.z > thi.z) continue;
+        int32_t ri[6];
+        cell_range(tg, l, h, ri);
+        for (int z = ri[2]; z <= ri[5]; z++)
+            for (int y = ri[1]; y <= ri[4]; y++)
+                for (int x = ri[0]; x <= ri[3]; x++) {
+                    int c = (z * tg->ny + y) * tg->nx + x;
+                    for (int k = tg->cell_start[c]; k < tg->cell_start[c + 1]; k++) {
+                        int t = tg->items[k];
+                        const int32_t *rt = w->trange[t];
+                        if (!boxes_overlap(ri, rt)) continue;
+                        if (x != (ri[0] > rt[0] ? ri[0] : rt[0]) || y != (ri[1] > rt[1] ? ri[1] : rt[1]) ||
+                            z != (ri[2] > rt[2] ? ri[2] : rt[2]))
+                            continue;
+                        const sd_tri *tr = &w->w.tri[t];
+                        double s = v3_dot(v3_sub(b->pos[i], tr->v[0]), tr->n);
+                        if (fabs(s) > b->bound_r[i] + w->def.margin) continue;
+                        int q;
+                        sd_vec3 cp = sd_geom_closest_on_tri(tr, b->pos[i], &q);
+                        double reach = b->bound_r[i] + w->def.margin;
+                        if (v3_norm2(v3_sub(cp, b->pos[i])) > reach * reach) continue;
+                        int kind = b->shape[i] == SD_SHAPE_SPHERE ? SD_PAIR_ST : SD_PAIR_CT;
+                        if ((st = push_pair(&w->bt, i, t, kind))) return st;
+                    }
+                }
+    }
+    w->csr.bt_start[b->n] = w->bt.n;
+
+    if ((st = restore_history(w, &w->bb))) return st;
+    if ((st = restore_history(w, &w->bt))) return st;
+    w->n_old = 0;
+
+    /* CSR of body–body pairs per body, in pair order, for the race-free gather */
+    if (sd_grow((void **)&w->csr.start, &w->csr.cap_start, b->n + 2, sizeof(int32_t)) ||
+        sd_grow((void **)&w->csr.idx, &w->csr.cap_idx, 2 * w->bb.n + 1, sizeof(int32_t)))
+        return SD_ERR_NOMEM;
+    memset(w->csr.start, 0, (size_t)(b->n + 2) * sizeof(int32_t));
+    for (int k = 0; k < w->bb.n; k++) {
+        w->csr.start[w->bb.p[k].a + 2]++;
+        w->csr.start[w->bb.p[k].b + 2]++;
+    }
+    for (int i = 0; i < b->n; i++) w->csr.start[i + 2] += w->csr.start[i + 1];
+    for (int k = 0; k < w->bb.n; k++) {
+        w->csr.idx[w->csr.start[w->bb.p[k].a + 1]++] = 2 * k;
+        w->csr.idx[w->csr.start[w->bb.p[k].b + 1]++] = 2 * k + 1;
+    }
+    if (sd_grow((void **)&w->bt_man, &w->bt_man_cap, w->bt.n + 1, sizeof(sd_manifold))) return SD_ERR_NOMEM;
+
+    for (int i = 0; i < b->n; i++) {
+        b->pos_ref[i] = b->pos[i];
+        b->axis_ref[i] = b->axis[i];
+    }
+    w->last_rebuild_time = w->time;
+    w->need_rebuild = 0;
+    w->timers.rebuilds++;
+    return SD_OK;
+}

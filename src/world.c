@@ -1,0 +1,427 @@
+/* The world owns every store; sd_world_step() is a short list of timed phases. */
+#include <string.h>
+
+#include "world_internal.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+sd_world_def sd_world_def_default(void)
+{
+    sd_world_def d;
+    memset(&d, 0, sizeof(d));
+    d.gravity = v3(9.81 * sin(15.0 * M_PI / 180.0), 0.0, -9.81 * cos(15.0 * M_PI / 180.0));
+    d.dt = 1.0e-5;
+    d.margin = 5.0e-3;
+    d.t_reset = 1.0e-3;
+    d.contact.k_n = 1.0e4;
+    d.contact.k_s = 4.0e3;
+    d.contact.damping = 0.2;
+    d.contact.tan_phi = 0.404;
+    d.contact.cohesion = 0.0;
+    d.threads = 0;
+    d.check_dt = 1;
+    return d;
+}
+
+sd_sphere_def sd_sphere_def_default(void)
+{
+    sd_sphere_def d;
+    memset(&d, 0, sizeof(d));
+    d.radius = 0.005;
+    d.density = 1900.0;
+    return d;
+}
+
+sd_cylinder_def sd_cylinder_def_default(void)
+{
+    sd_cylinder_def d;
+    memset(&d, 0, sizeof(d));
+    d.axis = v3(1.0, 0.0, 0.0);
+    d.radius = 0.005;
+    d.length = 0.1;
+    d.density = 800.0;
+    return d;
+}
+
+static int finite3(sd_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
+sd_status sd_world_create(const sd_world_def *def, sd_world **out)
+{
+    *out = NULL;
+    if (!def || !(def->dt > 0.0) || !(def->margin >= 0.0) || !(def->t_reset > 0.0) || !(def->contact.k_n > 0.0) ||
+        !(def->contact.k_s >= 0.0) || !(def->contact.damping >= 0.0) || !(def->contact.tan_phi >= 0.0) ||
+        !(def->contact.cohesion >= 0.0) || !finite3(def->gravity))
+        return SD_ERR_ARG;
+    sd_world *w = calloc(1, sizeof(*w));
+    if (!w) return SD_ERR_NOMEM;
+    w->def = *def;
+    w->need_rebuild = 1;
+#ifdef _OPENMP
+    if (def->threads > 0) omp_set_num_threads(def->threads);
+#endif
+    *out = w;
+    return SD_OK;
+}
+
+void sd_world_destroy(sd_world *w)
+{
+    if (!w) return;
+    sd_bodies_free(&w->b);
+    sd_walls_free(&w->w);
+    sd_pairlist_free(&w->bb);
+    sd_pairlist_free(&w->bt);
+    sd_grid_free(&w->grid);
+    sd_grid_free(&w->tgrid);
+    free(w->bt_man);
+    free(w->csr.start);
+    free(w->csr.idx);
+    free(w->csr.bt_start);
+    free(w->gid_map);
+    free(w->old_hist);
+    free(w->old_keys);
+    free(w->range);
+    free(w->trange);
+    free(w);
+}
+
+static int add_body(sd_world *w, int shape, sd_vec3 pos, sd_vec3 vel, sd_vec3 omega, sd_vec3 axis, double r,
+                    double hl, double density, int fixed, int tag)
+{
+    if (!(r > 0.0) || !(density > 0.0) || !(hl >= 0.0) || !finite3(pos) || !finite3(vel) || !finite3(omega) ||
+        !finite3(axis) || !isfinite(r) || !isfinite(hl) || !isfinite(density))
+        return -SD_ERR_ARG;
+    if (shape == SD_SHAPE_CYLINDER && !(v3_norm(axis) > 0.0)) return -SD_ERR_ARG;
+    /* history taken before the store grows; pairs are rebuilt before the next force pass */
+    if (sd_neighbor_collect_history(w)) return -SD_ERR_NOMEM;
+    sd_bodies *b = &w->b;
+    if (sd_bodies_reserve(b, b->n + 1)) return -SD_ERR_NOMEM;
+    if (sd_grow((void **)&w->gid_map, &w->gid_cap, w->next_gid + 1, sizeof(int32_t))) return -SD_ERR_NOMEM;
+    int i = b->n++;
+    int gid = w->next_gid++;
+    w->gid_map[gid] = i;
+    b->gid[i] = gid;
+    b->shape[i] = (uint8_t)shape;
+    b->fixed[i] = (uint8_t)(fixed != 0);
+    b->tag[i] = tag;
+    b->pos[i] = pos;
+    b->vel[i] = fixed ? v3(0, 0, 0) : vel;
+    b->force[i] = b->torque[i] = b->ext_force[i] = v3(0, 0, 0);
+    b->radius[i] = r;
+    b->hl[i] = hl;
+    double mass, i_ax, i_tr;
+    if (shape == SD_SHAPE_SPHERE) {
+        mass = density * 4.0 / 3.0 * M_PI * r * r * r;
+        i_ax = i_tr = 0.4 * mass * r * r;
+        b->axis[i] = v3(0.0, 0.0, 1.0);
+        b->quat[i] = quat_identity();
+        b->bound_r[i] = r;
+    } else {
+        double len = 2.0 * hl;
+        mass = density * M_PI * r * r * len;
+        i_ax = 0.5 * mass * r * r;
+        i_tr = mass * (3.0 * r * r + len * len) / 12.0;
+        sd_vec3 a = v3_normalize(axis);
+        b->quat[i] = quat_from_z_to(a);
+        b->axis[i] = quat_rotate(b->quat[i], v3(0.0, 0.0, 1.0));
+        b->bound_r[i] = sqrt(r * r + hl * hl);
+    }
+    b->mass[i] = mass;
+    b->inv_mass[i] = 1.0 / mass;
+    b->inv_i_ax[i] = 1.0 / i_ax;
+    b->inv_i_tr[i] = 1.0 / i_tr;
+    if (fixed) omega = v3(0, 0, 0);
+    if (shape == SD_SHAPE_SPHERE) {
+        b->omega[i] = omega;
+        b->angmom[i] = v3_scale(omega, i_ax);
+    } else {
+        /* L = A I Aᵀ ω */
+        sd_vec3 a = b->axis[i];
+        double wa = v3_dot(omega, a);
+        sd_vec3 L = v3_madd(v3_scale(omega, i_tr), a, (i_ax - i_tr) * wa);
+        b->angmom[i] = L;
+        b->omega[i] = omega;
+    }
+    b->pos_ref[i] = pos;
+    b->axis_ref[i] = b->axis[i];
+    w->need_rebuild = 1;
+    w->checked = 0;
+    return gid;
+}
+
+int sd_world_add_sphere(sd_world *w, const sd_sphere_def *d)
+{
+    return add_body(w, SD_SHAPE_SPHERE, d->pos, d->vel, d->omega, v3(0, 0, 1), d->radius, 0.0, d->density, d->fixed,
+                    d->tag);
+}
+
+int sd_world_add_cylinder(sd_world *w, const sd_cylinder_def *d)
+{
+    if (!(d->length > 0.0)) return -SD_ERR_ARG;
+    return add_body(w, SD_SHAPE_CYLINDER, d->pos, d->vel, d->omega, d->axis, d->radius, 0.5 * d->length, d->density,
+                    d->fixed, d->tag);
+}
+
+int sd_world_add_triangle(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, int group)
+{
+    if (!finite3(a) || !finite3(b) || !finite3(c)) return -SD_ERR_ARG;
+    if (!(v3_norm(v3_cross(v3_sub(b, a), v3_sub(c, a))) > 0.0)) return -SD_ERR_ARG; /* degenerate */
+    if (sd_neighbor_collect_history(w)) return -SD_ERR_NOMEM;
+    sd_walls *wl = &w->w;
+    if (sd_walls_reserve(wl, wl->n + 1)) return -SD_ERR_NOMEM;
+    int t = wl->n++;
+    sd_tri_init(&wl->tri[t], a, b, c);
+    wl->group[t] = group;
+    wl->active[t] = 1;
+    wl->force[t] = v3(0, 0, 0);
+    wl->dirty = 1;
+    w->need_rebuild = 1;
+    return t;
+}
+
+sd_status sd_world_set_group_active(sd_world *w, int group, int active)
+{
+    int found = 0;
+    for (int t = 0; t < w->w.n; t++)
+        if (w->w.group[t] == group) {
+            w->w.active[t] = (uint8_t)(active != 0);
+            found = 1;
+        }
+    if (!found) return SD_ERR_NOTFOUND;
+    /* pairs keep triangle indices; the grid is rebuilt without the inactive ones */
+    sd_status st = sd_neighbor_collect_history(w);
+    if (st) return st;
+    w->w.dirty = 1;
+    w->need_rebuild = 1;
+    return SD_OK;
+}
+
+sd_status sd_world_remove_body(sd_world *w, int gid)
+{
+    if (gid < 0 || gid >= w->next_gid || w->gid_map[gid] < 0) return SD_ERR_NOTFOUND;
+    sd_status st = sd_neighbor_collect_history(w);
+    if (st) return st;
+    int i = w->gid_map[gid];
+    int last = w->b.n - 1;
+    sd_bodies_swap_remove(&w->b, i);
+    if (i != last) w->gid_map[w->b.gid[i]] = i;
+    w->gid_map[gid] = -1;
+    w->need_rebuild = 1;
+    return SD_OK;
+}
+
+/* Stability: the stiffest contact (k_n against the smallest effective mass, m/2 for two equal
+ * smallest bodies) must be resolved by at least 8 steps per half period π/ω0; leapfrog itself
+ * goes unstable at Δt = 2/ω0 ≈ 0.64 half periods. */
+sd_status sd_world_check(const sd_world *w)
+{
+    if (!w->def.check_dt) return SD_OK;
+    double mmin = INFINITY;
+    for (int i = 0; i < w->b.n; i++)
+        if (!w->b.fixed[i] && w->b.mass[i] < mmin) mmin = w->b.mass[i];
+    if (!isfinite(mmin)) return SD_OK;
+    double omega0 = sqrt(w->def.contact.k_n / (0.5 * mmin));
+    double t_half = M_PI / omega0;
+    if (w->def.dt > t_half / 8.0) return SD_ERR_UNSTABLE;
+    return SD_OK;
+}
+
+double sd_world_max_stable_dt(const sd_world *w);
+double sd_world_max_stable_dt(const sd_world *w)
+{
+    double mmin = INFINITY;
+    for (int i = 0; i < w->b.n; i++)
+        if (!w->b.fixed[i] && w->b.mass[i] < mmin) mmin = w->b.mass[i];
+    if (!isfinite(mmin)) return INFINITY;
+    return M_PI / sqrt(w->def.contact.k_n / (0.5 * mmin)) / 8.0;
+}
+
+static sd_status health(const sd_world *w)
+{
+    const sd_bodies *b = &w->b;
+    for (int i = 0; i < b->n; i++)
+        if (!finite3(b->pos[i]) || !finite3(b->vel[i]) || !finite3(b->omega[i])) return SD_ERR_NONFINITE;
+    return SD_OK;
+}
+
+sd_status sd_world_step(sd_world *w)
+{
+    sd_status st;
+    if (!w->checked) {
+        if ((st = sd_world_check(w))) return st;
+        w->checked = 1;
+    }
+    double t0 = sd_now();
+    if (sd_neighbor_needs_rebuild(w)) {
+        if ((st = sd_neighbor_rebuild(w))) return st;
+    }
+    double t1 = sd_now();
+    if ((st = sd_contact_compute(w))) return st;
+    double t2 = sd_now();
+    sd_contact_gather(w);
+    double t3 = sd_now();
+    sd_integrate(w);
+    double t4 = sd_now();
+    w->step++;
+    w->time = (double)w->step * w->def.dt;
+    w->timers.neighbor += t1 - t0;
+    w->timers.contact += t2 - t1;
+    w->timers.gather += t3 - t2;
+    w->timers.integrate += t4 - t3;
+    if ((w->step & 1023) == 0) {
+        st = health(w);
+        w->timers.other += sd_now() - t4;
+        if (st) return st;
+    }
+    return SD_OK;
+}
+
+sd_status sd_world_run(sd_world *w, long steps)
+{
+    for (long s = 0; s < steps; s++) {
+        sd_status st = sd_world_step(w);
+        if (st) return st;
+    }
+    return health(w);
+}
+
+double sd_world_time(const sd_world *w) { return w->time; }
+long sd_world_step_count(const sd_world *w) { return w->step; }
+int sd_world_body_count(const sd_world *w) { return w->b.n; }
+int sd_world_triangle_count(const sd_world *w) { return w->w.n; }
+long sd_world_contact_count(const sd_world *w) { return w->contacts; }
+sd_world_timers sd_world_get_timers(const sd_world *w) { return w->timers; }
+void sd_world_set_rebuild_every_step(sd_world *w, int on) { w->rebuild_every_step = on; }
+
+sd_status sd_world_body_at(const sd_world *w, int i, sd_body_state *o)
+{
+    if (i < 0 || i >= w->b.n) return SD_ERR_NOTFOUND;
+    const sd_bodies *b = &w->b;
+    o->gid = b->gid[i];
+    o->shape = b->shape[i];
+    o->fixed = b->fixed[i];
+    o->tag = b->tag[i];
+    o->pos = b->pos[i];
+    o->vel = b->vel[i];
+    o->omega = b->omega[i];
+    o->axis = b->axis[i];
+    o->force = b->force[i];
+    o->torque = b->torque[i];
+    o->radius = b->radius[i];
+    o->length = 2.0 * b->hl[i];
+    o->mass = b->mass[i];
+    return SD_OK;
+}
+
+sd_status sd_world_body(const sd_world *w, int gid, sd_body_state *o)
+{
+    if (gid < 0 || gid >= w->next_gid || w->gid_map[gid] < 0) return SD_ERR_NOTFOUND;
+    return sd_world_body_at(w, w->gid_map[gid], o);
+}
+
+sd_vec3 sd_world_group_force(const sd_world *w, int group)
+{
+    sd_vec3 f = v3(0, 0, 0);
+    for (int t = 0; t < w->w.n; t++)
+        if (w->w.group[t] == group && w->w.active[t]) f = v3_add(f, w->w.force[t]);
+    return f;
+}
+
+sd_status sd_world_set_external_force(sd_world *w, int gid, sd_vec3 f)
+{
+    if (gid < 0 || gid >= w->next_gid || w->gid_map[gid] < 0) return SD_ERR_NOTFOUND;
+    w->b.ext_force[w->gid_map[gid]] = f;
+    return SD_OK;
+}
+
+double sd_world_kinetic_energy(const sd_world *w)
+{
+    const sd_bodies *b = &w->b;
+    double e = 0.0;
+    for (int i = 0; i < b->n; i++) {
+        if (b->fixed[i]) continue;
+        e += 0.5 * b->mass[i] * v3_norm2(b->vel[i]);
+        if (b->shape[i] == SD_SHAPE_SPHERE) e += 0.5 * v3_norm2(b->omega[i]) / b->inv_i_ax[i];
+        else e += 0.5 * v3_dot(b->angmom[i], b->omega[i]);
+    }
+    return e;
+}
+
+double sd_world_potential_energy(const sd_world *w)
+{
+    const sd_bodies *b = &w->b;
+    double e = 0.0;
+    for (int i = 0; i < b->n; i++)
+        if (!b->fixed[i]) e -= b->mass[i] * v3_dot(w->def.gravity, b->pos[i]);
+    return e;
+}
+
+/* Elastic energy of the current overlaps (normal springs only; ½ K_n δ²) and of the stored
+ * tangential springs (½ |P_s|² / K_s). Recomputed from geometry, so exact for the state. */
+double sd_world_spring_energy(const sd_world *w)
+{
+    double e = 0.0;
+    const sd_pairlist *lists[2] = {&w->bb, &w->bt};
+    for (int l = 0; l < 2; l++) {
+        const sd_pairlist *pl = lists[l];
+        for (int k = 0; k < pl->n; k++) {
+            const sd_pair *p = &pl->p[k];
+            sd_manifold m;
+            if (l == 0) {
+                const sd_bodies *b = &w->b;
+                if (p->kind == SD_PAIR_SS) sd_geom_sphere_sphere(b->pos[p->a], b->radius[p->a], b->pos[p->b], b->radius[p->b], &m);
+                else if (p->kind == SD_PAIR_SC) {
+                    sd_cyl c = sd_body_cyl(b, p->b);
+                    sd_geom_sphere_cyl(b->pos[p->a], b->radius[p->a], &c, &m);
+                } else {
+                    sd_cyl c1 = sd_body_cyl(b, p->a), c2 = sd_body_cyl(b, p->b);
+                    sd_geom_cyl_cyl(&c1, &c2, &m);
+                }
+            } else {
+                if (!w->w.active[p->b]) continue;
+                if (p->kind == SD_PAIR_ST) sd_geom_sphere_tri(w->b.pos[p->a], w->b.radius[p->a], &w->w.tri[p->b], &m);
+                else {
+                    sd_cyl c = sd_body_cyl(&w->b, p->a);
+                    sd_geom_cyl_tri(&c, &w->w.tri[p->b], &m);
+                }
+            }
+            for (int k2 = 0; k2 < m.n; k2++) e += 0.5 * w->def.contact.k_n * m.overlap[k2] * m.overlap[k2];
+            if (w->def.contact.k_s > 0.0)
+                for (int s = 0; s < p->cap; s++)
+                    if (pl->hist[p->off + s].feature >= 0)
+                        e += 0.5 * v3_norm2(pl->hist[p->off + s].shear) / w->def.contact.k_s;
+        }
+    }
+    return e;
+}
+
+/* FNV-1a over the bytes of the dynamic state, in gid order. */
+uint64_t sd_world_state_hash(const sd_world *w)
+{
+    uint64_t h = 1469598103934665603ULL;
+    const sd_bodies *b = &w->b;
+#define SD_HASH_BYTES(ptr, len)                                      \
+    do {                                                             \
+        const unsigned char *q_ = (const unsigned char *)(ptr);      \
+        for (size_t k_ = 0; k_ < (len); k_++) {                      \
+            h ^= q_[k_];                                             \
+            h *= 1099511628211ULL;                                   \
+        }                                                            \
+    } while (0)
+    for (int g = 0; g < w->next_gid; g++) {
+        int i = w->gid_map[g];
+        if (i < 0) continue;
+        SD_HASH_BYTES(&b->pos[i], sizeof(sd_vec3));
+        SD_HASH_BYTES(&b->vel[i], sizeof(sd_vec3));
+        SD_HASH_BYTES(&b->omega[i], sizeof(sd_vec3));
+        SD_HASH_BYTES(&b->quat[i], sizeof(sd_quat));
+        SD_HASH_BYTES(&b->force[i], sizeof(sd_vec3));
+    }
+    for (int k = 0; k < w->bb.nh; k++)
+        if (w->bb.hist[k].feature >= 0) SD_HASH_BYTES(&w->bb.hist[k].shear, sizeof(sd_vec3));
+    for (int k = 0; k < w->bt.nh; k++)
+        if (w->bt.hist[k].feature >= 0) SD_HASH_BYTES(&w->bt.hist[k].shear, sizeof(sd_vec3));
+#undef SD_HASH_BYTES
+    return h;
+}

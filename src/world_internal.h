@@ -1,0 +1,198 @@
+/* Internal state of a world. Not part of the public API. */
+#ifndef SD_WORLD_INTERNAL_H
+#define SD_WORLD_INTERNAL_H
+
+#include <stdint.h>
+#include <stdlib.h>
+
+#include "sabodem.h"
+#include "core/vmath.h"
+#include "geom/geom.h"
+
+/* Moving and fixed bodies (spheres and cylinders): one store, one array per field.
+ * Every per-body array is listed in the field table of bodies.c, which drives growth,
+ * removal (swap with last) and checkpoints, so a new field cannot be forgotten. */
+typedef struct {
+    int n, cap;
+    int32_t *gid;
+    uint8_t *shape;     /* SD_SHAPE_* */
+    uint8_t *fixed;
+    int32_t *tag;
+    sd_vec3 *pos;
+    sd_vec3 *vel;
+    sd_vec3 *omega;     /* world frame; derived from angmom for cylinders */
+    sd_vec3 *angmom;    /* world-frame angular momentum (cylinders) */
+    sd_quat *quat;      /* attitude; body z axis = cylinder axis */
+    sd_vec3 *axis;      /* derived: quat applied to e_z */
+    sd_vec3 *force;     /* contact force of the last step */
+    sd_vec3 *torque;
+    sd_vec3 *ext_force; /* external (fluid) force, persistent until changed */
+    sd_vec3 *pos_ref;   /* position at the last candidate rebuild */
+    sd_vec3 *axis_ref;
+    double *radius;
+    double *hl;         /* half length (0 for spheres) */
+    double *mass;
+    double *inv_mass;
+    double *inv_i_ax;   /* inverse axial moment of inertia (spheres: 1/I) */
+    double *inv_i_tr;   /* inverse transverse moment (spheres: 1/I) */
+    double *bound_r;    /* bounding-sphere radius */
+} sd_bodies;
+
+typedef struct {
+    int n, cap;
+    sd_tri *tri;
+    int32_t *group;
+    uint8_t *active;
+    int32_t (*edge_id)[3];  /* welded global ids: shared edges and vertices get one id */
+    int32_t (*vert_id)[3];
+    int32_t (*edge_vert)[2]; /* per edge id: its two vertex ids (sized n_edges) */
+    int n_edges, n_verts;
+    sd_vec3 *force;          /* contact force on each triangle in the last step */
+    int dirty;               /* welding and grid need rebuilding */
+} sd_walls;
+
+/* A candidate pair. Body–body: a, b are body indices ordered by (shape, gid).
+ * Body–triangle: a is the body index, b the triangle index. History slots
+ * hist[off .. off+cap) hold the tangential springs keyed by feature. */
+typedef struct {
+    int32_t a, b;
+    int32_t off;
+    int16_t cap;
+    int16_t kind; /* SD_PAIR_* */
+} sd_pair;
+
+enum { SD_PAIR_SS = 0, SD_PAIR_SC, SD_PAIR_CC, SD_PAIR_ST, SD_PAIR_CT, SD_PAIR_KINDS };
+
+typedef struct {
+    int32_t feature; /* -1: empty */
+    sd_vec3 shear;   /* tangential spring force P_s on A, N */
+} sd_hist;
+
+typedef struct {
+    sd_vec3 f_a;  /* force on A */
+    sd_vec3 t_a;  /* torque on A about its centre */
+    sd_vec3 t_b;  /* torque on B about its centre */
+} sd_pair_out;
+
+typedef struct {
+    int n, cap;
+    sd_pair *p;
+    sd_pair_out *out;
+    int out_cap;
+    int nh, hcap;
+    sd_hist *hist;
+} sd_pairlist;
+
+/* Per-body list of the body–body pairs it takes part in (CSR), for the race-free gather. */
+typedef struct {
+    int32_t *start; /* n+1 */
+    int32_t *idx;   /* 2k: pair k as A, 2k+1: pair k as B */
+    int32_t *bt_start; /* n+1: body-triangle pairs of body i are bt_start[i]..bt_start[i+1] */
+    int cap_start, cap_idx, cap_bt_start;
+} sd_csr;
+
+typedef struct {
+    double cell;
+    int nx, ny, nz;
+    sd_vec3 lo;
+    int32_t *cell_start; /* ncell + 1 */
+    int32_t *items;
+    int cap_cells, cap_items;
+} sd_grid;
+
+struct sd_world {
+    sd_world_def def;
+    sd_bodies b;
+    sd_walls w;
+    sd_pairlist bb;  /* body–body */
+    sd_pairlist bt;  /* body–triangle */
+    sd_manifold *bt_man; /* narrow-phase result per body–triangle pair (for mesh dedup) */
+    int bt_man_cap;
+    sd_csr csr;
+    sd_grid grid;    /* bodies */
+    sd_grid tgrid;   /* triangles */
+    int32_t *gid_map; /* gid -> index, -1 removed */
+    int gid_cap, next_gid;
+    double time;
+    long step;
+    double last_rebuild_time;
+    int need_rebuild;
+    int rebuild_every_step;
+    long contacts;
+    sd_world_timers timers;
+    int checked;
+    /* scratch for rebuilds: contact history carried across by key */
+    sd_hist *old_hist;
+    uint64_t *old_keys;
+    int n_old, old_cap, old_hist_cap;
+    int keys_collected; /* old keys already taken (a body was removed since) */
+    int32_t (*range)[6]; /* per-body cell range in the body grid */
+    int range_cap;
+    int32_t (*trange)[6]; /* per-triangle cell range in the triangle grid */
+    int trange_cap;
+};
+
+/* bodies.c */
+sd_status sd_bodies_reserve(sd_bodies *b, int cap);
+void sd_bodies_free(sd_bodies *b);
+void sd_bodies_swap_remove(sd_bodies *b, int i);
+/* Iterate over the field table: calls fn(ptr, elem_size, ctx) for each field array. */
+typedef void (*sd_field_fn)(void *array, size_t elem_size, const char *name, void *ctx);
+void sd_bodies_for_each_field(sd_bodies *b, sd_field_fn fn, void *ctx);
+
+/* walls.c */
+sd_status sd_walls_reserve(sd_walls *w, int cap);
+void sd_walls_free(sd_walls *w);
+sd_status sd_walls_weld(sd_walls *w);
+
+/* neighbor.c */
+sd_status sd_neighbor_rebuild(sd_world *w);
+int sd_neighbor_needs_rebuild(const sd_world *w);
+/* Take the live tangential history out of the pair lists, keyed by gids (before the body
+ * store changes order); the next rebuild puts it back. */
+sd_status sd_neighbor_collect_history(sd_world *w);
+void sd_grid_free(sd_grid *g);
+
+/* contact_law.c */
+typedef struct {
+    double k_n, k_s, c_n_factor, c_s_factor, tan_phi, cohesion; /* c = factor * sqrt(m*) */
+} sd_law;
+sd_law sd_law_make(const sd_contact_def *d);
+/* Force on A from one contact; updates the shear spring in place. Returns the normal force. */
+double sd_contact_law(const sd_law *law, double m_eff, sd_vec3 n, double overlap, sd_vec3 v_rel,
+                      double dt, sd_vec3 *shear, sd_vec3 *force_a);
+
+/* contact.c */
+sd_status sd_contact_compute(sd_world *w);
+void sd_contact_gather(sd_world *w);
+void sd_pairlist_free(sd_pairlist *l);
+/* Kernel shapes of a body. */
+static inline sd_cyl sd_body_cyl(const sd_bodies *b, int i)
+{
+    sd_cyl c;
+    c.c = b->pos[i];
+    c.a = b->axis[i];
+    c.r = b->radius[i];
+    c.hl = b->hl[i];
+    return c;
+}
+
+/* integrate.c */
+void sd_integrate(sd_world *w);
+
+/* helpers */
+static inline int sd_grow(void **p, int *cap, int need, size_t elem)
+{
+    if (need <= *cap) return 0;
+    int nc = *cap > 0 ? *cap : 64;
+    while (nc < need) nc *= 2;
+    void *q = realloc(*p, (size_t)nc * elem);
+    if (!q) return -1;
+    *p = q;
+    *cap = nc;
+    return 0;
+}
+
+double sd_now(void);
+
+#endif
