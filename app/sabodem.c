@@ -1,3 +1,151 @@
+/* sabodem: the only main(). Subcommands: run, check, params. Exit codes: 0 ok, 1 run failed,
+ * 2 bad input or usage, 130 interrupted. */
+#include <signal.h>
 #include <stdio.h>
-#include "sabodem.h"
-int main(void) { printf("%s\n", sd_status_message(SD_OK)); return 0; }
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "build.h"
+#include "run.h"
+#include "scenario.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+static volatile sig_atomic_t stop_flag = 0;
+
+static void on_sigint(int sig)
+{
+    (void)sig;
+    stop_flag = 1;
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: sabodem run FILE [-o DIR] [--set key=value]... [--threads N] [--seed S]\n"
+            "       sabodem check FILE [--set key=value]...\n"
+            "       sabodem params [--markdown]\n"
+            "\n"
+            "run     simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
+            "check   validate the scenario and build its scene without running\n"
+            "params  list every scenario key with its type, unit, default and range\n");
+}
+
+static const char *basename_noext(const char *path, char *buf, size_t n)
+{
+    const char *b = strrchr(path, '/');
+    b = b ? b + 1 : path;
+    snprintf(buf, n, "%s", b);
+    char *dot = strrchr(buf, '.');
+    if (dot && dot != buf) *dot = 0;
+    return buf;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    const char *cmd = argv[1];
+    if (!strcmp(cmd, "-h") || !strcmp(cmd, "--help") || !strcmp(cmd, "help")) {
+        usage(stdout);
+        return 0;
+    }
+    if (!strcmp(cmd, "params")) {
+        sd_scenario_print_params(stdout, argc > 2 && !strcmp(argv[2], "--markdown"));
+        return 0;
+    }
+    if (strcmp(cmd, "run") && strcmp(cmd, "check")) {
+        fprintf(stderr, "sabodem: unknown command '%s'\n", cmd);
+        usage(stderr);
+        return 2;
+    }
+    const char *file = NULL, *outdir = NULL;
+    const char **sets = calloc((size_t)argc + 2, sizeof(char *));
+    char seedbuf[64], thrbuf[64];
+    int nsets = 0;
+    if (!sets) return 1;
+    for (int i = 2; i < argc; i++) {
+        const char *a = argv[i];
+        if ((!strcmp(a, "-o") || !strcmp(a, "--output")) && i + 1 < argc) outdir = argv[++i];
+        else if (!strcmp(a, "--set") && i + 1 < argc) sets[nsets++] = argv[++i];
+        else if (!strncmp(a, "--set=", 6)) sets[nsets++] = a + 6;
+        else if (!strcmp(a, "--threads") && i + 1 < argc) {
+            snprintf(thrbuf, sizeof thrbuf, "solver.threads=%s", argv[++i]);
+            sets[nsets++] = thrbuf;
+        } else if (!strcmp(a, "--seed") && i + 1 < argc) {
+            snprintf(seedbuf, sizeof seedbuf, "solver.seed=%s", argv[++i]);
+            sets[nsets++] = seedbuf;
+        } else if (a[0] == '-') {
+            fprintf(stderr, "sabodem: unknown or incomplete option '%s'\n", a);
+            usage(stderr);
+            free(sets);
+            return 2;
+        } else if (!file) file = a;
+        else {
+            fprintf(stderr, "sabodem: more than one scenario file given ('%s')\n", a);
+            free(sets);
+            return 2;
+        }
+    }
+    if (!file) {
+        fprintf(stderr, "sabodem: no scenario file given\n");
+        usage(stderr);
+        free(sets);
+        return 2;
+    }
+    sd_scenario s;
+    if (sd_scenario_load(&s, file, sets, nsets, stderr)) {
+        free(sets);
+        return 2;
+    }
+    free(sets);
+#ifdef _OPENMP
+    if (s.world.threads > 0) omp_set_num_threads(s.world.threads);
+#endif
+    if (!strcmp(cmd, "check")) {
+        /* build the scene too: placement and stability are part of validity */
+        sd_world *w;
+        if (sd_world_create(&s.world, &w)) {
+            fprintf(stderr, "%s: invalid solver settings\n", file);
+            sd_scenario_free(&s);
+            return 2;
+        }
+        sd_build_info info;
+        sd_status st = sd_build_scene(w, &s, &info, stderr);
+        if (!st) st = sd_world_check(w);
+        int n = sd_world_body_count(w), t = sd_world_triangle_count(w);
+        sd_world_destroy(w);
+        sd_scenario_free(&s);
+        if (st) {
+            fprintf(stderr, "%s: %s\n", file, sd_status_message(st));
+            return 2;
+        }
+        printf("%s: ok (%d elements, %d triangles)\n", file, n, t);
+        return 0;
+    }
+    char name[256], dirbuf[512];
+    if (!outdir) {
+        snprintf(dirbuf, sizeof dirbuf, "out/%s", basename_noext(file, name, sizeof name));
+        outdir = dirbuf;
+    }
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_sigint;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+    sd_run_opts o = {outdir, isatty(fileno(stderr)), &stop_flag, stderr, stderr};
+    sd_run_result r;
+    int code = sd_run_scenario(&s, &o, &r);
+    if (code == 0 || code == 130) {
+        printf("%s: %s, %ld steps, %.1f s wall", file, code ? "interrupted" : "done", r.steps, r.wall_time);
+        if (s.flume_on) printf(", trap ratio P_V = %.4f (capture limit %.2f s)", r.p_v, s.capture_limit);
+        printf("; outputs in %s\n", outdir);
+    }
+    sd_scenario_free(&s);
+    return code;
+}

@@ -179,7 +179,7 @@ sd_status sd_contact_compute(sd_world *w)
     sd_law law = sd_law_make(&w->def.contact);
     long count = 0;
     const int nbb = w->bb.n;
-#pragma omp parallel for schedule(static) reduction(+ : count)
+#pragma omp parallel for schedule(static) reduction(+ : count) if (nbb > SD_OMP_MIN_ITEMS)
     for (int k = 0; k < nbb; k++) {
         const sd_pair *p = &w->bb.p[k];
         sd_manifold m;
@@ -187,7 +187,7 @@ sd_status sd_contact_compute(sd_world *w)
         count += apply_manifold(w, &law, &m, p->a, p->b, 0, &w->bb.hist[p->off], p->cap, &w->bb.out[k]);
     }
     const int nb = b->n;
-#pragma omp parallel for schedule(static) reduction(+ : count)
+#pragma omp parallel for schedule(static) reduction(+ : count) if (nb > SD_OMP_MIN_ITEMS)
     for (int i = 0; i < nb; i++) {
         int from = w->csr.bt_start[i], to = w->csr.bt_start[i + 1];
         if (from == to) continue;
@@ -208,7 +208,7 @@ void sd_contact_gather(sd_world *w)
 {
     sd_bodies *b = &w->b;
     const int n = b->n;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > SD_OMP_MIN_ITEMS)
     for (int i = 0; i < n; i++) {
         sd_vec3 f = v3(0, 0, 0), t = v3(0, 0, 0);
         for (int k = w->csr.start[i]; k < w->csr.start[i + 1]; k++) {

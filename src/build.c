@@ -1,0 +1,455 @@
+/* Builders (SPEC §6, §8). */
+#include "build.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/vmath.h"
+#include "geom/geom.h"
+
+sd_status sd_build_box(sd_world *w, sd_vec3 lo, sd_vec3 hi, int group)
+{
+    sd_vec3 c[8];
+    for (int k = 0; k < 8; k++) c[k] = v3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+    /* floor and four sides (open top): two triangles each */
+    static const int q[5][4] = {{0, 1, 3, 2}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+    for (int f = 0; f < 5; f++) {
+        if (sd_world_add_triangle(w, c[q[f][0]], c[q[f][1]], c[q[f][2]], group) < 0) return SD_ERR_ARG;
+        if (sd_world_add_triangle(w, c[q[f][0]], c[q[f][2]], c[q[f][3]], group) < 0) return SD_ERR_ARG;
+    }
+    return SD_OK;
+}
+
+/* Quad (a, b, c, d in order) as two triangles, split along x into pieces no longer than seg. */
+static sd_status add_quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d, int group, double seg)
+{
+    double len = v3_dist(a, b);
+    int n = seg > 0 ? (int)ceil(len / seg) : 1;
+    if (n < 1) n = 1;
+    for (int k = 0; k < n; k++) {
+        double s0 = (double)k / n, s1 = (double)(k + 1) / n;
+        sd_vec3 p0 = v3_add(a, v3_scale(v3_sub(b, a), s0)), p1 = v3_add(a, v3_scale(v3_sub(b, a), s1));
+        sd_vec3 q0 = v3_add(d, v3_scale(v3_sub(c, d), s0)), q1 = v3_add(d, v3_scale(v3_sub(c, d), s1));
+        if (sd_world_add_triangle(w, p0, p1, q1, group) < 0) return SD_ERR_ARG;
+        if (sd_world_add_triangle(w, p0, q1, q0, group) < 0) return SD_ERR_ARG;
+    }
+    return SD_OK;
+}
+
+typedef struct {
+    sd_vec3 pos, axis;
+    double r, hl;
+} pitem;
+
+struct sd_placer {
+    sd_vec3 lo, hi;
+    double cell;
+    int nx, ny, nz;
+    int **cells;
+    int *ncell, *ccap;
+    pitem *items;
+    int n, cap;
+};
+
+sd_placer *sd_placer_create(sd_vec3 lo, sd_vec3 hi, double cell)
+{
+    sd_placer *p = calloc(1, sizeof(*p));
+    if (!p) return NULL;
+    p->lo = lo;
+    p->hi = hi;
+    p->cell = cell;
+    p->nx = (int)((hi.x - lo.x) / cell) + 1;
+    p->ny = (int)((hi.y - lo.y) / cell) + 1;
+    p->nz = (int)((hi.z - lo.z) / cell) + 1;
+    size_t nc = (size_t)p->nx * p->ny * p->nz;
+    p->cells = calloc(nc, sizeof(int *));
+    p->ncell = calloc(nc, sizeof(int));
+    p->ccap = calloc(nc, sizeof(int));
+    if (!p->cells || !p->ncell || !p->ccap) {
+        sd_placer_destroy(p);
+        return NULL;
+    }
+    return p;
+}
+
+void sd_placer_destroy(sd_placer *p)
+{
+    if (!p) return;
+    if (p->cells) {
+        size_t nc = (size_t)p->nx * p->ny * p->nz;
+        for (size_t c = 0; c < nc; c++) free(p->cells[c]);
+    }
+    free(p->cells);
+    free(p->ncell);
+    free(p->ccap);
+    free(p->items);
+    free(p);
+}
+
+static int clampc(double v, int n)
+{
+    int i = (int)floor(v);
+    return i < 0 ? 0 : (i >= n ? n - 1 : i);
+}
+
+static void item_range(const sd_placer *p, sd_vec3 c, double ext, int r[6])
+{
+    r[0] = clampc((c.x - ext - p->lo.x) / p->cell, p->nx);
+    r[1] = clampc((c.y - ext - p->lo.y) / p->cell, p->ny);
+    r[2] = clampc((c.z - ext - p->lo.z) / p->cell, p->nz);
+    r[3] = clampc((c.x + ext - p->lo.x) / p->cell, p->nx);
+    r[4] = clampc((c.y + ext - p->lo.y) / p->cell, p->ny);
+    r[5] = clampc((c.z + ext - p->lo.z) / p->cell, p->nz);
+}
+
+void sd_placer_add(sd_placer *p, sd_vec3 pos, sd_vec3 axis, double r, double hl)
+{
+    if (p->n == p->cap) {
+        int nc = p->cap ? 2 * p->cap : 256;
+        pitem *q = realloc(p->items, (size_t)nc * sizeof(*q));
+        if (!q) return;
+        p->items = q;
+        p->cap = nc;
+    }
+    int id = p->n++;
+    p->items[id] = (pitem){pos, v3_normalize(axis), r, hl};
+    int rg[6];
+    item_range(p, pos, sqrt(r * r + hl * hl), rg);
+    for (int z = rg[2]; z <= rg[5]; z++)
+        for (int y = rg[1]; y <= rg[4]; y++)
+            for (int x = rg[0]; x <= rg[3]; x++) {
+                size_t c = ((size_t)z * p->ny + y) * p->nx + x;
+                if (p->ncell[c] == p->ccap[c]) {
+                    int nc = p->ccap[c] ? 2 * p->ccap[c] : 4;
+                    int *q = realloc(p->cells[c], (size_t)nc * sizeof(int));
+                    if (!q) return;
+                    p->cells[c] = q;
+                    p->ccap[c] = nc;
+                }
+                p->cells[c][p->ncell[c]++] = id;
+            }
+}
+
+/* Does a candidate (pos, axis, r, hl) overlap anything placed (with a clearance)? */
+static int collides(const sd_placer *p, sd_vec3 pos, sd_vec3 axis, double r, double hl, double clearance)
+{
+    int rg[6];
+    double ext = sqrt(r * r + hl * hl) + clearance;
+    item_range(p, pos, ext, rg);
+    sd_manifold m;
+    for (int z = rg[2]; z <= rg[5]; z++)
+        for (int y = rg[1]; y <= rg[4]; y++)
+            for (int x = rg[0]; x <= rg[3]; x++) {
+                size_t c = ((size_t)z * p->ny + y) * p->nx + x;
+                for (int k = 0; k < p->ncell[c]; k++) {
+                    const pitem *o = &p->items[p->cells[c][k]];
+                    double reach = ext + sqrt(o->r * o->r + o->hl * o->hl);
+                    if (v3_norm2(v3_sub(pos, o->pos)) >= reach * reach) continue;
+                    int hit;
+                    if (hl == 0.0 && o->hl == 0.0) hit = sd_geom_sphere_sphere(pos, r + clearance, o->pos, o->r, &m);
+                    else if (hl == 0.0) {
+                        sd_cyl cy = {o->pos, o->axis, o->r, o->hl};
+                        hit = sd_geom_sphere_cyl(pos, r + clearance, &cy, &m);
+                    } else if (o->hl == 0.0) {
+                        sd_cyl cy = {pos, axis, r + clearance, hl + clearance};
+                        hit = sd_geom_sphere_cyl(o->pos, o->r, &cy, &m);
+                    } else {
+                        sd_cyl a = {pos, axis, r + clearance, hl + clearance}, b = {o->pos, o->axis, o->r, o->hl};
+                        hit = sd_geom_cyl_cyl(&a, &b, &m);
+                    }
+                    if (hit) return 1;
+                }
+            }
+    return 0;
+}
+
+int sd_placer_try_sphere(sd_placer *p, sd_rng *rng, double r, double clearance, int max_tries, sd_vec3 *pos)
+{
+    for (int t = 0; t < max_tries; t++) {
+        sd_vec3 c = v3(sd_rng_range(rng, p->lo.x + r, p->hi.x - r), sd_rng_range(rng, p->lo.y + r, p->hi.y - r),
+                       sd_rng_range(rng, p->lo.z + r, p->hi.z - r));
+        if (!collides(p, c, v3(0, 0, 1), r, 0.0, clearance)) {
+            sd_placer_add(p, c, v3(0, 0, 1), r, 0.0);
+            *pos = c;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+int sd_placer_try_cylinder(sd_placer *p, sd_rng *rng, double r, double hl, double clearance, int max_tries,
+                           sd_vec3 *pos, sd_vec3 *axis)
+{
+    for (int t = 0; t < max_tries; t++) {
+        /* axis uniform on the sphere */
+        double z = sd_rng_range(rng, -1.0, 1.0), phi = sd_rng_range(rng, 0.0, 2.0 * M_PI);
+        double s = sqrt(fmax(0.0, 1.0 - z * z));
+        sd_vec3 a = v3(s * cos(phi), s * sin(phi), z);
+        /* keep the whole log inside the box */
+        sd_vec3 e = v3(hl * fabs(a.x) + r, hl * fabs(a.y) + r, hl * fabs(a.z) + r);
+        if (2 * e.x >= p->hi.x - p->lo.x || 2 * e.y >= p->hi.y - p->lo.y || 2 * e.z >= p->hi.z - p->lo.z) continue;
+        sd_vec3 c = v3(sd_rng_range(rng, p->lo.x + e.x, p->hi.x - e.x), sd_rng_range(rng, p->lo.y + e.y, p->hi.y - e.y),
+                       sd_rng_range(rng, p->lo.z + e.z, p->hi.z - e.z));
+        if (!collides(p, c, a, r, hl, clearance)) {
+            sd_placer_add(p, c, a, r, hl);
+            *pos = c;
+            *axis = a;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double *beam_z, int *n_beam)
+{
+    double d = s->pipe_diam, r = 0.5 * d;
+    if (s->n_columns > 0) {
+        *n_col = s->n_columns;
+        for (int k = 0; k < s->n_columns; k++) col_y[k] = s->column_y[k];
+    } else {
+        /* columns centred across the width, clear spacing l_h, wall gaps no wider than l_h */
+        double pitch = s->l_h + d;
+        int n = (int)ceil((s->width - s->l_h) / pitch - 1e-9);
+        if (n < 1) n = 1;
+        if (n > SD_MAX_PIPES) n = SD_MAX_PIPES;
+        *n_col = n;
+        for (int k = 0; k < n; k++) col_y[k] = 0.5 * s->width + (k - 0.5 * (n - 1)) * pitch;
+    }
+    if (s->n_beams > 0) {
+        *n_beam = s->n_beams;
+        for (int k = 0; k < s->n_beams; k++) beam_z[k] = s->beam_z[k] + r;
+    } else {
+        int n = 0;
+        if (s->l_v > 0.0 && s->l_v + d < s->top_beam) beam_z[n++] = s->l_v + r;
+        beam_z[n++] = s->top_beam + r;
+        *n_beam = n;
+    }
+    return 0;
+}
+
+int sd_build_log_count(const sd_scenario *s)
+{
+    if (s->log_count >= 0) return s->log_count;
+    if (s->log_kw <= 0.0) return 0;
+    double vs = 0.0;
+    for (int k = 0; k < s->n_classes; k++) vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+    double vlog = M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
+    /* K_w = V_t / (V + V_t)  =>  V_t = K_w V / (1 - K_w) */
+    return (int)lround(s->log_kw * vs / (1.0 - s->log_kw) / vlog);
+}
+
+static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *info, sd_rng *rng, FILE *err)
+{
+    double W = s->width, H = s->wall_height, L = s->x_end;
+    sd_status st;
+    /* bed, side walls and end wall; triangles of at most 0.25 m along x */
+    if ((st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, W, 0), v3(0, W, 0), SD_GROUP_BED, 0.25))) return st;
+    if ((st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, 0, H), v3(0, 0, H), SD_GROUP_WALLS, 0.25))) return st;
+    if ((st = add_quad(w, v3(0, W, 0), v3(L, W, 0), v3(L, W, H), v3(0, W, H), SD_GROUP_WALLS, 0.25))) return st;
+    if ((st = add_quad(w, v3(0, 0, 0), v3(0, W, 0), v3(0, W, H), v3(0, 0, H), SD_GROUP_END, 0))) return st;
+    if ((st = add_quad(w, v3(s->x_gate, 0, 0), v3(s->x_gate, W, 0), v3(s->x_gate, W, H), v3(s->x_gate, 0, H),
+                       SD_GROUP_GATE, 0)))
+        return st;
+
+    /* grid dam of fixed cylinders; upstream face at x_dam */
+    if (s->dam_on) {
+        double col_y[SD_MAX_PIPES], beam_z[SD_MAX_PIPES];
+        int nc, nb;
+        sd_build_dam_layout(s, col_y, &nc, beam_z, &nb);
+        double r = 0.5 * s->pipe_diam, xc = s->x_dam + r;
+        double top = beam_z[nb - 1] + r;
+        for (int k = 0; k < nc; k++) {
+            sd_cylinder_def c = sd_cylinder_def_default();
+            c.pos = v3(xc, col_y[k], 0.5 * top);
+            c.axis = v3(0, 0, 1);
+            c.radius = r;
+            c.length = top;
+            c.density = 7850.0;
+            c.fixed = 1;
+            c.tag = SD_TAG_PIPE;
+            int g = sd_world_add_cylinder(w, &c);
+            if (g < 0) return (sd_status)-g;
+            info->pipe_gid[info->n_pipes] = g;
+            info->pipe_is_column[info->n_pipes] = 1;
+            info->pipe_coord[info->n_pipes++] = col_y[k];
+        }
+        for (int k = 0; k < nb; k++) {
+            sd_cylinder_def c = sd_cylinder_def_default();
+            c.pos = v3(xc, 0.5 * W, beam_z[k]);
+            c.axis = v3(0, 1, 0);
+            c.radius = r;
+            c.length = W;
+            c.density = 7850.0;
+            c.fixed = 1;
+            c.tag = SD_TAG_PIPE;
+            int g = sd_world_add_cylinder(w, &c);
+            if (g < 0) return (sd_status)-g;
+            info->pipe_gid[info->n_pipes] = g;
+            info->pipe_is_column[info->n_pipes] = 0;
+            info->pipe_coord[info->n_pipes++] = beam_z[k];
+        }
+    }
+
+    /* bed roughness: fixed spheres centred on the bed plane, random without overlap; random
+     * sequential adsorption until 2000 tries in a row fail (jamming coverage ~0.5) */
+    if (s->roughness_on) {
+        sd_placer *pl = sd_placer_create(v3(0, 0, -s->rough_dmax), v3(L, W, s->rough_dmax), s->rough_dmax);
+        if (!pl) return SD_ERR_NOMEM;
+        int fails = 0;
+        while (fails < 2000) {
+            double d = sd_rng_range(rng, s->rough_dmin, s->rough_dmax), r = 0.5 * d;
+            sd_vec3 c = v3(sd_rng_range(rng, r, L - r), sd_rng_range(rng, r, W - r), 0.0);
+            if (s->dam_on && fabs(c.x - (s->x_dam + 0.5 * s->pipe_diam)) < r + 0.5 * s->pipe_diam + 1e-4) {
+                fails++;
+                continue; /* keep the dam foot clear */
+            }
+            if (s->x_gate - r < c.x && c.x < s->x_gate + r) {
+                fails++;
+                continue; /* the gate stands on the bed */
+            }
+            if (collides(pl, c, v3(0, 0, 1), r, 0.0, 0.0)) {
+                fails++;
+                continue;
+            }
+            fails = 0;
+            sd_placer_add(pl, c, v3(0, 0, 1), r, 0.0);
+            sd_sphere_def sp = sd_sphere_def_default();
+            sp.pos = c;
+            sp.radius = r;
+            sp.density = s->sphere_density;
+            sp.fixed = 1;
+            sp.tag = SD_TAG_ROUGH;
+            int g = sd_world_add_sphere(w, &sp);
+            if (g < 0) {
+                sd_placer_destroy(pl);
+                return (sd_status)-g;
+            }
+            info->n_rough++;
+        }
+        sd_placer_destroy(pl);
+    }
+
+    /* packing box above the reservoir: logs first (hardest to place), then spheres large to small */
+    double gap = 0.002;
+    sd_vec3 lo = v3(gap, gap, s->rough_dmax * 0.5 + gap), hi = v3(s->x_gate - gap, W - gap, s->pack_height);
+    sd_placer *pl = sd_placer_create(lo, hi, 0.025);
+    if (!pl) return SD_ERR_NOMEM;
+    info->first_moving_gid = -1;
+    int nlogs = sd_build_log_count(s);
+    for (int k = 0; k < nlogs; k++) {
+        sd_vec3 pos, axis;
+        if (!sd_placer_try_cylinder(pl, rng, 0.5 * s->log_diam, 0.5 * s->log_length, 0.0005, 200000, &pos, &axis)) {
+            fprintf(err, "%s: no room for log %d of %d in the packing box; raise flume.pack_height\n", s->path, k + 1, nlogs);
+            sd_placer_destroy(pl);
+            return SD_ERR_ARG;
+        }
+        sd_cylinder_def c = sd_cylinder_def_default();
+        c.pos = pos;
+        c.axis = axis;
+        c.radius = 0.5 * s->log_diam;
+        c.length = s->log_length;
+        c.density = s->log_density;
+        c.tag = SD_TAG_LOG;
+        int g = sd_world_add_cylinder(w, &c);
+        if (g < 0) {
+            sd_placer_destroy(pl);
+            return (sd_status)-g;
+        }
+        if (info->first_moving_gid < 0) info->first_moving_gid = g;
+        info->n_logs++;
+    }
+    for (int cl = 0; cl < s->n_classes; cl++)
+        for (int k = 0; k < s->class_count[cl]; k++) {
+            sd_vec3 pos;
+            double r = 0.5 * s->class_diam[cl];
+            if (!sd_placer_try_sphere(pl, rng, r, 0.0005, 200000, &pos)) {
+                fprintf(err, "%s: no room for sphere %d of class %d in the packing box; raise flume.pack_height\n",
+                        s->path, k + 1, cl);
+                sd_placer_destroy(pl);
+                return SD_ERR_ARG;
+            }
+            sd_sphere_def sp = sd_sphere_def_default();
+            sp.pos = pos;
+            sp.radius = r;
+            sp.density = s->sphere_density;
+            sp.tag = cl;
+            int g = sd_world_add_sphere(w, &sp);
+            if (g < 0) {
+                sd_placer_destroy(pl);
+                return (sd_status)-g;
+            }
+            if (info->first_moving_gid < 0) info->first_moving_gid = g;
+            info->n_spheres++;
+        }
+    sd_placer_destroy(pl);
+    return SD_OK;
+}
+
+sd_status sd_build_scene(sd_world *w, const sd_scenario *s, sd_build_info *info, FILE *err)
+{
+    memset(info, 0, sizeof(*info));
+    info->first_moving_gid = -1;
+    sd_rng rng = {(uint64_t)s->seed * 0x9E3779B97F4A7C15ULL + 12345};
+    for (int i = 0; i < s->n_elems; i++) {
+        const sd_elem_def *d = &s->elems[i];
+        int g;
+        if (d->type == 0) {
+            sd_sphere_def sp = sd_sphere_def_default();
+            sp.pos = d->pos;
+            sp.vel = d->vel;
+            sp.omega = d->omega;
+            sp.radius = d->radius;
+            sp.density = d->density;
+            sp.fixed = d->fixed;
+            sp.tag = d->tag;
+            g = sd_world_add_sphere(w, &sp);
+        } else if (d->type == 1) {
+            sd_cylinder_def c = sd_cylinder_def_default();
+            c.pos = d->pos;
+            c.vel = d->vel;
+            c.omega = d->omega;
+            c.axis = d->axis;
+            c.radius = d->radius;
+            c.length = d->length;
+            c.density = d->density;
+            c.fixed = d->fixed;
+            c.tag = d->tag;
+            g = sd_world_add_cylinder(w, &c);
+        } else {
+            g = sd_world_add_triangle(w, d->v[0], d->v[1], d->v[2], d->group);
+        }
+        if (g < 0) {
+            fprintf(err, "%s:%d: element rejected: %s\n", s->path, d->line, sd_status_message((sd_status)-g));
+            return (sd_status)-g;
+        }
+    }
+    sd_status st;
+    if (s->box_on && (st = sd_build_box(w, s->box_min, s->box_max, SD_GROUP_BOX))) return st;
+    if (s->pile_n_classes > 0) {
+        sd_placer *pl = sd_placer_create(s->pile_min, s->pile_max, 0.025);
+        if (!pl) return SD_ERR_NOMEM;
+        for (int cl = 0; cl < s->pile_n_classes; cl++)
+            for (int k = 0; k < s->pile_count[cl]; k++) {
+                sd_vec3 pos;
+                double r = 0.5 * s->pile_diam[cl];
+                if (!sd_placer_try_sphere(pl, &rng, r, 0.0005, 200000, &pos)) {
+                    fprintf(err, "%s: no room for pile sphere %d of class %d; enlarge pile.min/pile.max\n", s->path, k + 1, cl);
+                    sd_placer_destroy(pl);
+                    return SD_ERR_ARG;
+                }
+                sd_sphere_def sp = sd_sphere_def_default();
+                sp.pos = pos;
+                sp.radius = r;
+                sp.density = s->pile_density;
+                sp.tag = cl;
+                if (sd_world_add_sphere(w, &sp) < 0) {
+                    sd_placer_destroy(pl);
+                    return SD_ERR_ARG;
+                }
+                info->n_spheres++;
+            }
+        sd_placer_destroy(pl);
+    }
+    if (s->flume_on && (st = build_flume(w, s, info, &rng, err))) return st;
+    return SD_OK;
+}

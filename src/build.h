@@ -1,0 +1,41 @@
+/* Builders: box, random pile, flume, gate, bed roughness, grid dam, packing (SPEC §6, §8). */
+#ifndef SD_BUILD_H
+#define SD_BUILD_H
+
+#include "scenario.h"
+#include "core/rng.h"
+
+enum { SD_GROUP_BED = 0, SD_GROUP_WALLS = 1, SD_GROUP_END = 2, SD_GROUP_GATE = 3, SD_GROUP_BOX = 4 };
+enum { SD_TAG_ROUGH = 100, SD_TAG_LOG = 200, SD_TAG_PIPE = 300 };
+
+typedef struct {
+    int n_pipes;
+    int pipe_gid[2 * SD_MAX_PIPES];
+    int pipe_is_column[2 * SD_MAX_PIPES];
+    double pipe_coord[2 * SD_MAX_PIPES]; /* y of a column, z of a beam's axis */
+    int n_rough, n_spheres, n_logs;
+    int first_moving_gid;
+} sd_build_info;
+
+/* Open-top box of triangles between lo and hi. */
+sd_status sd_build_box(sd_world *w, sd_vec3 lo, sd_vec3 hi, int group);
+/* Put `count` spheres of diameter d at random, without overlap with anything placed so far
+ * by this placer, inside [lo, hi]. */
+typedef struct sd_placer sd_placer;
+sd_placer *sd_placer_create(sd_vec3 lo, sd_vec3 hi, double cell);
+void sd_placer_destroy(sd_placer *p);
+/* Returns 1 when placed, 0 when no room was found in max_tries. */
+int sd_placer_try_sphere(sd_placer *p, sd_rng *rng, double r, double clearance, int max_tries, sd_vec3 *pos);
+int sd_placer_try_cylinder(sd_placer *p, sd_rng *rng, double r, double hl, double clearance, int max_tries,
+                           sd_vec3 *pos, sd_vec3 *axis);
+/* Register an existing body (sphere when hl = 0) with the placer. */
+void sd_placer_add(sd_placer *p, sd_vec3 pos, sd_vec3 axis, double r, double hl);
+
+/* The scene of a scenario: explicit elements, box, pile, flume with everything in it. */
+sd_status sd_build_scene(sd_world *w, const sd_scenario *s, sd_build_info *info, FILE *err);
+/* Grid dam layout from l_h / l_v / top_beam or the explicit lists (SPEC §8). */
+int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double *beam_z, int *n_beam);
+/* Number of logs from logs.count or logs.k_w and the sphere volume (eq 54). */
+int sd_build_log_count(const sd_scenario *s);
+
+#endif

@@ -1,0 +1,180 @@
+/* Cases 5, 6, 7 (eqs 28-39) and the gaps between them: two solid cylinders with flat ends.
+ *
+ * Candidate feature pairs, each with its own exact local depth, normal and point:
+ *   S     side-side: common perpendicular of the two axes (eqs 28-31), feet inside both axes;
+ *   E(P)  end disk of P against the side of Q (case 6, eqs 32-35, done exactly): the point of
+ *         the disk nearest the axis of Q, depth r_Q - rho, normal radial from Q's axis;
+ *   F(P)  end disk of P against an end face of Q (case 7, eqs 36-39): the rim point of the
+ *         disk deepest past Q's end plane (the disk centre region when the disks are
+ *         parallel), depth below the plane, normal = Q's end-face normal;
+ * for P, Q = A, B and B, A. Rim against side, rim against rim and rim against end face are the
+ * E and F candidates with the rim point as the deepest point of the disk. A candidate is kept
+ * when it is a true penetration and describes how the two bodies actually separate: S always;
+ * E when the side is the nearest surface of Q to the point, or when the separating-axis
+ * overlap of the two whole bodies along its normal equals its depth; F only in the latter
+ * case. Of the E and F candidates of one disk the shallower is kept (least penetration
+ * direction); near-duplicates (close points, similar normals) are merged, keeping the deepest.
+ * feature: 0 side-side; A's disk -/+: 1/2 against B's side, 3/4 against an end face of B;
+ * B's disk -/+: 5/6 against A's side, 7/8 against an end face of A. */
+#include "cyl_common.h"
+
+typedef struct {
+    sd_vec3 n; /* from Q towards P */
+    sd_vec3 p;
+    double ov;
+    int kind; /* 0 side (E), 1 end face (F) */
+} sd_cc_cand;
+
+/* Separating-axis overlap of the projections of P and Q on n, for pushing P along +n. */
+static double cc_sat_overlap(const sd_cyl *P, const sd_cyl *Q, sd_vec3 n)
+{
+    return sd_cyl_extent(P, n) + sd_cyl_extent(Q, n) - v3_dot(v3_sub(P->c, Q->c), n);
+}
+
+/* The contact of end disk e of P with Q, if any (normal from Q towards P). */
+static int cc_disk_into(const sd_cyl *P, double e, const sd_cyl *Q, double tol, sd_cc_cand *out)
+{
+    sd_vec3 ce = sd_cyl_end(P, e);
+    int found = 0;
+    /* E: disk against Q's side */
+    {
+        sd_vec3 x = sd_disk_closest_to_line(ce, P->a, P->r, Q->c, Q->a);
+        sd_vec3 d = v3_sub(x, Q->c);
+        double tq = v3_dot(d, Q->a);
+        sd_vec3 w = v3_madd(d, Q->a, -tq);
+        double rho = v3_norm(w);
+        if (fabs(tq) <= Q->hl + tol && rho < Q->r) {
+            sd_vec3 n = rho > 1e-300 ? v3_scale(w, 1.0 / rho) : sd_perp_dir(Q->a, v3_sub(P->c, Q->c), P->a);
+            double ov = Q->r - rho;
+            int side_nearest = ov <= Q->hl - fabs(tq);
+            if (side_nearest || cc_sat_overlap(P, Q, n) <= ov + tol) {
+                out->n = n;
+                out->ov = ov;
+                out->p = v3_madd(x, n, 0.5 * ov);
+                out->kind = 0;
+                found = 1;
+            }
+        }
+    }
+    /* F: disk against an end face of Q */
+    for (int k = 0; k < 2; k++) {
+        double f = k ? 1.0 : -1.0;
+        sd_vec3 nf = v3_scale(Q->a, f);
+        sd_vec3 cf = sd_cyl_end(Q, f);
+        sd_vec3 dp = v3_madd(v3_neg(nf), P->a, v3_dot(nf, P->a)); /* -nf projected on the disk plane */
+        double ndp = v3_norm(dp);
+        sd_vec3 x;
+        if (ndp > 1e-12) {
+            x = v3_madd(ce, dp, P->r / ndp);
+        } else {
+            /* parallel disks: middle of the lens of the two disks along their centre line */
+            sd_vec3 dv = v3_sub(ce, cf);
+            dv = v3_madd(dv, Q->a, -v3_dot(dv, Q->a));
+            double dd = v3_norm(dv);
+            if (dd > 1e-300) {
+                sd_vec3 dir = v3_scale(dv, 1.0 / dd);
+                double lo = dd - P->r > -Q->r ? dd - P->r : -Q->r;
+                double hi = dd + P->r < Q->r ? dd + P->r : Q->r;
+                x = v3_madd(ce, dir, 0.5 * (lo + hi) - dd);
+            } else {
+                x = ce;
+            }
+        }
+        sd_vec3 d = v3_sub(x, cf);
+        double ov = -v3_dot(d, nf);
+        if (!(ov > 0.0)) continue;
+        double rho = v3_norm(v3_madd(d, Q->a, -v3_dot(d, Q->a)));
+        if (rho > Q->r + tol) continue;
+        if (cc_sat_overlap(P, Q, nf) > ov + tol) continue;
+        if (!found || ov < out->ov) {
+            out->n = nf;
+            out->ov = ov;
+            out->p = v3_madd(x, nf, 0.5 * ov);
+            out->kind = 1;
+            found = 1;
+        }
+    }
+    return found;
+}
+
+int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
+{
+    m->n = 0;
+    sd_vec3 dc = v3_sub(a->c, b->c);
+    double ra = sqrt(a->r * a->r + a->hl * a->hl), rb = sqrt(b->r * b->r + b->hl * b->hl);
+    if (v3_norm2(dc) >= (ra + rb) * (ra + rb)) return 0; /* bounding spheres (eq 44) */
+    double tol = 1e-9 * (a->r + a->hl + b->r + b->hl);
+
+    sd_vec3 cn[5], cp[5];
+    double cov[5];
+    int cid[5], nc = 0;
+
+    /* S: side-side, common perpendicular of the axes (eqs 28-31) */
+    double s, t;
+    if (sd_line_line(a->c, a->a, b->c, b->a, &s, &t) && fabs(s) <= a->hl && fabs(t) <= b->hl) {
+        sd_vec3 pa = v3_madd(a->c, a->a, s), pb = v3_madd(b->c, b->a, t);
+        sd_vec3 d = v3_sub(pa, pb);
+        double dist = v3_norm(d);
+        double ov = a->r + b->r - dist;
+        if (ov > 0.0) {
+            sd_vec3 n;
+            if (dist > 1e-300) {
+                n = v3_scale(d, 1.0 / dist);
+            } else {
+                n = v3_normalize(v3_cross(a->a, b->a));
+                if (v3_dot(n, dc) < 0.0) n = v3_neg(n);
+            }
+            cn[nc] = n;
+            cov[nc] = ov;
+            /* midway between B's surface pb + rb n and A's surface pa - ra n */
+            cp[nc] = v3_madd(v3_scale(v3_add(pa, pb), 0.5), n, 0.5 * (b->r - a->r));
+            cid[nc] = 0;
+            nc++;
+        }
+    }
+    /* end disks of A into B, then of B into A (normal flipped to point from B to A) */
+    for (int k = 0; k < 4; k++) {
+        double e = (k & 1) ? 1.0 : -1.0;
+        sd_cc_cand c;
+        if (k < 2) {
+            if (!cc_disk_into(a, e, b, tol, &c)) continue;
+            cn[nc] = c.n;
+            cid[nc] = 1 + (k & 1) + 2 * c.kind;
+        } else {
+            if (!cc_disk_into(b, e, a, tol, &c)) continue;
+            cn[nc] = v3_neg(c.n);
+            cid[nc] = 5 + (k & 1) + 2 * c.kind;
+        }
+        cp[nc] = c.p;
+        cov[nc] = c.ov;
+        nc++;
+    }
+    /* deepest first (ties by feature id), merge near-duplicates, keep at most 4 */
+    int order[5];
+    for (int i = 0; i < nc; i++) order[i] = i;
+    for (int i = 1; i < nc; i++) {
+        int j = i, x = order[i];
+        while (j > 0 && (cov[order[j - 1]] < cov[x] || (cov[order[j - 1]] == cov[x] && cid[order[j - 1]] > cid[x]))) {
+            order[j] = order[j - 1];
+            j--;
+        }
+        order[j] = x;
+    }
+    double rmin = a->r < b->r ? a->r : b->r;
+    for (int i = 0; i < nc && m->n < SD_MANIFOLD_MAX; i++) {
+        int c = order[i], dup = 0;
+        for (int j = 0; j < m->n; j++) {
+            if (v3_dist(cp[c], m->point[j]) < 0.5 * rmin && v3_dot(cn[c], m->normal[j]) > 0.9) {
+                dup = 1;
+                break;
+            }
+        }
+        if (dup) continue;
+        m->normal[m->n] = cn[c];
+        m->point[m->n] = cp[c];
+        m->overlap[m->n] = cov[c];
+        m->feature[m->n] = cid[c];
+        m->n++;
+    }
+    return m->n;
+}

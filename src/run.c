@@ -1,0 +1,587 @@
+/* The driver: builds the scene, runs the phases of SPEC §6, writes the outputs. Output and
+ * phase logic happen between steps, never inside them. */
+#include "run.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "build.h"
+#include "fluid.h"
+#include "io_vtk.h"
+#include "world_internal.h"
+
+enum { PH_PACK = 0, PH_FLOW = 1, PH_CAPTURE = 2, PH_DONE = 3, PH_RUN = 4 };
+static const char *phase_names[] = {"packing", "flow", "capture", "done", "run"};
+
+typedef struct {
+    const sd_scenario *s;
+    const sd_run_opts *o;
+    sd_world *w;
+    sd_build_info info;
+    FILE *series, *traj;
+    char dir[1024];
+    int phase;
+    double vol_total_class[SD_MAX_CLASSES], vol_total_logs;
+    double vol_passed_class[SD_MAX_CLASSES], vol_passed_logs;
+    int n_passed;
+    double h_d;
+    double last_cross_time;
+    double ke_peak;
+    double pipe_peak[2 * SD_MAX_PIPES], pipe_impulse[2 * SD_MAX_PIPES];
+    sd_vec3 pipe_impulse_vec[2 * SD_MAX_PIPES];
+    double dam_force_now;
+    double phase_end[4];
+    double phase_wall[4];
+    int flow_len_done;
+    double flow_len, flow_q05, flow_q95, flow_front, flow_len_time;
+    int n_snap;
+    sd_vtk_series pvd;
+    int pvd_on;
+    double wall0;
+} run_ctx;
+
+static double body_volume(const sd_bodies *b, int i)
+{
+    double r = b->radius[i];
+    return b->shape[i] == SD_SHAPE_SPHERE ? 4.0 / 3.0 * M_PI * r * r * r : M_PI * r * r * 2.0 * b->hl[i];
+}
+
+static int is_debris(const sd_bodies *b, int i) { return !b->fixed[i]; }
+
+static int mkdir_p(const char *path)
+{
+    char tmp[1024];
+    snprintf(tmp, sizeof tmp, "%s", path);
+    for (char *p = tmp + 1; *p; p++)
+        if (*p == '/') {
+            *p = 0;
+            if (mkdir(tmp, 0777) && errno != EEXIST) return -1;
+            *p = '/';
+        }
+    if (mkdir(tmp, 0777) && errno != EEXIST) return -1;
+    return 0;
+}
+
+/* Volume still upstream of the dam: centre upstream of the pipes' axis plane. */
+static double x_trap(const run_ctx *c) { return c->s->x_dam + 0.5 * c->s->pipe_diam; }
+
+static void volumes_upstream(const run_ctx *c, double *cls, double *logs, int *n_up)
+{
+    const sd_bodies *b = &c->w->b;
+    for (int k = 0; k < SD_MAX_CLASSES; k++) cls[k] = 0.0;
+    *logs = 0.0;
+    *n_up = 0;
+    double xt = x_trap(c);
+    for (int i = 0; i < b->n; i++) {
+        if (!is_debris(b, i) || b->pos[i].x >= xt) continue;
+        (*n_up)++;
+        if (b->shape[i] == SD_SHAPE_CYLINDER) *logs += body_volume(b, i);
+        else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES) cls[b->tag[i]] += body_volume(b, i);
+    }
+}
+
+static double trap_ratio(const run_ctx *c, double *per_class, double *logs_ratio, int *n_up)
+{
+    double cls[SD_MAX_CLASSES], logs;
+    volumes_upstream(c, cls, &logs, n_up);
+    double up = logs, tot = c->vol_total_logs;
+    for (int k = 0; k < SD_MAX_CLASSES; k++) {
+        up += cls[k];
+        tot += c->vol_total_class[k];
+        if (per_class) per_class[k] = c->vol_total_class[k] > 0 ? cls[k] / c->vol_total_class[k] : 0.0;
+    }
+    if (logs_ratio) *logs_ratio = c->vol_total_logs > 0 ? logs / c->vol_total_logs : 0.0;
+    return tot > 0 ? up / tot : 0.0;
+}
+
+static void apply_fluid(run_ctx *c)
+{
+    sd_bodies *b = &c->w->b;
+    const sd_scenario *s = c->s;
+    if (!s->water_on || c->phase == PH_PACK || c->phase == PH_RUN) return;
+    sd_fluid_params fp = sd_fluid_params_default(s->slope_deg * M_PI / 180.0);
+    fp.U = s->water_u;
+    fp.h = s->water_h;
+    fp.rho = s->water_rho;
+    fp.C_D = s->water_cd;
+    fp.gravity = c->w->def.gravity;
+    const double xd = s->x_dam;
+    const int n = b->n;
+    const int capture = c->phase == PH_CAPTURE;
+    const double h_d = c->h_d;
+#pragma omp parallel for schedule(static) if (n > SD_OMP_MIN_ITEMS)
+    for (int i = 0; i < n; i++) {
+        if (b->fixed[i]) continue;
+        sd_fluid_element e;
+        e.shape = b->shape[i];
+        e.pos = b->pos[i];
+        e.vel = b->vel[i];
+        e.axis = b->axis[i];
+        e.radius = b->radius[i];
+        e.length = 2.0 * b->hl[i];
+        /* the capture profile applies upstream of the dam; passed elements keep the flow one */
+        sd_fluid_phase ph = (capture && b->pos[i].x < xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
+        b->ext_force[i] = sd_fluid_force_total(&fp, ph, h_d, &e);
+    }
+}
+
+static void update_h_d(run_ctx *c)
+{
+    const sd_bodies *b = &c->w->b;
+    double h = c->s->water_h, xd = c->s->x_dam, lo = xd - c->s->water_probe;
+    for (int i = 0; i < b->n; i++)
+        if (!b->fixed[i] && b->pos[i].x >= lo && b->pos[i].x <= xd && b->pos[i].z > h) h = b->pos[i].z;
+    c->h_d = h;
+}
+
+static void remove_passed(run_ctx *c)
+{
+    sd_bodies *b = &c->w->b;
+    for (int i = b->n - 1; i >= 0; i--) {
+        if (b->fixed[i] || b->pos[i].x <= c->s->x_end) continue;
+        if (b->shape[i] == SD_SHAPE_CYLINDER) c->vol_passed_logs += body_volume(b, i);
+        else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES) c->vol_passed_class[b->tag[i]] += body_volume(b, i);
+        c->n_passed++;
+        sd_world_remove_body(c->w, b->gid[i]);
+    }
+}
+
+static double front_x(const run_ctx *c)
+{
+    const sd_bodies *b = &c->w->b;
+    double f = -INFINITY;
+    for (int i = 0; i < b->n; i++)
+        if (!b->fixed[i] && b->pos[i].x + b->bound_r[i] > f) f = b->pos[i].x + b->bound_r[i];
+    return f;
+}
+
+static double upstream_ke(const run_ctx *c)
+{
+    const sd_bodies *b = &c->w->b;
+    double e = 0.0, xt = x_trap(c);
+    for (int i = 0; i < b->n; i++)
+        if (!b->fixed[i] && b->pos[i].x < xt) e += 0.5 * b->mass[i] * v3_norm2(b->vel[i]);
+    return e;
+}
+
+static double max_speed(const run_ctx *c)
+{
+    const sd_bodies *b = &c->w->b;
+    double v = 0.0;
+    for (int i = 0; i < b->n; i++)
+        if (!b->fixed[i]) v = fmax(v, v3_norm2(b->vel[i]));
+    return sqrt(v);
+}
+
+typedef struct {
+    double x, v;
+} xv;
+
+static int cmp_xv(const void *pa, const void *pb)
+{
+    const xv *a = pa, *b = pb;
+    return (a->x > b->x) - (a->x < b->x);
+}
+
+/* Flow length (SPEC §8): spread between the 5 % and 95 % volume quantiles of x over the
+ * volume that has left the reservoir. */
+static void measure_flow_length(run_ctx *c)
+{
+    const sd_bodies *b = &c->w->b;
+    xv *a = malloc((size_t)(b->n + 1) * sizeof(*a));
+    if (!a) return;
+    int m = 0;
+    double tot = 0.0;
+    for (int i = 0; i < b->n; i++)
+        if (!b->fixed[i] && b->pos[i].x > c->s->x_gate) {
+            a[m].x = b->pos[i].x;
+            a[m].v = body_volume(b, i);
+            tot += a[m].v;
+            m++;
+        }
+    qsort(a, (size_t)m, sizeof(*a), cmp_xv);
+    double acc = 0.0, q05 = NAN, q95 = NAN;
+    for (int k = 0; k < m; k++) {
+        acc += a[k].v;
+        if (isnan(q05) && acc >= 0.05 * tot) q05 = a[k].x;
+        if (isnan(q95) && acc >= 0.95 * tot) q95 = a[k].x;
+    }
+    free(a);
+    c->flow_q05 = q05;
+    c->flow_q95 = q95;
+    c->flow_len = q95 - q05;
+    c->flow_front = front_x(c);
+    c->flow_len_time = c->w->time;
+    c->flow_len_done = 1;
+}
+
+static void write_series_row(run_ctx *c)
+{
+    if (!c->series) return;
+    double cls[SD_MAX_CLASSES], logs;
+    int n_up;
+    volumes_upstream(c, cls, &logs, &n_up);
+    double up = logs;
+    for (int k = 0; k < SD_MAX_CLASSES; k++) up += cls[k];
+    double pv = c->s->flume_on ? trap_ratio(c, NULL, NULL, &n_up) : 0.0;
+    fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d\n", c->w->time, phase_names[c->phase],
+            c->w->b.n ? front_x(c) : 0.0, up, sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w),
+            c->dam_force_now, pv, c->h_d, c->w->b.n, c->n_passed);
+}
+
+static void write_traj(run_ctx *c)
+{
+    if (!c->traj) return;
+    for (int k = 0; k < c->s->n_traj; k++) {
+        sd_body_state st;
+        if (sd_world_body(c->w, c->s->traj_ids[k], &st)) continue;
+        fprintf(c->traj, "%.9f,%d,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.9f,%.9f,%.9f,%.9e,%.9e,%.9e\n",
+                c->w->time, st.gid, st.pos.x, st.pos.y, st.pos.z, st.vel.x, st.vel.y, st.vel.z, st.omega.x,
+                st.omega.y, st.omega.z, st.axis.x, st.axis.y, st.axis.z, st.force.x, st.force.y, st.force.z);
+    }
+}
+
+static int snapshot(run_ctx *c, const char *name)
+{
+    if (!c->s->vtk_on) return 0;
+    const sd_bodies *b = &c->w->b;
+    size_t cap = (size_t)(b->n + 1);
+    sd_vec3 *pos = malloc(cap * sizeof(sd_vec3)), *vel = malloc(cap * sizeof(sd_vec3)), *ax = malloc(cap * sizeof(sd_vec3));
+    double *rad = malloc(cap * sizeof(double)), *len = malloc(cap * sizeof(double));
+    int *id = malloc(cap * sizeof(int)), *tag = malloc(cap * sizeof(int));
+    int rc = -1;
+    if (pos && vel && ax && rad && len && id && tag) {
+        char r1[256], r2[256], f[1400];
+        snprintf(r1, sizeof r1, "spheres_%s.vtp", name);
+        snprintf(r2, sizeof r2, "cylinders_%s.vtp", name);
+        for (int pass = 0; pass < 2; pass++) {
+            size_t m = 0;
+            for (int i = 0; i < b->n; i++) {
+                if ((b->shape[i] == SD_SHAPE_SPHERE) != (pass == 0)) continue;
+                pos[m] = b->pos[i];
+                vel[m] = b->vel[i];
+                ax[m] = b->axis[i];
+                rad[m] = b->radius[i];
+                len[m] = 2.0 * b->hl[i];
+                id[m] = b->gid[i];
+                tag[m] = b->tag[i];
+                m++;
+            }
+            snprintf(f, sizeof f, "%s/%s", c->dir, pass == 0 ? r1 : r2);
+            rc = pass == 0 ? sd_vtk_write_spheres(f, m, pos, rad, vel, id, tag)
+                           : sd_vtk_write_cylinders(f, m, pos, ax, len, rad, vel, id, tag);
+            if (rc) break;
+        }
+        if (!rc && c->pvd_on) {
+            rc = sd_vtk_series_add(&c->pvd, c->w->time, 0, r1);
+            if (!rc) rc = sd_vtk_series_add(&c->pvd, c->w->time, 1, r2);
+        }
+    }
+    free(pos);
+    free(vel);
+    free(ax);
+    free(rad);
+    free(len);
+    free(id);
+    free(tag);
+    c->n_snap++;
+    return rc;
+}
+
+static int write_walls(run_ctx *c)
+{
+    if (!c->s->vtk_on) return 0;
+    const sd_walls *wl = &c->w->w;
+    char f[1200];
+    snprintf(f, sizeof f, "%s/walls.vtp", c->dir);
+    sd_vec3 *v = malloc((size_t)(3 * wl->n + 1) * sizeof(sd_vec3));
+    int *g = malloc((size_t)(wl->n + 1) * sizeof(int));
+    int rc = -1;
+    if (v && g) {
+        for (int t = 0; t < wl->n; t++) {
+            for (int k = 0; k < 3; k++) v[3 * t + k] = wl->tri[t].v[k];
+            g[t] = wl->group[t];
+        }
+        rc = sd_vtk_write_triangles(f, (size_t)wl->n, v, g);
+    }
+    free(v);
+    free(g);
+    return rc;
+}
+
+static void plot(run_ctx *c, const char *name, const char *png, double xmin, double xmax)
+{
+    if (!c->s->png_on || !c->s->vtk_on) return;
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd,
+             "/usr/bin/python3 \"%s/scripts/plot_side.py\" --spheres \"%s/spheres_%s.vtp\" --cylinders \"%s/cylinders_%s.vtp\""
+             " --xmin %g --xmax %g --out \"%s/%s\" >/dev/null 2>&1",
+             SD_SOURCE_DIR, c->dir, name, c->dir, name, xmin, xmax, c->dir, png);
+    if (system(cmd) != 0 && c->o->log) fprintf(c->o->log, "note: picture %s not drawn (python3-matplotlib missing?)\n", png);
+}
+
+static void progress(run_ctx *c, double t_end_est)
+{
+    double wall = sd_now() - c->wall0;
+    double sps = wall > 0 ? (double)c->w->step / wall : 0.0;
+    double eta = sps > 0 && t_end_est > c->w->time ? (t_end_est - c->w->time) / c->w->def.dt / sps : 0.0;
+    if (!c->o->log) return;
+    if (c->o->progress_tty)
+        fprintf(c->o->log, "\r%-8s t = %8.4f s  %9.0f steps/s  %6d elements  ETA %6.0f s   ", phase_names[c->phase],
+                c->w->time, sps, c->w->b.n, eta);
+    else
+        fprintf(c->o->log, "phase=%s t=%.4f steps_per_s=%.0f elements=%d passed=%d eta_s=%.0f\n", phase_names[c->phase],
+                c->w->time, sps, c->w->b.n, c->n_passed, eta);
+    fflush(c->o->log);
+}
+
+static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg)
+{
+    char path[1200], tmp[1300];
+    snprintf(path, sizeof path, "%s/summary.json", c->dir);
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    FILE *f = fopen(tmp, "w");
+    if (!f) return -1;
+    const sd_scenario *s = c->s;
+    double per[SD_MAX_CLASSES] = {0}, logs_ratio = 0.0;
+    int n_up = 0;
+    double pv = s->flume_on ? trap_ratio(c, per, &logs_ratio, &n_up) : 0.0;
+    fprintf(f, "{\n  \"scenario\": \"%s\",\n  \"status\": \"%s\",\n  \"exit_code\": %d,\n", s->path, status_msg, status_code);
+    fprintf(f, "  \"simulated_time_s\": %.6f,\n  \"steps\": %ld,\n  \"wall_time_s\": %.3f,\n", c->w->time, c->w->step,
+            sd_now() - c->wall0);
+    sd_world_timers tm = sd_world_get_timers(c->w);
+    fprintf(f, "  \"timers_s\": {\"neighbor\": %.3f, \"contact\": %.3f, \"gather\": %.3f, \"integrate\": %.3f, \"rebuilds\": %ld},\n",
+            tm.neighbor, tm.contact, tm.gather, tm.integrate, tm.rebuilds);
+    fprintf(f, "  \"elements\": {\"moving_spheres\": %d, \"logs\": %d, \"roughness_spheres\": %d, \"pipes\": %d, \"triangles\": %d, \"passed\": %d, \"remaining\": %d},\n",
+            c->info.n_spheres, c->info.n_logs, c->info.n_rough, c->info.n_pipes, sd_world_triangle_count(c->w),
+            c->n_passed, sd_world_body_count(c->w));
+    if (s->flume_on) {
+        res->p_v = pv;
+        for (int k = 0; k < SD_MAX_CLASSES; k++) res->p_v_class[k] = per[k];
+        res->p_v_logs = logs_ratio;
+        res->n_upstream = n_up;
+        fprintf(f, "  \"trap_ratio\": %.6f,\n  \"capture_limit_s\": %.3f,\n  \"trap_ratio_class\": [", pv, s->capture_limit);
+        for (int k = 0; k < s->n_classes; k++) fprintf(f, "%s{\"diameter\": %g, \"p_v\": %.6f}", k ? ", " : "", s->class_diam[k], per[k]);
+        double vt = c->vol_total_logs, vs = 0;
+        for (int k = 0; k < SD_MAX_CLASSES; k++) vs += c->vol_total_class[k];
+        fprintf(f, "],\n  \"trap_ratio_logs\": %.6f,\n  \"k_w\": %.6f,\n  \"solid_volume_m3\": {\"spheres\": %.9e, \"logs\": %.9e},\n",
+                logs_ratio, vt + vs > 0 ? vt / (vt + vs) : 0.0, vs, vt);
+        /* deposit height at the dam: top of the highest element within the probe length */
+        double dep = 0.0;
+        const sd_bodies *b = &c->w->b;
+        for (int i = 0; i < b->n; i++)
+            if (!b->fixed[i] && b->pos[i].x >= s->x_dam - s->water_probe && b->pos[i].x <= x_trap(c))
+                dep = fmax(dep, b->pos[i].z + b->bound_r[i]);
+        fprintf(f, "  \"deposit_height_at_dam_m\": %.5f,\n", dep);
+        fprintf(f, "  \"phase_end_s\": {\"packing\": %.4f, \"flow\": %.4f, \"capture\": %.4f},\n", c->phase_end[0],
+                c->phase_end[1], c->phase_end[2]);
+        fprintf(f, "  \"phase_wall_s\": {\"packing\": %.2f, \"flow\": %.2f, \"capture\": %.2f},\n", c->phase_wall[0],
+                c->phase_wall[1], c->phase_wall[2]);
+        if (c->flow_len_done)
+            fprintf(f, "  \"flow_at_1m_before_dam\": {\"t\": %.4f, \"length_q05_q95_m\": %.4f, \"q05_m\": %.4f, \"q95_m\": %.4f, \"front_m\": %.4f},\n",
+                    c->flow_len_time, c->flow_len, c->flow_q05, c->flow_q95, c->flow_front);
+        fprintf(f, "  \"pipes\": [\n");
+        for (int k = 0; k < c->info.n_pipes; k++)
+            fprintf(f, "    {\"gid\": %d, \"kind\": \"%s\", \"%s\": %.4f, \"peak_force_N\": %.6e, \"impulse_Ns\": %.6e, \"impulse_x_Ns\": %.6e}%s\n",
+                    c->info.pipe_gid[k], c->info.pipe_is_column[k] ? "column" : "beam",
+                    c->info.pipe_is_column[k] ? "y_m" : "z_axis_m", c->info.pipe_coord[k], c->pipe_peak[k],
+                    c->pipe_impulse[k], c->pipe_impulse_vec[k].x, k + 1 < c->info.n_pipes ? "," : "");
+        fprintf(f, "  ],\n");
+    }
+    sd_scenario_echo_json(s, f);
+    fprintf(f, "\n}\n");
+    int bad = ferror(f);
+    if (fclose(f) || bad) return -1;
+    return rename(tmp, path);
+}
+
+static void accumulate_pipes(run_ctx *c)
+{
+    double tot = 0.0;
+    for (int k = 0; k < c->info.n_pipes; k++) {
+        sd_body_state st;
+        if (sd_world_body(c->w, c->info.pipe_gid[k], &st)) continue;
+        double f = v3_norm(st.force);
+        tot += f;
+        if (f > c->pipe_peak[k]) c->pipe_peak[k] = f;
+        c->pipe_impulse[k] += f * c->w->def.dt;
+        c->pipe_impulse_vec[k] = v3_madd(c->pipe_impulse_vec[k], st.force, c->w->def.dt);
+    }
+    c->dam_force_now = tot;
+}
+
+int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *res)
+{
+    run_ctx c;
+    memset(&c, 0, sizeof c);
+    memset(res, 0, sizeof(*res));
+    c.s = s;
+    c.o = o;
+    c.wall0 = sd_now();
+    sd_status st = sd_world_create(&s->world, &c.w);
+    if (st) {
+        fprintf(o->err, "%s: %s\n", s->path, sd_status_message(st));
+        return 2;
+    }
+    st = sd_build_scene(c.w, s, &c.info, o->err);
+    if (!st) st = sd_world_check(c.w);
+    if (st) {
+        if (st == SD_ERR_UNSTABLE) fprintf(o->err, "%s: solver.dt: %s\n", s->path, sd_status_message(st));
+        else fprintf(o->err, "%s: cannot build the scene: %s\n", s->path, sd_status_message(st));
+        sd_world_destroy(c.w);
+        return 2;
+    }
+    /* only now, with valid input, does the output directory appear */
+    snprintf(c.dir, sizeof c.dir, "%s", o->outdir);
+    if (mkdir_p(c.dir)) {
+        fprintf(o->err, "%s: cannot create output directory: %s\n", c.dir, strerror(errno));
+        sd_world_destroy(c.w);
+        return 2;
+    }
+    char path[1200];
+    snprintf(path, sizeof path, "%s/series.csv", c.dir);
+    c.series = fopen(path, "w");
+    if (c.series)
+        fprintf(c.series, "t,phase,front_x,volume_upstream_m3,kinetic_energy_J,contacts,dam_force_N,p_v,h_d,elements,passed\n");
+    if (s->n_traj > 0) {
+        snprintf(path, sizeof path, "%s/trajectories.csv", c.dir);
+        c.traj = fopen(path, "w");
+        if (c.traj) fprintf(c.traj, "t,id,x,y,z,vx,vy,vz,wx,wy,wz,ax,ay,az,fx,fy,fz\n");
+    }
+    if (s->vtk_on) {
+        snprintf(path, sizeof path, "%s/series.pvd", c.dir);
+        c.pvd_on = sd_vtk_series_init(&c.pvd, path) == 0;
+    }
+    if (!c.series || (s->n_traj > 0 && !c.traj) || (s->vtk_on && !c.pvd_on) || write_walls(&c)) {
+        fprintf(o->err, "%s: cannot write output files: %s\n", c.dir, strerror(errno));
+        if (c.series) fclose(c.series);
+        if (c.traj) fclose(c.traj);
+        if (c.pvd_on) sd_vtk_series_free(&c.pvd);
+        sd_world_destroy(c.w);
+        return 1;
+    }
+    const sd_bodies *b = &c.w->b;
+    for (int i = 0; i < b->n; i++) {
+        if (b->fixed[i]) continue;
+        if (b->shape[i] == SD_SHAPE_CYLINDER) c.vol_total_logs += body_volume(b, i);
+        else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES) c.vol_total_class[b->tag[i]] += body_volume(b, i);
+    }
+    c.phase = s->flume_on ? PH_PACK : PH_RUN;
+    c.h_d = s->water_h;
+    const double dt = s->world.dt;
+    long log_every = (long)llround(s->log_interval / dt);
+    if (log_every < 1) log_every = 1;
+    long traj_every = (long)llround(s->traj_interval / dt);
+    if (traj_every < 1) traj_every = 1;
+    long snap_every = s->snapshot_interval > 0 ? (long)llround(s->snapshot_interval / dt) : 0;
+    long progress_every = 2000;
+    double phase_t0 = 0.0, phase_w0 = c.wall0;
+    double t_end_est = s->flume_on ? s->packing_time + 4.0 + s->capture_limit : s->duration;
+    int code = 0;
+    const char *msg = "finished";
+    snapshot(&c, "initial");
+    write_series_row(&c);
+    write_traj(&c);
+    for (;;) {
+        if (o->stop && *o->stop) {
+            code = 130;
+            msg = "interrupted";
+            res->interrupted = 1;
+            break;
+        }
+        if (c.phase == PH_RUN && c.w->time >= s->duration - 0.5 * dt) break;
+        if (c.phase == PH_DONE) break;
+        apply_fluid(&c);
+        st = sd_world_step(c.w);
+        if (st) {
+            fprintf(o->err, "%s: step %ld, t = %.6f s: %s\n", s->path, c.w->step, c.w->time, sd_status_message(st));
+            code = 1;
+            msg = sd_status_message(st);
+            break;
+        }
+        long step = c.w->step;
+        if (c.info.n_pipes) accumulate_pipes(&c);
+        if (s->flume_on && step % 100 == 0) {
+            int before = c.n_passed;
+            remove_passed(&c);
+            double tph = c.w->time - phase_t0;
+            /* crossing the dam: an element whose centre passed the trap plane */
+            double xt = x_trap(&c);
+            for (int i = 0; i < b->n; i++)
+                if (!b->fixed[i] && b->pos[i].x >= xt && b->pos[i].x < xt + 0.02) {
+                    c.last_cross_time = c.w->time;
+                    break;
+                }
+            if (c.n_passed != before) c.last_cross_time = c.w->time;
+            int next = c.phase;
+            if (c.phase == PH_PACK) {
+                if (tph >= s->packing_time - 0.5 * dt) next = PH_FLOW;
+            } else if (c.phase == PH_FLOW) {
+                double fx = front_x(&c);
+                if (!c.flow_len_done && fx >= s->x_dam - 1.0) measure_flow_length(&c);
+                if (fx >= s->x_dam || tph >= s->flow_limit) next = PH_CAPTURE;
+            } else if (c.phase == PH_CAPTURE) {
+                update_h_d(&c);
+                double ke = upstream_ke(&c);
+                if (ke > c.ke_peak) c.ke_peak = ke;
+                int quiet = c.w->time - c.last_cross_time >= s->quiet_time && ke < s->ke_fraction * c.ke_peak;
+                if (tph >= s->capture_limit || (tph > s->quiet_time && quiet)) next = PH_DONE;
+            }
+            if (next != c.phase) {
+                c.phase_end[c.phase] = c.w->time;
+                c.phase_wall[c.phase] = sd_now() - phase_w0;
+                phase_w0 = sd_now();
+                if (o->log && !o->progress_tty)
+                    fprintf(o->log, "phase %s ended at t = %.4f s (max speed %.4f m/s)\n", phase_names[c.phase], c.w->time,
+                            max_speed(&c));
+                if (c.phase == PH_PACK) {
+                    sd_world_set_group_active(c.w, SD_GROUP_GATE, 0);
+                    snapshot(&c, "packed");
+                }
+                if (next == PH_CAPTURE) {
+                    snapshot(&c, "arrival");
+                    plot(&c, "arrival", "side_arrival.png", s->x_dam - 1.2, s->x_end);
+                    c.last_cross_time = c.w->time;
+                    update_h_d(&c);
+                }
+                phase_t0 = c.w->time;
+                c.phase = next;
+            }
+        }
+        if (step % log_every == 0) write_series_row(&c);
+        if (c.traj && step % traj_every == 0) write_traj(&c);
+        if (snap_every && step % snap_every == 0) {
+            char name[64];
+            snprintf(name, sizeof name, "%06d", c.n_snap);
+            snapshot(&c, name);
+        }
+        if (step % progress_every == 0) progress(&c, t_end_est);
+    }
+    if (o->log && o->progress_tty) fputc('\n', o->log);
+    if (c.phase != PH_DONE && c.phase != PH_RUN) {
+        c.phase_end[c.phase] = c.w->time;
+        c.phase_wall[c.phase] = sd_now() - phase_w0;
+    }
+    write_series_row(&c);
+    snapshot(&c, "final");
+    if (s->flume_on && code == 0) plot(&c, "final", "side_final.png", s->x_dam - 1.0, s->x_end);
+    fclose(c.series);
+    if (c.traj) fclose(c.traj);
+    if (c.pvd_on) {
+        sd_vtk_series_flush(&c.pvd);
+        sd_vtk_series_free(&c.pvd);
+    }
+    if (write_summary(&c, res, code, msg)) {
+        fprintf(o->err, "%s: cannot write summary.json: %s\n", c.dir, strerror(errno));
+        if (!code) code = 1;
+    }
+    res->n_passed = c.n_passed;
+    res->steps = c.w->step;
+    res->wall_time = sd_now() - c.wall0;
+    for (int k = 0; k < 4; k++) res->phase_end[k] = c.phase_end[k];
+    sd_world_destroy(c.w);
+    return code;
+}

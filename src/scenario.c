@@ -1,0 +1,633 @@
+/* Scenario loader: YAML tree → sd_scenario through one parameter table. */
+#include "scenario.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/vmath.h"
+#include "yaml_tree.h"
+
+typedef enum { P_DOUBLE, P_INT, P_BOOL, P_VEC3, P_DLIST, P_ILIST } ptype;
+
+typedef struct {
+    const char *key;
+    ptype type;
+    size_t off;
+    size_t count_off; /* lists: offset of the int count */
+    int max_count;
+    const char *unit;
+    double min, max;
+    int strict_min; /* 1: value must be > min */
+    const char *doc;
+} sd_param;
+
+#define OFF(f) offsetof(sd_scenario, f)
+#define INF HUGE_VAL
+
+static const sd_param params[] = {
+    {"solver.dt", P_DOUBLE, OFF(world.dt), 0, 0, "s", 0, 1, 1, "time step Δt"},
+    {"solver.duration", P_DOUBLE, OFF(duration), 0, 0, "s", 0, INF, 0, "simulated time (scenes without a flume; the flume run ends by its phases)"},
+    {"solver.margin", P_DOUBLE, OFF(world.margin), 0, 0, "m", 0, 1, 0, "candidate margin r_dam"},
+    {"solver.t_reset", P_DOUBLE, OFF(world.t_reset), 0, 0, "s", 0, INF, 1, "candidate list rebuild interval"},
+    {"solver.threads", P_INT, OFF(world.threads), 0, 0, "-", 0, 1024, 0, "OpenMP threads (0 = all cores)"},
+    {"solver.check_dt", P_BOOL, OFF(world.check_dt), 0, 0, "-", 0, 1, 0, "refuse a time step with fewer than 8 steps per contact half-period"},
+    {"solver.seed", P_INT, OFF(seed), 0, 0, "-", 0, 2147483647.0, 0, "random seed (packing, roughness, log axes)"},
+    {"gravity", P_VEC3, OFF(world.gravity), 0, 0, "m/s^2", -INF, INF, 0, "gravity vector (flume: set from flume.slope_deg)"},
+    {"contact.k_n", P_DOUBLE, OFF(world.contact.k_n), 0, 0, "N/m", 0, INF, 1, "normal spring K_n"},
+    {"contact.k_s", P_DOUBLE, OFF(world.contact.k_s), 0, 0, "N/m", 0, INF, 0, "tangential spring K_s"},
+    {"contact.damping", P_DOUBLE, OFF(world.contact.damping), 0, 0, "-", 0, 1, 0, "damping ratio h (c = 2h sqrt(m* K))"},
+    {"contact.tan_phi", P_DOUBLE, OFF(world.contact.tan_phi), 0, 0, "-", 0, INF, 0, "friction tan φ"},
+    {"contact.cohesion", P_DOUBLE, OFF(world.contact.cohesion), 0, 0, "N", 0, INF, 0, "cohesion c in the Mohr–Coulomb limit"},
+    {"box.on", P_BOOL, OFF(box_on), 0, 0, "-", 0, 1, 0, "add an open-top box of triangles"},
+    {"box.min", P_VEC3, OFF(box_min), 0, 0, "m", -INF, INF, 0, "box lower corner"},
+    {"box.max", P_VEC3, OFF(box_max), 0, 0, "m", -INF, INF, 0, "box upper corner"},
+    {"pile.diameters", P_DLIST, OFF(pile_diam), OFF(pile_n_classes), SD_MAX_CLASSES, "m", 0, 1, 1, "sphere diameters of the random pile"},
+    {"pile.counts", P_ILIST, OFF(pile_count), OFF(pile_n_classes), SD_MAX_CLASSES, "-", 0, 1e7, 0, "sphere counts per diameter"},
+    {"pile.density", P_DOUBLE, OFF(pile_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density"},
+    {"pile.min", P_VEC3, OFF(pile_min), 0, 0, "m", -INF, INF, 0, "placement region lower corner"},
+    {"pile.max", P_VEC3, OFF(pile_max), 0, 0, "m", -INF, INF, 0, "placement region upper corner"},
+    {"flume.on", P_BOOL, OFF(flume_on), 0, 0, "-", 0, 1, 0, "build the paper's flume (SPEC §8)"},
+    {"flume.slope_deg", P_DOUBLE, OFF(slope_deg), 0, 0, "deg", 0, 90, 0, "bed slope θ"},
+    {"flume.width", P_DOUBLE, OFF(width), 0, 0, "m", 0, INF, 1, "flume width"},
+    {"flume.wall_height", P_DOUBLE, OFF(wall_height), 0, 0, "m", 0, INF, 1, "side wall height"},
+    {"flume.x_gate", P_DOUBLE, OFF(x_gate), 0, 0, "m", 0, INF, 1, "gate position (reconstructed 0.35)"},
+    {"flume.x_dam", P_DOUBLE, OFF(x_dam), 0, 0, "m", 0, INF, 1, "dam upstream face (reconstructed 4.0)"},
+    {"flume.x_end", P_DOUBLE, OFF(x_end), 0, 0, "m", 0, INF, 1, "end of the bed; elements beyond are removed"},
+    {"flume.roughness", P_BOOL, OFF(roughness_on), 0, 0, "-", 0, 1, 0, "fixed roughness spheres on the bed"},
+    {"flume.roughness_dmin", P_DOUBLE, OFF(rough_dmin), 0, 0, "m", 0, 1, 1, "smallest roughness diameter"},
+    {"flume.roughness_dmax", P_DOUBLE, OFF(rough_dmax), 0, 0, "m", 0, 1, 1, "largest roughness diameter"},
+    {"flume.pack_height", P_DOUBLE, OFF(pack_height), 0, 0, "m", 0, INF, 1, "top of the packing box above the bed"},
+    {"spheres.diameters", P_DLIST, OFF(class_diam), OFF(n_classes), SD_MAX_CLASSES, "m", 0, 1, 1, "size classes (SPEC §8: 20, 15, 10, 5 mm)"},
+    {"spheres.counts", P_ILIST, OFF(class_count), OFF(n_classes), SD_MAX_CLASSES, "-", 0, 1e7, 0, "count per class (376, 891, 3010, 342)"},
+    {"spheres.density", P_DOUBLE, OFF(sphere_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density (SG 1.9)"},
+    {"logs.count", P_INT, OFF(log_count), 0, 0, "-", -1, 1e6, 0, "number of logs (-1: from logs.k_w)"},
+    {"logs.k_w", P_DOUBLE, OFF(log_kw), 0, 0, "-", 0, 0.95, 0, "woody volume ratio K_w (eq 54), used when count = -1"},
+    {"logs.diameter", P_DOUBLE, OFF(log_diam), 0, 0, "m", 0, 1, 1, "log diameter"},
+    {"logs.length", P_DOUBLE, OFF(log_length), 0, 0, "m", 0, 10, 1, "log length"},
+    {"logs.density", P_DOUBLE, OFF(log_density), 0, 0, "kg/m^3", 0, INF, 1, "log density (SG 0.8)"},
+    {"dam.on", P_BOOL, OFF(dam_on), 0, 0, "-", 0, 1, 0, "build the grid dam"},
+    {"dam.pipe_diameter", P_DOUBLE, OFF(pipe_diam), 0, 0, "m", 0, 1, 1, "pipe diameter"},
+    {"dam.l_h", P_DOUBLE, OFF(l_h), 0, 0, "m", 0, 1, 1, "clear spacing of the columns ℓ_H"},
+    {"dam.l_v", P_DOUBLE, OFF(l_v), 0, 0, "m", 0, 1, 0, "underside of the intermediate beam above the bed ℓ_V (0: none)"},
+    {"dam.top_beam", P_DOUBLE, OFF(top_beam), 0, 0, "m", 0, 1, 1, "underside of the top beam above the bed"},
+    {"dam.columns", P_DLIST, OFF(column_y), OFF(n_columns), SD_MAX_PIPES, "m", 0, INF, 0, "explicit column positions y (empty: from l_h)"},
+    {"dam.beams", P_DLIST, OFF(beam_z), OFF(n_beams), SD_MAX_PIPES, "m", 0, INF, 0, "explicit beam undersides z (empty: from l_v, top_beam)"},
+    {"water.on", P_BOOL, OFF(water_on), 0, 0, "-", 0, 1, 0, "fluid forces (SPEC §5)"},
+    {"water.u", P_DOUBLE, OFF(water_u), 0, 0, "m/s", 0, INF, 0, "reference velocity U"},
+    {"water.h", P_DOUBLE, OFF(water_h), 0, 0, "m", 0, INF, 1, "flow depth h"},
+    {"water.rho", P_DOUBLE, OFF(water_rho), 0, 0, "kg/m^3", 0, INF, 0, "water density ρ"},
+    {"water.c_d", P_DOUBLE, OFF(water_cd), 0, 0, "-", 0, INF, 0, "drag coefficient C_D"},
+    {"water.probe", P_DOUBLE, OFF(water_probe), 0, 0, "m", 0, INF, 1, "capture-phase probe length upstream of the dam"},
+    {"phases.packing_time", P_DOUBLE, OFF(packing_time), 0, 0, "s", 0, INF, 0, "packing (drop) time"},
+    {"phases.flow_limit", P_DOUBLE, OFF(flow_limit), 0, 0, "s", 0, INF, 1, "longest flow phase"},
+    {"phases.capture_limit", P_DOUBLE, OFF(capture_limit), 0, 0, "s", 0, INF, 1, "capture time limit (reconstructed 6 s)"},
+    {"phases.quiet_time", P_DOUBLE, OFF(quiet_time), 0, 0, "s", 0, INF, 1, "settled when nothing crossed the dam for this long"},
+    {"phases.ke_fraction", P_DOUBLE, OFF(ke_fraction), 0, 0, "-", 0, 1, 0, "... and upstream kinetic energy below this fraction of its peak"},
+    {"output.snapshot_interval", P_DOUBLE, OFF(snapshot_interval), 0, 0, "s", 0, INF, 0, "VTK snapshot interval (0: none)"},
+    {"output.log_interval", P_DOUBLE, OFF(log_interval), 0, 0, "s", 0, INF, 1, "time-series and progress interval"},
+    {"output.trajectory_ids", P_ILIST, OFF(traj_ids), OFF(n_traj), SD_MAX_IDS, "-", 0, 1e9, 0, "element ids whose trajectories are logged"},
+    {"output.trajectory_interval", P_DOUBLE, OFF(traj_interval), 0, 0, "s", 0, INF, 1, "trajectory CSV interval"},
+    {"output.vtk", P_BOOL, OFF(vtk_on), 0, 0, "-", 0, 1, 0, "write VTK snapshots"},
+    {"output.png", P_BOOL, OFF(png_on), 0, 0, "-", 0, 1, 0, "draw side-view pictures (matplotlib)"},
+};
+#define N_PARAMS ((int)(sizeof(params) / sizeof(params[0])))
+
+void sd_scenario_default(sd_scenario *s)
+{
+    memset(s, 0, sizeof(*s));
+    s->world = sd_world_def_default();
+    s->world.gravity = v3(0.0, 0.0, -9.81);
+    s->duration = 1.0;
+    s->seed = 1;
+    s->pile_density = 1900.0;
+    s->slope_deg = 15.0;
+    s->width = 0.3;
+    s->wall_height = 0.5;
+    s->x_gate = 0.35;
+    s->x_dam = 4.0;
+    s->x_end = 4.35;
+    s->roughness_on = 1;
+    s->rough_dmin = 0.007;
+    s->rough_dmax = 0.020;
+    s->pack_height = 0.45;
+    s->n_classes = 4;
+    double d[4] = {0.020, 0.015, 0.010, 0.005};
+    int c[4] = {376, 891, 3010, 342};
+    for (int i = 0; i < 4; i++) {
+        s->class_diam[i] = d[i];
+        s->class_count[i] = c[i];
+    }
+    s->sphere_density = 1900.0;
+    s->log_count = -1;
+    s->log_kw = 0.0;
+    s->log_diam = 0.010;
+    s->log_length = 0.100;
+    s->log_density = 800.0;
+    s->dam_on = 1;
+    s->pipe_diam = 0.018;
+    s->l_h = 0.050;
+    s->l_v = 0.040;
+    s->top_beam = 0.118;
+    s->water_on = 1;
+    s->water_u = 1.2;
+    s->water_h = 0.03;
+    s->water_rho = 1000.0;
+    s->water_cd = 0.49;
+    s->water_probe = 0.10;
+    s->packing_time = 2.0;
+    s->flow_limit = 10.0;
+    s->capture_limit = 6.0;
+    s->quiet_time = 0.5;
+    s->ke_fraction = 0.01;
+    s->snapshot_interval = 0.0;
+    s->log_interval = 0.01;
+    s->traj_interval = 1e-3;
+    s->vtk_on = 1;
+    s->png_on = 1;
+}
+
+void sd_scenario_free(sd_scenario *s)
+{
+    free(s->elems);
+    s->elems = NULL;
+    s->n_elems = 0;
+}
+
+typedef struct {
+    FILE *err;
+    const char *file;
+    int errors;
+} ectx;
+
+static void report(ectx *e, int line, int col, const char *fmt, const char *a, const char *b)
+{
+    if (e->errors < 20) {
+        fprintf(e->err, "%s:%d:%d: ", e->file, line, col);
+        fprintf(e->err, fmt, a, b);
+        fputc('\n', e->err);
+    }
+    e->errors++;
+}
+
+static int parse_double(const char *txt, double *out)
+{
+    if (!txt || !*txt) return -1;
+    char *end;
+    errno = 0;
+    double v = strtod(txt, &end);
+    if (errno || *end || !isfinite(v)) return -1;
+    *out = v;
+    return 0;
+}
+
+static int parse_int(const char *txt, long *out)
+{
+    if (!txt || !*txt) return -1;
+    char *end;
+    errno = 0;
+    long v = strtol(txt, &end, 10);
+    if (errno || *end) return -1;
+    *out = v;
+    return 0;
+}
+
+static int parse_bool(const char *txt, int *out)
+{
+    if (!txt) return -1;
+    if (!strcmp(txt, "true") || !strcmp(txt, "yes") || !strcmp(txt, "on") || !strcmp(txt, "1")) *out = 1;
+    else if (!strcmp(txt, "false") || !strcmp(txt, "no") || !strcmp(txt, "off") || !strcmp(txt, "0")) *out = 0;
+    else return -1;
+    return 0;
+}
+
+static int check_range(ectx *e, const sd_param *p, double v, int line, int col)
+{
+    int bad = p->strict_min ? !(v > p->min) : !(v >= p->min);
+    if (bad || v > p->max) {
+        char buf[160];
+        if (p->strict_min) snprintf(buf, sizeof buf, "must be > %g and <= %g (%s)", p->min, p->max, p->unit);
+        else snprintf(buf, sizeof buf, "must be in [%g, %g] (%s)", p->min, p->max, p->unit);
+        report(e, line, col, "%s: %s", p->key, buf);
+        return -1;
+    }
+    return 0;
+}
+
+static int parse_vec3_node(const sd_ynode *n, sd_vec3 *v)
+{
+    if (n->kind != SD_Y_SEQ || n->n != 3) return -1;
+    double x[3];
+    for (int k = 0; k < 3; k++)
+        if (n->items[k]->kind != SD_Y_SCALAR || parse_double(n->items[k]->value, &x[k])) return -1;
+    *v = v3(x[0], x[1], x[2]);
+    return 0;
+}
+
+/* Set one parameter from a node (or from override text when node is NULL). */
+static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode *n, const char *text, int line, int col)
+{
+    char *base = (char *)s;
+    sd_ynode *tmp = NULL;
+    if (!n) {
+        /* override text: parse it as YAML so lists and vectors use the same syntax */
+        char msg[512];
+        tmp = sd_yaml_parse_string(text, "--set", msg, sizeof msg);
+        if (!tmp) {
+            report(e, line, col, "%s: cannot parse value '%s'", p->key, text);
+            return;
+        }
+        n = tmp;
+    }
+    switch (p->type) {
+    case P_DOUBLE: {
+        double v;
+        if (n->kind != SD_Y_SCALAR || parse_double(n->value, &v)) {
+            report(e, n->line > 0 && !tmp ? n->line : line, tmp ? col : n->col, "%s: expected a number%s", p->key, "");
+            break;
+        }
+        if (!check_range(e, p, v, tmp ? line : n->line, tmp ? col : n->col)) *(double *)(base + p->off) = v;
+        break;
+    }
+    case P_INT: {
+        long v;
+        if (n->kind != SD_Y_SCALAR || parse_int(n->value, &v)) {
+            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected an integer%s", p->key, "");
+            break;
+        }
+        if (!check_range(e, p, (double)v, tmp ? line : n->line, tmp ? col : n->col)) {
+            if (p->off == OFF(seed)) *(long *)(base + p->off) = v;
+            else *(int *)(base + p->off) = (int)v;
+        }
+        break;
+    }
+    case P_BOOL: {
+        int v;
+        if (n->kind != SD_Y_SCALAR || parse_bool(n->value, &v)) {
+            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected true or false%s", p->key, "");
+            break;
+        }
+        *(int *)(base + p->off) = v;
+        break;
+    }
+    case P_VEC3: {
+        sd_vec3 v;
+        if (parse_vec3_node(n, &v)) {
+            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected a list of three numbers [x, y, z]%s", p->key, "");
+            break;
+        }
+        *(sd_vec3 *)(base + p->off) = v;
+        break;
+    }
+    case P_DLIST:
+    case P_ILIST: {
+        if (n->kind != SD_Y_SEQ || n->n > p->max_count) {
+            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected a list (at most the allowed length)%s", p->key, "");
+            break;
+        }
+        int ok = 1;
+        for (int k = 0; k < n->n && ok; k++) {
+            const sd_ynode *it = n->items[k];
+            int l = tmp ? line : it->line, c = tmp ? col : it->col;
+            if (p->type == P_DLIST) {
+                double v;
+                if (it->kind != SD_Y_SCALAR || parse_double(it->value, &v)) {
+                    report(e, l, c, "%s: expected a number in the list%s", p->key, "");
+                    ok = 0;
+                } else if (check_range(e, p, v, l, c)) ok = 0;
+                else ((double *)(base + p->off))[k] = v;
+            } else {
+                long v;
+                if (it->kind != SD_Y_SCALAR || parse_int(it->value, &v)) {
+                    report(e, l, c, "%s: expected an integer in the list%s", p->key, "");
+                    ok = 0;
+                } else if (check_range(e, p, (double)v, l, c)) ok = 0;
+                else ((int *)(base + p->off))[k] = (int)v;
+            }
+        }
+        if (ok) *(int *)(base + p->count_off) = n->n;
+        break;
+    }
+    }
+    sd_yaml_free(tmp);
+}
+
+static const sd_param *find_param(const char *key)
+{
+    for (int i = 0; i < N_PARAMS; i++)
+        if (!strcmp(params[i].key, key)) return &params[i];
+    return NULL;
+}
+
+static int is_section(const char *prefix)
+{
+    size_t n = strlen(prefix);
+    for (int i = 0; i < N_PARAMS; i++)
+        if (!strncmp(params[i].key, prefix, n) && params[i].key[n] == '.') return 1;
+    return 0;
+}
+
+/* Element list entry keys. */
+static const char *elem_keys[] = {"type", "radius", "diameter", "length", "density", "position", "velocity",
+                                  "omega", "axis", "fixed", "tag", "vertices", "group", NULL};
+
+static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
+{
+    sd_elem_def d;
+    memset(&d, 0, sizeof d);
+    d.line = n->line;
+    d.axis = v3(1, 0, 0);
+    d.density = -1;
+    d.radius = -1;
+    d.length = -1;
+    if (n->kind != SD_Y_MAP) {
+        report(e, n->line, n->col, "elements: each element is a mapping with a type%s%s", "", "");
+        return;
+    }
+    const sd_ynode *t = sd_yaml_get(n, "type");
+    if (!t || t->kind != SD_Y_SCALAR) {
+        report(e, n->line, n->col, "elements: missing 'type' (sphere, cylinder or triangle)%s%s", "", "");
+        return;
+    }
+    if (!strcmp(t->value, "sphere")) d.type = 0;
+    else if (!strcmp(t->value, "cylinder")) d.type = 1;
+    else if (!strcmp(t->value, "triangle")) d.type = 2;
+    else {
+        report(e, t->line, t->col, "elements.type: unknown element type '%s'%s", t->value, "");
+        return;
+    }
+    int errs = e->errors;
+    for (int i = 0; i < n->n; i++) {
+        const char *k = n->keys[i];
+        const sd_ynode *v = n->items[i];
+        int known = 0;
+        for (int j = 0; elem_keys[j]; j++) known |= !strcmp(elem_keys[j], k);
+        if (!known) {
+            report(e, n->key_line[i], n->key_col[i], "elements: unknown key '%s'%s", k, "");
+            continue;
+        }
+        double x;
+        if (!strcmp(k, "radius") || !strcmp(k, "diameter") || !strcmp(k, "length") || !strcmp(k, "density")) {
+            if (v->kind != SD_Y_SCALAR || parse_double(v->value, &x) || !(x > 0)) {
+                report(e, v->line, v->col, "elements.%s: expected a positive number%s", k, "");
+                continue;
+            }
+            if (!strcmp(k, "radius")) d.radius = x;
+            else if (!strcmp(k, "diameter")) d.radius = 0.5 * x;
+            else if (!strcmp(k, "length")) d.length = x;
+            else d.density = x;
+        } else if (!strcmp(k, "position") || !strcmp(k, "velocity") || !strcmp(k, "omega") || !strcmp(k, "axis")) {
+            sd_vec3 vv;
+            if (parse_vec3_node(v, &vv)) {
+                report(e, v->line, v->col, "elements.%s: expected [x, y, z]%s", k, "");
+                continue;
+            }
+            if (!strcmp(k, "position")) d.pos = vv;
+            else if (!strcmp(k, "velocity")) d.vel = vv;
+            else if (!strcmp(k, "omega")) d.omega = vv;
+            else {
+                if (!(v3_norm(vv) > 0)) report(e, v->line, v->col, "elements.axis: must be non-zero%s%s", "", "");
+                d.axis = vv;
+            }
+        } else if (!strcmp(k, "fixed")) {
+            if (v->kind != SD_Y_SCALAR || parse_bool(v->value, &d.fixed))
+                report(e, v->line, v->col, "elements.fixed: expected true or false%s%s", "", "");
+        } else if (!strcmp(k, "tag") || !strcmp(k, "group")) {
+            long iv;
+            if (v->kind != SD_Y_SCALAR || parse_int(v->value, &iv) || iv < 0)
+                report(e, v->line, v->col, "elements.%s: expected a non-negative integer%s", k, "");
+            else if (!strcmp(k, "tag")) d.tag = (int)iv;
+            else d.group = (int)iv;
+        } else if (!strcmp(k, "vertices")) {
+            if (v->kind != SD_Y_SEQ || v->n != 3 || parse_vec3_node(v->items[0], &d.v[0]) ||
+                parse_vec3_node(v->items[1], &d.v[1]) || parse_vec3_node(v->items[2], &d.v[2]))
+                report(e, v->line, v->col, "elements.vertices: expected three points [[x,y,z],[x,y,z],[x,y,z]]%s%s", "", "");
+        }
+    }
+    if (e->errors != errs) return;
+    if (d.type != 2 && d.radius < 0) {
+        report(e, n->line, n->col, "elements: %s needs a radius (or diameter)%s", t->value, "");
+        return;
+    }
+    if (d.type == 1 && d.length < 0) {
+        report(e, n->line, n->col, "elements: cylinder needs a length%s%s", "", "");
+        return;
+    }
+    if (d.type != 2 && d.density < 0) d.density = d.type == 0 ? 1900.0 : 800.0;
+    if (d.type == 2 && !(v3_norm(v3_cross(v3_sub(d.v[1], d.v[0]), v3_sub(d.v[2], d.v[0]))) > 0)) {
+        report(e, n->line, n->col, "elements: triangle is degenerate (or has no vertices)%s%s", "", "");
+        return;
+    }
+    sd_elem_def *ne = realloc(s->elems, (size_t)(s->n_elems + 1) * sizeof(*ne));
+    if (!ne) {
+        report(e, n->line, n->col, "out of memory%s%s", "", "");
+        return;
+    }
+    s->elems = ne;
+    s->elems[s->n_elems++] = d;
+}
+
+static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefix)
+{
+    for (int i = 0; i < map->n; i++) {
+        char key[256];
+        if (*prefix) snprintf(key, sizeof key, "%s.%s", prefix, map->keys[i]);
+        else snprintf(key, sizeof key, "%s", map->keys[i]);
+        const sd_ynode *v = map->items[i];
+        if (!*prefix && !strcmp(key, "elements")) {
+            if (v->kind != SD_Y_SEQ) {
+                report(e, v->line, v->col, "elements: expected a list%s%s", "", "");
+                continue;
+            }
+            for (int k = 0; k < v->n; k++) parse_element(e, s, v->items[k]);
+            continue;
+        }
+        const sd_param *p = find_param(key);
+        if (p) {
+            set_param(e, s, p, v, NULL, v->line, v->col);
+        } else if (is_section(key)) {
+            if (v->kind != SD_Y_MAP) report(e, v->line, v->col, "%s: expected a mapping (section)%s", key, "");
+            else walk(e, s, v, key);
+        } else {
+            report(e, map->key_line[i], map->key_col[i], "unknown key '%s'%s", key, "");
+        }
+    }
+}
+
+static double sphere_mass(double d, double rho) { return rho * M_PI / 6.0 * d * d * d; }
+
+/* Cross-field checks: geometry that contradicts itself, an unstable time step. */
+static void validate(ectx *e, sd_scenario *s, const sd_ynode *root)
+{
+    const sd_ynode *n;
+    if (s->flume_on) {
+        if (s->x_gate >= s->x_dam) {
+            n = sd_yaml_get(sd_yaml_get(root, "flume"), "x_gate");
+            report(e, n ? n->line : 1, n ? n->col : 1, "flume.x_gate must be upstream of flume.x_dam%s%s", "", "");
+        }
+        if (s->x_end <= s->x_dam) {
+            n = sd_yaml_get(sd_yaml_get(root, "flume"), "x_end");
+            report(e, n ? n->line : 1, n ? n->col : 1, "flume.x_end must be downstream of flume.x_dam%s%s", "", "");
+        }
+        if (s->rough_dmin > s->rough_dmax) {
+            n = sd_yaml_get(sd_yaml_get(root, "flume"), "roughness_dmin");
+            report(e, n ? n->line : 1, n ? n->col : 1, "flume.roughness_dmin must not exceed roughness_dmax%s%s", "", "");
+        }
+    }
+    if (s->box_on && (s->box_min.x >= s->box_max.x || s->box_min.y >= s->box_max.y || s->box_min.z >= s->box_max.z)) {
+        n = sd_yaml_get(root, "box");
+        report(e, n ? n->line : 1, n ? n->col : 1, "box.min must be below box.max on every axis%s%s", "", "");
+    }
+    /* smallest moving mass → stability of Δt */
+    double mmin = INFINITY;
+    for (int i = 0; i < s->n_elems; i++) {
+        const sd_elem_def *d = &s->elems[i];
+        if (d->fixed || d->type == 2) continue;
+        double m = d->type == 0 ? sphere_mass(2 * d->radius, d->density) : d->density * M_PI * d->radius * d->radius * d->length;
+        mmin = fmin(mmin, m);
+    }
+    for (int k = 0; k < s->pile_n_classes; k++)
+        if (s->pile_count[k] > 0) mmin = fmin(mmin, sphere_mass(s->pile_diam[k], s->pile_density));
+    if (s->flume_on) {
+        for (int k = 0; k < s->n_classes; k++)
+            if (s->class_count[k] > 0) mmin = fmin(mmin, sphere_mass(s->class_diam[k], s->sphere_density));
+        if (s->log_count != 0)
+            mmin = fmin(mmin, s->log_density * M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length);
+    }
+    if (s->world.check_dt && isfinite(mmin)) {
+        double dt_max = M_PI / sqrt(s->world.contact.k_n / (0.5 * mmin)) / 8.0;
+        if (s->world.dt > dt_max) {
+            n = sd_yaml_get(sd_yaml_get(root, "solver"), "dt");
+            char a[64], b[200];
+            snprintf(a, sizeof a, "%g", s->world.dt);
+            snprintf(b, sizeof b, "%g s (8 steps per contact half-period for k_n = %g N/m and the smallest mass %g kg)",
+                     dt_max, s->world.contact.k_n, mmin);
+            report(e, n ? n->line : 1, n ? n->col : 1, "solver.dt = %s is unstable: it must be at most %s", a, b);
+        }
+    }
+}
+
+int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overrides, int n_overrides, FILE *err)
+{
+    sd_scenario_default(s);
+    snprintf(s->path, sizeof s->path, "%s", path);
+    char msg[1024];
+    sd_ynode *root = sd_yaml_load(path, msg, sizeof msg);
+    if (!root) {
+        fprintf(err, "%s\n", msg);
+        return -1;
+    }
+    ectx e = {err, path, 0};
+    if (root->kind != SD_Y_MAP) report(&e, root->line, root->col, "the scenario must be a mapping of sections%s%s", "", "");
+    else {
+        /* flume scenes default gravity to the slope unless given */
+        const sd_ynode *fl = sd_yaml_get(root, "flume");
+        walk(&e, s, root, "");
+        if (fl && s->flume_on && !sd_yaml_get(root, "gravity")) {
+            double th = s->slope_deg * M_PI / 180.0;
+            s->world.gravity = v3(9.81 * sin(th), 0.0, -9.81 * cos(th));
+        }
+    }
+    ectx eo = {err, "--set", 0};
+    for (int i = 0; i < n_overrides; i++) {
+        const char *eq = strchr(overrides[i], '=');
+        char key[256];
+        if (!eq || eq == overrides[i] || (size_t)(eq - overrides[i]) >= sizeof key) {
+            report(&eo, i + 1, 1, "expected key=value, got '%s'%s", overrides[i], "");
+            continue;
+        }
+        memcpy(key, overrides[i], (size_t)(eq - overrides[i]));
+        key[eq - overrides[i]] = 0;
+        const sd_param *p = find_param(key);
+        if (!p) {
+            report(&eo, i + 1, 1, "unknown key '%s'%s", key, "");
+            continue;
+        }
+        set_param(&eo, s, p, NULL, eq + 1, i + 1, (int)(eq - overrides[i]) + 2);
+        if (!strcmp(key, "flume.slope_deg") && s->flume_on) {
+            double th = s->slope_deg * M_PI / 180.0;
+            s->world.gravity = v3(9.81 * sin(th), 0.0, -9.81 * cos(th));
+        }
+    }
+    if (!e.errors && !eo.errors) validate(&e, s, root);
+    sd_yaml_free(root);
+    int total = e.errors + eo.errors;
+    if (total) {
+        if (total > 20) fprintf(err, "%s: %d errors in all (first 20 shown)\n", path, total);
+        sd_scenario_free(s);
+        return -1;
+    }
+    return 0;
+}
+
+static const char *type_name(ptype t)
+{
+    switch (t) {
+    case P_DOUBLE: return "number";
+    case P_INT: return "integer";
+    case P_BOOL: return "bool";
+    case P_VEC3: return "[x, y, z]";
+    case P_DLIST: return "list of numbers";
+    case P_ILIST: return "list of integers";
+    }
+    return "?";
+}
+
+static void print_value(FILE *f, const sd_scenario *s, const sd_param *p)
+{
+    const char *base = (const char *)s;
+    switch (p->type) {
+    case P_DOUBLE: fprintf(f, "%.10g", *(const double *)(base + p->off)); break;
+    case P_INT:
+        if (p->off == OFF(seed)) fprintf(f, "%ld", *(const long *)(base + p->off));
+        else fprintf(f, "%d", *(const int *)(base + p->off));
+        break;
+    case P_BOOL: fprintf(f, "%s", *(const int *)(base + p->off) ? "true" : "false"); break;
+    case P_VEC3: {
+        const sd_vec3 *v = (const sd_vec3 *)(base + p->off);
+        fprintf(f, "[%.10g, %.10g, %.10g]", v->x, v->y, v->z);
+        break;
+    }
+    case P_DLIST:
+    case P_ILIST: {
+        int n = *(const int *)(base + p->count_off);
+        fputc('[', f);
+        for (int k = 0; k < n; k++) {
+            if (p->type == P_DLIST) fprintf(f, "%s%.10g", k ? ", " : "", ((const double *)(base + p->off))[k]);
+            else fprintf(f, "%s%d", k ? ", " : "", ((const int *)(base + p->off))[k]);
+        }
+        fputc(']', f);
+        break;
+    }
+    }
+}
+
+void sd_scenario_print_params(FILE *f, int md)
+{
+    sd_scenario d;
+    sd_scenario_default(&d);
+    if (md) {
+        fprintf(f, "| key | type | unit | default | range | meaning |\n|---|---|---|---|---|---|\n");
+    }
+    for (int i = 0; i < N_PARAMS; i++) {
+        const sd_param *p = &params[i];
+        if (md) fprintf(f, "| `%s` | %s | %s | `", p->key, type_name(p->type), p->unit);
+        else fprintf(f, "%-28s %-16s %-8s ", p->key, type_name(p->type), p->unit);
+        print_value(f, &d, p);
+        if (p->type == P_BOOL || p->type == P_VEC3) fprintf(f, md ? "` | | %s |\n" : "  %s\n", p->doc);
+        else fprintf(f, md ? "` | %s%g, %g] | %s |\n" : "  %s%g, %g]  %s\n", p->strict_min ? "(" : "[", p->min, p->max, p->doc);
+    }
+}
+
+void sd_scenario_echo_json(const sd_scenario *s, FILE *f)
+{
+    fprintf(f, "  \"parameters\": {\n");
+    for (int i = 0; i < N_PARAMS; i++) {
+        fprintf(f, "    \"%s\": ", params[i].key);
+        print_value(f, s, &params[i]);
+        fprintf(f, "%s\n", i + 1 < N_PARAMS ? "," : "");
+    }
+    fprintf(f, "  }");
+}

@@ -1,0 +1,211 @@
+#include "yaml_tree.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <yaml.h>
+
+static sd_ynode *node_new(sd_ynode_kind k, const yaml_mark_t *m)
+{
+    sd_ynode *n = calloc(1, sizeof(*n));
+    if (!n) return NULL;
+    n->kind = k;
+    n->line = (int)m->line + 1;
+    n->col = (int)m->column + 1;
+    return n;
+}
+
+void sd_yaml_free(sd_ynode *n)
+{
+    if (!n) return;
+    free(n->value);
+    for (int i = 0; i < n->n; i++) {
+        sd_yaml_free(n->items[i]);
+        if (n->keys) free(n->keys[i]);
+    }
+    free(n->items);
+    free(n->keys);
+    free(n->key_line);
+    free(n->key_col);
+    free(n);
+}
+
+static int push_child(sd_ynode *p, sd_ynode *c, char *key, int kl, int kc)
+{
+    sd_ynode **it = realloc(p->items, (size_t)(p->n + 1) * sizeof(*it));
+    if (!it) return -1;
+    p->items = it;
+    if (p->kind == SD_Y_MAP) {
+        char **k = realloc(p->keys, (size_t)(p->n + 1) * sizeof(*k));
+        if (!k) return -1;
+        p->keys = k;
+        int *l = realloc(p->key_line, (size_t)(p->n + 1) * sizeof(int));
+        if (!l) return -1;
+        p->key_line = l;
+        int *c2 = realloc(p->key_col, (size_t)(p->n + 1) * sizeof(int));
+        if (!c2) return -1;
+        p->key_col = c2;
+        p->keys[p->n] = key;
+        p->key_line[p->n] = kl;
+        p->key_col[p->n] = kc;
+    }
+    p->items[p->n++] = c;
+    return 0;
+}
+
+/* Recursive descent over parser events. */
+static sd_ynode *parse_node(yaml_parser_t *ps, yaml_event_t *ev, const char *name, char *err, int errlen);
+
+static sd_ynode *parse_collection(yaml_parser_t *ps, sd_ynode *n, const char *name, char *err, int errlen)
+{
+    for (;;) {
+        yaml_event_t ev;
+        if (!yaml_parser_parse(ps, &ev)) {
+            snprintf(err, (size_t)errlen, "%s:%d:%d: %s", name, (int)ps->problem_mark.line + 1,
+                     (int)ps->problem_mark.column + 1, ps->problem ? ps->problem : "YAML error");
+            sd_yaml_free(n);
+            return NULL;
+        }
+        if (ev.type == YAML_SEQUENCE_END_EVENT || ev.type == YAML_MAPPING_END_EVENT) {
+            yaml_event_delete(&ev);
+            return n;
+        }
+        char *key = NULL;
+        int kl = 0, kc = 0;
+        if (n->kind == SD_Y_MAP) {
+            if (ev.type != YAML_SCALAR_EVENT) {
+                snprintf(err, (size_t)errlen, "%s:%d:%d: mapping keys must be plain words", name,
+                         (int)ev.start_mark.line + 1, (int)ev.start_mark.column + 1);
+                yaml_event_delete(&ev);
+                sd_yaml_free(n);
+                return NULL;
+            }
+            key = strdup((const char *)ev.data.scalar.value);
+            kl = (int)ev.start_mark.line + 1;
+            kc = (int)ev.start_mark.column + 1;
+            for (int i = 0; i < n->n; i++)
+                if (strcmp(n->keys[i], key) == 0) {
+                    snprintf(err, (size_t)errlen, "%s:%d:%d: duplicate key '%s'", name, kl, kc, key);
+                    free(key);
+                    yaml_event_delete(&ev);
+                    sd_yaml_free(n);
+                    return NULL;
+                }
+            yaml_event_delete(&ev);
+            if (!yaml_parser_parse(ps, &ev)) {
+                snprintf(err, (size_t)errlen, "%s:%d:%d: %s", name, (int)ps->problem_mark.line + 1,
+                         (int)ps->problem_mark.column + 1, ps->problem ? ps->problem : "YAML error");
+                free(key);
+                sd_yaml_free(n);
+                return NULL;
+            }
+        }
+        sd_ynode *c = parse_node(ps, &ev, name, err, errlen);
+        if (!c || push_child(n, c, key, kl, kc)) {
+            free(key);
+            sd_yaml_free(c);
+            sd_yaml_free(n);
+            return NULL;
+        }
+    }
+}
+
+static sd_ynode *parse_node(yaml_parser_t *ps, yaml_event_t *ev, const char *name, char *err, int errlen)
+{
+    sd_ynode *n = NULL;
+    switch (ev->type) {
+    case YAML_SCALAR_EVENT:
+        n = node_new(SD_Y_SCALAR, &ev->start_mark);
+        if (n) n->value = strdup((const char *)ev->data.scalar.value);
+        yaml_event_delete(ev);
+        return n;
+    case YAML_SEQUENCE_START_EVENT:
+        n = node_new(SD_Y_SEQ, &ev->start_mark);
+        yaml_event_delete(ev);
+        return n ? parse_collection(ps, n, name, err, errlen) : NULL;
+    case YAML_MAPPING_START_EVENT:
+        n = node_new(SD_Y_MAP, &ev->start_mark);
+        yaml_event_delete(ev);
+        return n ? parse_collection(ps, n, name, err, errlen) : NULL;
+    case YAML_ALIAS_EVENT:
+        snprintf(err, (size_t)errlen, "%s:%d:%d: YAML aliases are not supported", name, (int)ev->start_mark.line + 1,
+                 (int)ev->start_mark.column + 1);
+        yaml_event_delete(ev);
+        return NULL;
+    default:
+        snprintf(err, (size_t)errlen, "%s:%d:%d: unexpected YAML event", name, (int)ev->start_mark.line + 1,
+                 (int)ev->start_mark.column + 1);
+        yaml_event_delete(ev);
+        return NULL;
+    }
+}
+
+static sd_ynode *parse_all(yaml_parser_t *ps, const char *name, char *err, int errlen)
+{
+    sd_ynode *root = NULL;
+    for (;;) {
+        yaml_event_t ev;
+        if (!yaml_parser_parse(ps, &ev)) {
+            snprintf(err, (size_t)errlen, "%s:%d:%d: %s", name, (int)ps->problem_mark.line + 1,
+                     (int)ps->problem_mark.column + 1, ps->problem ? ps->problem : "YAML error");
+            sd_yaml_free(root);
+            return NULL;
+        }
+        yaml_event_type_t t = ev.type;
+        if (t == YAML_STREAM_END_EVENT) {
+            yaml_event_delete(&ev);
+            break;
+        }
+        if (t == YAML_SEQUENCE_START_EVENT || t == YAML_MAPPING_START_EVENT || t == YAML_SCALAR_EVENT ||
+            t == YAML_ALIAS_EVENT) {
+            if (root) {
+                snprintf(err, (size_t)errlen, "%s:%d:%d: only one YAML document is allowed", name,
+                         (int)ev.start_mark.line + 1, (int)ev.start_mark.column + 1);
+                yaml_event_delete(&ev);
+                sd_yaml_free(root);
+                return NULL;
+            }
+            root = parse_node(ps, &ev, name, err, errlen);
+            if (!root) return NULL;
+            continue;
+        }
+        yaml_event_delete(&ev);
+    }
+    if (!root) snprintf(err, (size_t)errlen, "%s:1:1: empty scenario", name);
+    return root;
+}
+
+sd_ynode *sd_yaml_load(const char *path, char *err, int errlen)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        snprintf(err, (size_t)errlen, "%s: cannot open: %s", path, strerror(errno));
+        return NULL;
+    }
+    yaml_parser_t ps;
+    yaml_parser_initialize(&ps);
+    yaml_parser_set_input_file(&ps, f);
+    sd_ynode *r = parse_all(&ps, path, err, errlen);
+    yaml_parser_delete(&ps);
+    fclose(f);
+    return r;
+}
+
+sd_ynode *sd_yaml_parse_string(const char *text, const char *name, char *err, int errlen)
+{
+    yaml_parser_t ps;
+    yaml_parser_initialize(&ps);
+    yaml_parser_set_input_string(&ps, (const unsigned char *)text, strlen(text));
+    sd_ynode *r = parse_all(&ps, name, err, errlen);
+    yaml_parser_delete(&ps);
+    return r;
+}
+
+const sd_ynode *sd_yaml_get(const sd_ynode *map, const char *key)
+{
+    if (!map || map->kind != SD_Y_MAP) return NULL;
+    for (int i = 0; i < map->n; i++)
+        if (strcmp(map->keys[i], key) == 0) return map->items[i];
+    return NULL;
+}

@@ -1,0 +1,24 @@
+/* A YAML document read with libyaml into a small tree that remembers line and column, so that
+ * every error can name file:line:col. */
+#ifndef SD_YAML_TREE_H
+#define SD_YAML_TREE_H
+
+typedef enum { SD_Y_SCALAR, SD_Y_MAP, SD_Y_SEQ } sd_ynode_kind;
+
+typedef struct sd_ynode {
+    sd_ynode_kind kind;
+    int line, col;      /* 1-based */
+    char *value;        /* scalar text */
+    int n;              /* children (seq items, or map values) */
+    char **keys;        /* map keys */
+    int *key_line, *key_col;
+    struct sd_ynode **items;
+} sd_ynode;
+
+/* Parse a file; returns NULL and writes "file:line:col: message" into err on failure. */
+sd_ynode *sd_yaml_load(const char *path, char *err, int errlen);
+sd_ynode *sd_yaml_parse_string(const char *text, const char *name, char *err, int errlen);
+void sd_yaml_free(sd_ynode *n);
+const sd_ynode *sd_yaml_get(const sd_ynode *map, const char *key);
+
+#endif
