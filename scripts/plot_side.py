@@ -190,7 +190,7 @@ def main(argv=None):
                                           linewidths=0.4, alpha=0.9, zorder=3))
     if patches_p:
         ax.add_collection(PatchCollection(patches_p, facecolors="#555555", edgecolors="k",
-                                          linewidths=0.4, alpha=0.9, zorder=4))
+                                          linewidths=0.4, alpha=0.55, zorder=4))
     ax.set_xlim(args.xmin, args.xmax)
     ax.set_ylim(zmin, zmax)
     ax.set_xlabel("x along the bed (m)")

@@ -113,7 +113,7 @@ static int tri_has_vert(const sd_walls *wl, int t, int32_t v)
  * triangle owning that edge, or the same edge was already taken; a vertex contact when a face
  * or edge contact touches that vertex, or the vertex was already taken. A sphere rolling across
  * a shared edge of a flat mesh thus always feels exactly one contact. */
-static void mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to)
+void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to)
 {
     for (int p = from; p < to; p++) {
         sd_manifold *m = &man[p];
@@ -193,7 +193,7 @@ sd_status sd_contact_compute(sd_world *w)
         if (from == to) continue;
         int multi = 0;
         for (int k = from; k < to; k++) multi += narrow_bt(b, &w->w, &w->bt.p[k], &w->bt_man[k]) > 0;
-        if (multi > 1) mesh_dedup(&w->w, w->bt.p, w->bt_man, from, to);
+        if (multi > 1) sd_contact_mesh_dedup(&w->w, w->bt.p, w->bt_man, from, to);
         for (int k = from; k < to; k++) {
             const sd_pair *p = &w->bt.p[k];
             count += apply_manifold(w, &law, &w->bt_man[k], p->a, -1, 1, &w->bt.hist[p->off], p->cap,

@@ -521,7 +521,7 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
                 if (tph >= s->packing_time - 0.5 * dt) next = PH_FLOW;
             } else if (c.phase == PH_FLOW) {
                 double fx = front_x(&c);
-                if (!c.flow_len_done && fx >= s->x_dam - 1.0) measure_flow_length(&c);
+                if (!c.flow_len_done && s->x_dam - 1.0 > s->x_gate && fx >= s->x_dam - 1.0) measure_flow_length(&c);
                 if (fx >= s->x_dam || tph >= s->flow_limit) next = PH_CAPTURE;
             } else if (c.phase == PH_CAPTURE) {
                 update_h_d(&c);

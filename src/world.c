@@ -358,41 +358,59 @@ double sd_world_potential_energy(const sd_world *w)
 }
 
 /* Elastic energy of the current overlaps (normal springs only; ½ K_n δ²) and of the stored
- * tangential springs (½ |P_s|² / K_s). Recomputed from geometry, so exact for the state. */
+ * tangential springs (½ |P_s|² / K_s). Recomputed from geometry, so exact for the state.
+ * Triangle contacts go through the same mesh rule as the force pass, so that a sphere over a
+ * shared edge counts one spring, not two. */
+static double manifold_energy(const sd_world *w, const sd_pair *p, const sd_hist *hist, const sd_manifold *m)
+{
+    double e = 0.0;
+    for (int k2 = 0; k2 < m->n; k2++) e += 0.5 * w->def.contact.k_n * m->overlap[k2] * m->overlap[k2];
+    if (w->def.contact.k_s > 0.0)
+        for (int s = 0; s < p->cap; s++)
+            if (hist[p->off + s].feature >= 0) e += 0.5 * v3_norm2(hist[p->off + s].shear) / w->def.contact.k_s;
+    return e;
+}
+
 double sd_world_spring_energy(const sd_world *w)
 {
     double e = 0.0;
-    const sd_pairlist *lists[2] = {&w->bb, &w->bt};
-    for (int l = 0; l < 2; l++) {
-        const sd_pairlist *pl = lists[l];
-        for (int k = 0; k < pl->n; k++) {
-            const sd_pair *p = &pl->p[k];
-            sd_manifold m;
-            if (l == 0) {
-                const sd_bodies *b = &w->b;
-                if (p->kind == SD_PAIR_SS) sd_geom_sphere_sphere(b->pos[p->a], b->radius[p->a], b->pos[p->b], b->radius[p->b], &m);
-                else if (p->kind == SD_PAIR_SC) {
-                    sd_cyl c = sd_body_cyl(b, p->b);
-                    sd_geom_sphere_cyl(b->pos[p->a], b->radius[p->a], &c, &m);
-                } else {
-                    sd_cyl c1 = sd_body_cyl(b, p->a), c2 = sd_body_cyl(b, p->b);
-                    sd_geom_cyl_cyl(&c1, &c2, &m);
-                }
-            } else {
-                if (!w->w.active[p->b]) continue;
-                if (p->kind == SD_PAIR_ST) sd_geom_sphere_tri(w->b.pos[p->a], w->b.radius[p->a], &w->w.tri[p->b], &m);
-                else {
-                    sd_cyl c = sd_body_cyl(&w->b, p->a);
-                    sd_geom_cyl_tri(&c, &w->w.tri[p->b], &m);
-                }
-            }
-            for (int k2 = 0; k2 < m.n; k2++) e += 0.5 * w->def.contact.k_n * m.overlap[k2] * m.overlap[k2];
-            if (w->def.contact.k_s > 0.0)
-                for (int s = 0; s < p->cap; s++)
-                    if (pl->hist[p->off + s].feature >= 0)
-                        e += 0.5 * v3_norm2(pl->hist[p->off + s].shear) / w->def.contact.k_s;
+    const sd_bodies *b = &w->b;
+    for (int k = 0; k < w->bb.n; k++) {
+        const sd_pair *p = &w->bb.p[k];
+        sd_manifold m;
+        if (p->kind == SD_PAIR_SS) sd_geom_sphere_sphere(b->pos[p->a], b->radius[p->a], b->pos[p->b], b->radius[p->b], &m);
+        else if (p->kind == SD_PAIR_SC) {
+            sd_cyl c = sd_body_cyl(b, p->b);
+            sd_geom_sphere_cyl(b->pos[p->a], b->radius[p->a], &c, &m);
+        } else {
+            sd_cyl c1 = sd_body_cyl(b, p->a), c2 = sd_body_cyl(b, p->b);
+            sd_geom_cyl_cyl(&c1, &c2, &m);
         }
+        e += manifold_energy(w, p, w->bb.hist, &m);
     }
+    if (w->bt.n == 0) return e;
+    sd_manifold *man = malloc((size_t)w->bt.n * sizeof(*man));
+    if (!man) return NAN;
+    for (int i = 0; i < b->n; i++) {
+        int from = w->csr.bt_start[i], to = w->csr.bt_start[i + 1];
+        int multi = 0;
+        for (int k = from; k < to; k++) {
+            const sd_pair *p = &w->bt.p[k];
+            sd_manifold *m = &man[k];
+            m->n = 0;
+            if (!w->w.active[p->b]) continue;
+            if (p->kind == SD_PAIR_ST) sd_geom_sphere_tri(b->pos[p->a], b->radius[p->a], &w->w.tri[p->b], m);
+            else {
+                sd_cyl c = sd_body_cyl(b, p->a);
+                sd_geom_cyl_tri(&c, &w->w.tri[p->b], m);
+            }
+            multi += m->n > 0;
+        }
+        if (multi > 1) sd_contact_mesh_dedup(&w->w, w->bt.p, man, from, to);
+        for (int k = from; k < to; k++)
+            if (w->w.active[w->bt.p[k].b]) e += manifold_energy(w, &w->bt.p[k], w->bt.hist, &man[k]);
+    }
+    free(man);
     return e;
 }
 

@@ -169,6 +169,10 @@ double sd_contact_law(const sd_law *law, double m_eff, sd_vec3 n, double overlap
 sd_status sd_contact_compute(sd_world *w);
 void sd_contact_gather(sd_world *w);
 void sd_pairlist_free(sd_pairlist *l);
+/* Mesh rule on the manifolds man[from..to) of one body's triangle pairs: drops edge and vertex
+ * contacts already represented by a face or edge contact (used by the force pass and by
+ * sd_world_spring_energy, so that the energy counts the springs the forces use). */
+void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to);
 /* Kernel shapes of a body. */
 static inline sd_cyl sd_body_cyl(const sd_bodies *b, int i)
 {

@@ -20,16 +20,22 @@ static inline sd_vec3 sd_cyl_end(const sd_cyl *c, double e)
 }
 
 /* Unit vector perpendicular to unit axis a along the part of v perpendicular to a; when that
- * part vanishes, fall back to the part of `hint` perpendicular to a, then to any perpendicular
- * (deterministic). */
+ * part is too small to give a reliable direction, along the part of `hint` perpendicular to a,
+ * then any perpendicular (deterministic). Two Gram-Schmidt passes keep it perpendicular to a
+ * to rounding even when the perpendicular part is small. */
 static inline sd_vec3 sd_perp_dir(sd_vec3 a, sd_vec3 v, sd_vec3 hint)
 {
-    sd_vec3 w = v3_madd(v, a, -v3_dot(v, a));
-    double n = v3_norm(w);
-    if (n > 1e-300) return v3_scale(w, 1.0 / n);
-    w = v3_madd(hint, a, -v3_dot(hint, a));
-    n = v3_norm(w);
-    if (n > 1e-300) return v3_scale(w, 1.0 / n);
+    for (int k = 0; k < 2; k++) {
+        sd_vec3 x = k ? hint : v;
+        double nx = v3_norm(x);
+        sd_vec3 w = v3_madd(x, a, -v3_dot(x, a));
+        double n = v3_norm(w);
+        if (n > 1e-8 * nx && n > 1e-300) {
+            w = v3_scale(w, 1.0 / n);
+            w = v3_normalize(v3_madd(w, a, -v3_dot(w, a)));
+            return w;
+        }
+    }
     return v3_any_perp(a);
 }
 

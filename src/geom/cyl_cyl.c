@@ -6,7 +6,8 @@
  *         the disk nearest the axis of Q, depth r_Q - rho, normal radial from Q's axis;
  *   F(P)  end disk of P against an end face of Q (case 7, eqs 36-39): the rim point of the
  *         disk deepest past Q's end plane (the disk centre region when the disks are
- *         parallel), depth below the plane, normal = Q's end-face normal;
+ *         parallel), depth below the plane, normal = Q's end-face normal; the point must lie
+ *         inside Q (within its radius and its length);
  * for P, Q = A, B and B, A. Rim against side, rim against rim and rim against end face are the
  * E and F candidates with the rim point as the deepest point of the disk. A candidate is kept
  * when it is a true penetration and describes how the two bodies actually separate: S always;
@@ -82,7 +83,7 @@ static int cc_disk_into(const sd_cyl *P, double e, const sd_cyl *Q, double tol, 
         }
         sd_vec3 d = v3_sub(x, cf);
         double ov = -v3_dot(d, nf);
-        if (!(ov > 0.0)) continue;
+        if (!(ov > 0.0) || ov > 2.0 * Q->hl) continue;
         double rho = v3_norm(v3_madd(d, Q->a, -v3_dot(d, Q->a)));
         if (rho > Q->r + tol) continue;
         if (cc_sat_overlap(P, Q, nf) > ov + tol) continue;

@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# Command-line behaviour: bad scenarios are refused with file:line:col, exit 2 and no output
+# directory; check validates; --set overrides; unknown options fail.
+set -u
+bin="$1"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+pass=0
+expect() { # name, expected exit code, expected stderr pattern, args...
+  local name="$1" code="$2" pat="$3"
+  shift 3
+  "$bin" "$@" >"$tmp/out" 2>"$tmp/err"
+  local got=$?
+  if [ "$got" -ne "$code" ] || ! grep -Eq -- "$pat" "$tmp/err" "$tmp/out"; then
+    echo "FAIL $name: exit $got (want $code), output:"; cat "$tmp/err" "$tmp/out"; fail=$((fail + 1))
+  else pass=$((pass + 1)); fi
+}
+base='solver: {dt: 1.0e-5, duration: 0.001}
+gravity: [0, 0, -9.81]
+elements:
+  - {type: sphere, radius: 0.005, density: 1900, position: [0, 0, 0.1]}
+'
+printf '%s' "$base" > "$tmp/good.yaml"
+expect good-check 0 "ok \(1 elements" check "$tmp/good.yaml"
+expect good-run 0 "done" run "$tmp/good.yaml" -o "$tmp/good-out"
+[ -f "$tmp/good-out/summary.json" ] && pass=$((pass + 1)) || { echo "FAIL good-run: no summary.json"; fail=$((fail + 1)); }
+
+printf '%s  - {type: sphere, radius: -0.01, position: [0, 0, 0]}\n' "$base" > "$tmp/neg.yaml"
+expect negative-radius 2 "neg.yaml:5:[0-9]+: elements.radius: expected a positive number" run "$tmp/neg.yaml" -o "$tmp/neg-out"
+[ ! -e "$tmp/neg-out" ] && pass=$((pass + 1)) || { echo "FAIL negative-radius left an output directory"; fail=$((fail + 1)); }
+
+printf 'solver: {dt: 1.0e-5, durration: 1}\n' > "$tmp/key.yaml"
+expect unknown-key 2 "key.yaml:1:[0-9]+: unknown key 'solver.durration'" check "$tmp/key.yaml"
+
+printf 'solver: {dt: fast}\n' > "$tmp/type.yaml"
+expect wrong-type 2 "type.yaml:1:[0-9]+: solver.dt: expected a number" check "$tmp/type.yaml"
+
+printf 'solver:\n  dt: 1.0e-3\nelements:\n  - {type: sphere, radius: 0.0025, position: [0, 0, 0]}\n' > "$tmp/dt.yaml"
+expect unstable-dt 2 "dt.yaml:2:[0-9]+: solver.dt = 0.001 is unstable" run "$tmp/dt.yaml" -o "$tmp/dt-out"
+[ ! -e "$tmp/dt-out" ] && pass=$((pass + 1)) || { echo "FAIL unstable-dt left an output directory"; fail=$((fail + 1)); }
+
+printf 'flume: {on: true, x_gate: 4.2, x_dam: 4.0}\n' > "$tmp/gate.yaml"
+expect gate-beyond-dam 2 "gate.yaml:1:[0-9]+: flume.x_gate must be upstream of flume.x_dam" check "$tmp/gate.yaml"
+
+expect unreadable 2 "nonexistent.yaml: cannot open" check "$tmp/nonexistent.yaml"
+printf 'solver: {dt: [1, 2\n' > "$tmp/syntax.yaml"
+expect yaml-syntax 2 "syntax.yaml:[0-9]+:[0-9]+:" check "$tmp/syntax.yaml"
+expect set-override 2 "--set:1:[0-9]+: contact.k_n: must be > 0" check "$tmp/good.yaml" --set contact.k_n=-5
+expect set-unknown 2 "--set:1:1: unknown key 'contact.kn'" check "$tmp/good.yaml" --set contact.kn=5
+expect bad-option 2 "unknown or incomplete option" run "$tmp/good.yaml" --frobnicate
+expect params 0 "solver.dt" params
+
+echo "cli: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]

@@ -1,0 +1,580 @@
+/* Exact tests of the cylinder kernels: sphere-cylinder (cases 2, 3-1, 3-2), cylinder-cylinder
+ * (cases 5-7 and rim contacts), cylinder-triangle (case 8, edges, vertices, lines on a floor).
+ * Each hand-built configuration is checked as built, after random rigid motions of the whole
+ * configuration, and (cylinder-cylinder) with the pair swapped. Units: metres. */
+#include <stdint.h>
+
+#include "check.h"
+#include "geom/geom.h"
+
+/* ---- deterministic RNG (splitmix64) and rigid motions ---- */
+static uint64_t rng_state = 0x5eed5eed1234ULL;
+static double urand(void)
+{
+    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    z ^= z >> 31;
+    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+static double urange(double lo, double hi) { return lo + (hi - lo) * urand(); }
+
+typedef struct {
+    sd_quat q;
+    sd_vec3 t;
+} xform;
+
+static xform rand_xform(void)
+{
+    xform x;
+    x.q = quat_from_rotvec(v3(urange(-3.0, 3.0), urange(-3.0, 3.0), urange(-3.0, 3.0)));
+    x.t = v3(urange(-1.0, 1.0), urange(-1.0, 1.0), urange(-1.0, 1.0));
+    return x;
+}
+static sd_vec3 xp(xform x, sd_vec3 p) { return v3_add(quat_rotate(x.q, p), x.t); }
+static sd_vec3 xv(xform x, sd_vec3 v) { return quat_rotate(x.q, v); }
+static sd_cyl xcyl(xform x, sd_cyl c)
+{
+    sd_cyl r = c;
+    r.c = xp(x, c.c);
+    r.a = v3_normalize(xv(x, c.a));
+    return r;
+}
+static sd_tri xtri(xform x, const sd_tri *t)
+{
+    sd_tri r;
+    sd_tri_init(&r, xp(x, t->v[0]), xp(x, t->v[1]), xp(x, t->v[2]));
+    return r;
+}
+
+static sd_cyl mkcyl(sd_vec3 c, sd_vec3 a, double r, double hl)
+{
+    sd_cyl k;
+    k.c = c;
+    k.a = v3_normalize(a);
+    k.r = r;
+    k.hl = hl;
+    return k;
+}
+
+static int manifold_finite(const sd_manifold *m)
+{
+    if (m->n < 0 || m->n > SD_MANIFOLD_MAX) return 0;
+    for (int i = 0; i < m->n; i++) {
+        const double v[] = {m->normal[i].x, m->normal[i].y, m->normal[i].z, m->point[i].x, m->point[i].y,
+                            m->point[i].z, m->overlap[i]};
+        for (int k = 0; k < 7; k++)
+            if (!isfinite(v[k])) return 0;
+        if (fabs(v3_norm(m->normal[i]) - 1.0) > 1e-12) return 0;
+        if (!(m->overlap[i] > 0.0)) return 0;
+        if (m->feature[i] < 0) return 0;
+        for (int j = 0; j < i; j++)
+            if (m->feature[j] == m->feature[i]) return 0;
+    }
+    return 1;
+}
+
+static int find_feature(const sd_manifold *m, int f)
+{
+    for (int i = 0; i < m->n; i++)
+        if (m->feature[i] == f) return i;
+    return -1;
+}
+
+/* expected contacts of one configuration */
+typedef struct {
+    int n;
+    int feature[SD_MANIFOLD_MAX];
+    sd_vec3 normal[SD_MANIFOLD_MAX];
+    sd_vec3 point[SD_MANIFOLD_MAX];
+    double overlap[SD_MANIFOLD_MAX];
+} expect;
+
+#define TOL 1e-12
+
+/* m must equal e mapped through x (features via fmap, normals times sgn). */
+static void check_expect(const char *what, const sd_manifold *m, const expect *e, xform x, double sgn,
+                         int (*fmap)(int))
+{
+    int failures_before = check_failures;
+    CHECK(manifold_finite(m));
+    CHECK(m->n == e->n);
+    for (int i = 0; i < e->n; i++) {
+        int f = fmap ? fmap(e->feature[i]) : e->feature[i];
+        int k = find_feature(m, f);
+        CHECK(k >= 0);
+        if (k < 0) continue;
+        CHECK_VEC_NEAR(m->normal[k], v3_scale(xv(x, e->normal[i]), sgn), TOL);
+        CHECK_NEAR(m->overlap[k], e->overlap[i], TOL);
+        CHECK_VEC_NEAR(m->point[k], xp(x, e->point[i]), TOL);
+    }
+    if (check_failures != failures_before) {
+        fprintf(stderr, "  in %s: got %d contacts:\n", what, m->n);
+        for (int i = 0; i < m->n; i++)
+            fprintf(stderr, "   f=%d n=(%.6g %.6g %.6g) ov=%.9g p=(%.9g %.9g %.9g)\n", m->feature[i], m->normal[i].x,
+                    m->normal[i].y, m->normal[i].z, m->overlap[i], m->point[i].x, m->point[i].y, m->point[i].z);
+    }
+}
+
+static xform identity_xform(void)
+{
+    xform x;
+    x.q = quat_identity();
+    x.t = v3(0.0, 0.0, 0.0);
+    return x;
+}
+
+/* ---------------------------------------------------------------- sphere-cylinder ---- */
+static void sc_case(const char *what, sd_vec3 c, double r, sd_cyl b, const expect *e)
+{
+    sd_manifold m;
+    sd_geom_sphere_cyl(c, r, &b, &m);
+    check_expect(what, &m, e, identity_xform(), 1.0, NULL);
+    for (int k = 0; k < 4; k++) {
+        xform x = rand_xform();
+        sd_cyl bx = xcyl(x, b);
+        sd_geom_sphere_cyl(xp(x, c), r, &bx, &m);
+        check_expect(what, &m, e, x, 1.0, NULL);
+    }
+}
+
+static expect one(int f, sd_vec3 n, double ov, sd_vec3 p)
+{
+    expect e;
+    e.n = 1;
+    e.feature[0] = f;
+    e.normal[0] = n;
+    e.overlap[0] = ov;
+    e.point[0] = p;
+    return e;
+}
+static expect none(void)
+{
+    expect e;
+    e.n = 0;
+    return e;
+}
+
+static void test_sphere_cyl(void)
+{
+    const double r = 0.005, hl = 0.05, rs = 0.004, d = 0.0003;
+    sd_cyl b = mkcyl(v3(0, 0, 0), v3(1, 0, 0), r, hl); /* axis x, ends at x = -hl (-) and +hl (+) */
+    expect e;
+    /* case 2, side: centre above the axis */
+    e = one(0, v3(0, 0, 1), d, v3(0.01, 0, r - 0.5 * d));
+    sc_case("sphere side", v3(0.01, 0, r + rs - d), rs, b, &e);
+    e = none();
+    sc_case("sphere side separated", v3(0.01, 0, r + rs + 1e-6), rs, b, &e);
+    {
+        sd_manifold m;
+        sd_geom_sphere_cyl(v3(0.01, 0, r + rs), rs, &b, &m); /* exactly touching: no contact */
+        CHECK(m.n == 0);
+    }
+    /* case 3-1, end face +: centre beyond x = hl, inside the radius */
+    e = one(2, v3(1, 0, 0), d, v3(hl - 0.5 * d, 0.002, 0.001));
+    sc_case("sphere end face +", v3(hl + rs - d, 0.002, 0.001), rs, b, &e);
+    e = one(1, v3(-1, 0, 0), d, v3(-hl + 0.5 * d, 0.0, 0.0));
+    sc_case("sphere end face - on axis", v3(-hl - rs + d, 0, 0), rs, b, &e);
+    /* case 3-2, rim +: centre beyond the end and outside the radius, at 45 deg */
+    {
+        double s = (rs - d) / sqrt(2.0);
+        sd_vec3 n = v3(1.0 / sqrt(2.0), 0, 1.0 / sqrt(2.0));
+        sd_vec3 q = v3(hl, 0, r);
+        e = one(4, n, d, v3_madd(q, n, -0.5 * d));
+        sc_case("sphere rim +", v3(hl + s, 0, r + s), rs, b, &e);
+        e = none();
+        sc_case("sphere rim separated", v3(hl + s + 0.001, 0, r + s), rs, b, &e);
+    }
+    /* centre inside, nearest surface the side */
+    e = one(0, v3(0, 1, 0), rs + 0.001, v3(0.0, r - 0.5 * (rs + 0.001), 0));
+    sc_case("sphere inside near side", v3(0.0, r - 0.001, 0), rs, b, &e);
+    /* centre inside, nearest surface end face - */
+    e = one(1, v3(-1, 0, 0), rs + 0.001, v3(-hl + 0.5 * (rs + 0.001), 0.001, 0));
+    sc_case("sphere inside near end", v3(-hl + 0.001, 0.001, 0), rs, b, &e);
+    /* degenerate: centre exactly at the cylinder centre, on the axis */
+    {
+        sd_manifold m;
+        sd_geom_sphere_cyl(v3(0, 0, 0), rs, &b, &m);
+        CHECK(manifold_finite(&m));
+        CHECK(m.n == 1);
+        CHECK_NEAR(m.overlap[0], rs + r, TOL);
+        CHECK_NEAR(v3_dot(m.normal[0], b.a), 0.0, TOL);
+    }
+}
+
+/* ---------------------------------------------------------------- cylinder-cylinder ---- */
+static int cc_swap_feature(int f) { return f == 0 ? 0 : (f <= 4 ? f + 4 : f - 4); }
+
+static void cc_case(const char *what, sd_cyl a, sd_cyl b, const expect *e)
+{
+    sd_manifold m;
+    sd_geom_cyl_cyl(&a, &b, &m);
+    check_expect(what, &m, e, identity_xform(), 1.0, NULL);
+    sd_geom_cyl_cyl(&b, &a, &m);
+    check_expect(what, &m, e, identity_xform(), -1.0, cc_swap_feature);
+    for (int k = 0; k < 4; k++) {
+        xform x = rand_xform();
+        sd_cyl ax = xcyl(x, a), bx = xcyl(x, b);
+        sd_geom_cyl_cyl(&ax, &bx, &m);
+        check_expect(what, &m, e, x, 1.0, NULL);
+        sd_geom_cyl_cyl(&bx, &ax, &m);
+        check_expect(what, &m, e, x, -1.0, cc_swap_feature);
+    }
+}
+
+static void test_cyl_cyl(void)
+{
+    const double r = 0.005, hl = 0.05, rp = 0.009, hp = 0.2, d = 0.0004;
+    expect e;
+    /* case 5: crossed logs, A along x above B along y */
+    {
+        sd_cyl b = mkcyl(v3(0, 0, 0), v3(0, 1, 0), r, hl);
+        sd_cyl a = mkcyl(v3(0.01, 0.02, 2 * r - d), v3(1, 0, 0), r, hl);
+        e = one(0, v3(0, 0, 1), d, v3(0, 0.02, r - 0.5 * d));
+        cc_case("crossed logs", a, b, &e);
+        a.c.z = 2 * r + 1e-7;
+        e = none();
+        cc_case("crossed logs separated", a, b, &e);
+        /* crossed at 30 degrees, different radii */
+        sd_cyl a2 = mkcyl(v3(0.003, -0.004, r + rp - d), v3(cos(0.5), sin(0.5), 0), r, hl);
+        sd_cyl b2 = mkcyl(v3(0, 0, 0), v3(1, 0, 0), rp, hp);
+        /* axes cross above (x, 0): point on A's axis where y = 0 */
+        double s = 0.004 / sin(0.5);
+        sd_vec3 pa = v3(0.003 + s * cos(0.5), 0, 0);
+        e = one(0, v3(0, 0, 1), d, v3(pa.x, 0, rp - 0.5 * d));
+        cc_case("crossed log on pipe 30 deg", a2, b2, &e);
+    }
+    /* case 5 parallel: log resting along a pipe: two contacts under the log's end rims */
+    {
+        sd_cyl b = mkcyl(v3(0, 0, 0), v3(1, 0, 0), rp, hp);
+        sd_cyl a = mkcyl(v3(0.03, 0, r + rp - d), v3(1, 0, 0), r, hl);
+        e.n = 2;
+        e.feature[0] = 1;
+        e.normal[0] = v3(0, 0, 1);
+        e.overlap[0] = d;
+        e.point[0] = v3(0.03 - hl, 0, rp - 0.5 * d);
+        e.feature[1] = 2;
+        e.normal[1] = v3(0, 0, 1);
+        e.overlap[1] = d;
+        e.point[1] = v3(0.03 + hl, 0, rp - 0.5 * d);
+        cc_case("log along pipe", a, b, &e);
+        a.c.z = r + rp + 1e-7;
+        e = none();
+        cc_case("log along pipe separated", a, b, &e);
+    }
+    /* parallel equal logs side by side, offset along the axis: ends of the overlapping part */
+    {
+        sd_cyl b = mkcyl(v3(0, 0, 0), v3(1, 0, 0), r, hl);
+        sd_cyl a = mkcyl(v3(0.03, 2 * r - d, 0), v3(1, 0, 0), r, hl);
+        e.n = 2;
+        e.feature[0] = 1; /* A's end - against B's side */
+        e.normal[0] = v3(0, 1, 0);
+        e.overlap[0] = d;
+        e.point[0] = v3(0.03 - hl, r - 0.5 * d, 0);
+        e.feature[1] = 6; /* B's end + against A's side */
+        e.normal[1] = v3(0, 1, 0);
+        e.overlap[1] = d;
+        e.point[1] = v3(hl, r - 0.5 * d, 0);
+        cc_case("parallel logs offset", a, b, &e);
+    }
+    /* case 6: log end face against the side of a pipe (log axis through the pipe axis) */
+    {
+        sd_cyl b = mkcyl(v3(0, 0, 0), v3(0, 0, 1), rp, hp);
+        sd_cyl a = mkcyl(v3(rp - d + hl, 0, 0.01), v3(1, 0, 0), r, hl);
+        e = one(1, v3(1, 0, 0), d, v3(rp - 0.5 * d, 0, 0.01));
+        cc_case("log end against pipe side", a, b, &e);
+        /* tilted log: its lowest rim point touches the pipe side */
+        double th = 0.4;
+        sd_vec3 ax = v3(cos(th), 0, sin(th));
+        sd_vec3 u = v3(-sin(th), 0, cos(th)); /* perpendicular to ax in the xz plane */
+        /* rim points of end - : ce + r (cos phi u + sin phi y); the one nearest the z axis has
+         * the smallest x: phi = 0 when u.x < 0 */
+        sd_vec3 rim = v3(rp - d, 0, 0.02);
+        sd_vec3 ce = v3_madd(rim, u, -r);
+        sd_cyl a2 = mkcyl(v3_madd(ce, ax, hl), ax, r, hl);
+        e = one(1, v3(1, 0, 0), d, v3(rp - 0.5 * d, 0, 0.02));
+        cc_case("tilted log rim against pipe side", a2, b, &e);
+    }
+    /* case 7: end to end, coaxial; and parallel axes offset sideways (lens of two disks) */
+    {
+        sd_cyl b = mkcyl(v3(0, 0, 0), v3(0, 0, 1), r, hl);
+        sd_cyl a = mkcyl(v3(0, 0, 2 * hl - d), v3(0, 0, 1), r, hl);
+        e = one(3, v3(0, 0, 1), d, v3(0, 0, hl - 0.5 * d));
+        cc_case("end to end coaxial", a, b, &e);
+        sd_cyl a2 = mkcyl(v3(0.003, 0, 2 * hl - d), v3(0, 0, 1), r, hl);
+        e = one(3, v3(0, 0, 1), d, v3(0.0015, 0, hl - 0.5 * d));
+        cc_case("end to end offset", a2, b, &e);
+        a2.c.z = 2 * hl + 1e-7;
+        e = none();
+        cc_case("end to end separated", a2, b, &e);
+    }
+    /* rim against end face: a tilted log's lowest rim point into a pipe's end face */
+    {
+        sd_cyl b = mkcyl(v3(0, 0, 0), v3(0, 0, 1), rp, hp);
+        double th = 0.3;
+        sd_vec3 ax = v3(sin(th), 0, cos(th));
+        sd_vec3 u = v3(-cos(th), 0, sin(th)); /* in-plane direction of steepest descent is -u */
+        sd_vec3 rim = v3(0.001, 0, hp - d);
+        sd_vec3 ce = v3_madd(rim, u, r); /* rim = ce - r u */
+        sd_cyl a = mkcyl(v3_madd(ce, ax, hl), ax, r, hl);
+        e = one(3, v3(0, 0, 1), d, v3(0.001, 0, hp - 0.5 * d));
+        cc_case("rim against end face", a, b, &e);
+    }
+    /* rim against side of a parallel log at the corner (ends flush): still two contacts */
+    {
+        sd_cyl b = mkcyl(v3(0, 0, 0), v3(1, 0, 0), r, hl);
+        sd_cyl a = mkcyl(v3(0, 0, 2 * r - d), v3(1, 0, 0), r, hl);
+        sd_manifold m;
+        sd_geom_cyl_cyl(&a, &b, &m);
+        CHECK(manifold_finite(&m));
+        CHECK(m.n == 2);
+        for (int i = 0; i < m.n; i++) {
+            CHECK_NEAR(m.overlap[i], d, TOL);
+            CHECK_VEC_NEAR(m.normal[i], v3(0, 0, 1), TOL);
+            CHECK_NEAR(fabs(m.point[i].x), hl, TOL);
+        }
+    }
+    /* degenerate: coincident cylinders, axes crossing through each other */
+    {
+        sd_cyl b = mkcyl(v3(0, 0, 0), v3(1, 0, 0), r, hl);
+        sd_manifold m;
+        sd_geom_cyl_cyl(&b, &b, &m);
+        CHECK(manifold_finite(&m));
+        CHECK(m.n >= 1);
+        sd_cyl a = mkcyl(v3(0, 0, 0), v3(0, 1, 0), r, hl);
+        sd_geom_cyl_cyl(&a, &b, &m);
+        CHECK(manifold_finite(&m));
+        CHECK(m.n >= 1);
+        sd_cyl c = mkcyl(v3(0, 0, 0.001), v3(0, 0, 1), r, hl);
+        sd_geom_cyl_cyl(&c, &b, &m);
+        CHECK(manifold_finite(&m));
+        CHECK(m.n >= 1);
+    }
+}
+
+/* ---------------------------------------------------------------- cylinder-triangle ---- */
+static void ct_case(const char *what, sd_cyl a, const sd_tri *t, const expect *e)
+{
+    sd_manifold m;
+    sd_geom_cyl_tri(&a, t, &m);
+    check_expect(what, &m, e, identity_xform(), 1.0, NULL);
+    /* reversed winding: two-sided, same result */
+    sd_tri tr;
+    sd_tri_init(&tr, t->v[0], t->v[2], t->v[1]);
+    sd_manifold m2;
+    sd_geom_cyl_tri(&a, &tr, &m2);
+    CHECK(m2.n == m.n);
+    for (int k = 0; k < 4; k++) {
+        xform x = rand_xform();
+        sd_cyl ax = xcyl(x, a);
+        sd_tri tx = xtri(x, t);
+        sd_geom_cyl_tri(&ax, &tx, &m);
+        check_expect(what, &m, e, x, 1.0, NULL);
+    }
+}
+
+#define CTF(c, t) (((c) << SD_TRI_FEATURE_BITS) | (t))
+
+static void test_cyl_tri(void)
+{
+    const double r = 0.005, hl = 0.05, d = 0.0002;
+    sd_tri floor;
+    sd_tri_init(&floor, v3(-1, -1, 0), v3(1, -1, 0), v3(0, 1, 0));
+    expect e;
+    /* log lying flat on a floor triangle: exactly two contacts, one under each end rim */
+    {
+        sd_cyl a = mkcyl(v3(0.01, 0.02, r - d), v3(cos(0.7), sin(0.7), 0), r, hl);
+        e.n = 2;
+        for (int i = 0; i < 2; i++) {
+            double s = i ? hl : -hl;
+            e.feature[i] = CTF(1 + i, SD_TRI_FACE);
+            e.normal[i] = v3(0, 0, 1);
+            e.overlap[i] = d;
+            e.point[i] = v3(0.01 + s * cos(0.7), 0.02 + s * sin(0.7), -0.5 * d);
+        }
+        ct_case("log flat on floor", a, &floor, &e);
+        /* below the floor (cylinder centre on the other side): mirrored normal */
+        sd_cyl ab = a;
+        ab.c.z = -(r - d);
+        for (int i = 0; i < 2; i++) {
+            e.normal[i] = v3(0, 0, -1);
+            e.point[i].z = 0.5 * d;
+        }
+        ct_case("log flat under floor", ab, &floor, &e);
+        a.c.z = r + 1e-7;
+        e = none();
+        ct_case("log above floor", a, &floor, &e);
+    }
+    /* case 8: tilted log, the lower end's deepest rim point only */
+    {
+        double th = 0.25;
+        sd_vec3 ax = v3(cos(th), 0, sin(th));
+        sd_vec3 u = v3(sin(th), 0, -cos(th)); /* deepest direction in the end disk */
+        sd_vec3 rim = v3(0.02, 0.03, -d);
+        sd_vec3 ce = v3_madd(rim, u, -r);
+        sd_cyl a = mkcyl(v3_madd(ce, ax, hl), ax, r, hl);
+        e = one(CTF(1, SD_TRI_FACE), v3(0, 0, 1), d, v3(0.02, 0.03, -0.5 * d));
+        ct_case("tilted log rim on floor", a, &floor, &e);
+    }
+    /* standing log: end disk flat on the floor (S = 0) */
+    {
+        sd_cyl a = mkcyl(v3(0.1, 0.2, hl - d), v3(0, 0, 1), r, hl);
+        e = one(CTF(1, SD_TRI_FACE), v3(0, 0, 1), d, v3(0.1, 0.2, -0.5 * d));
+        ct_case("standing log", a, &floor, &e);
+        sd_cyl b = mkcyl(v3(0.1, 0.2, -(hl - d)), v3(0, 0, 1), r, hl); /* under: end + */
+        e = one(CTF(2, SD_TRI_FACE), v3(0, 0, -1), d, v3(0.1, 0.2, 0.5 * d));
+        ct_case("standing log under", b, &floor, &e);
+    }
+    /* log across a seam of two triangles: each supports its own part of the line */
+    {
+        sd_tri t1, t2;
+        sd_tri_init(&t1, v3(-1, -1, 0), v3(0, -1, 0), v3(0, 1, 0)); /* x <= 0 */
+        sd_tri_init(&t2, v3(0, -1, 0), v3(1, -1, 0), v3(0, 1, 0));  /* x >= 0 */
+        sd_cyl a = mkcyl(v3(0.02, 0.0, r - d), v3(1, 0, 0), r, hl);
+        /* t1: end - rim (face) and the seam (edge 1 of t1 from v1 to v2) */
+        e.n = 2;
+        e.feature[0] = CTF(1, SD_TRI_FACE);
+        e.normal[0] = v3(0, 0, 1);
+        e.overlap[0] = d;
+        e.point[0] = v3(0.02 - hl, 0, -0.5 * d);
+        e.feature[1] = CTF(4, SD_TRI_EDGE0 + 1);
+        e.normal[1] = v3(0, 0, 1);
+        e.overlap[1] = d;
+        e.point[1] = v3(0, 0, -0.5 * d);
+        ct_case("log over seam, t1", a, &t1, &e);
+        /* t2: the seam (edge 2 of t2 from v2 to v0) and end + rim */
+        e.feature[0] = CTF(3, SD_TRI_EDGE0 + 2);
+        e.point[0] = v3(0, 0, -0.5 * d);
+        e.feature[1] = CTF(2, SD_TRI_FACE);
+        e.point[1] = v3(0.02 + hl, 0, -0.5 * d);
+        ct_case("log over seam, t2", a, &t2, &e);
+    }
+    /* log against a vertical wall with its end rim (case 8 with the wall's normal) */
+    {
+        sd_tri wall;
+        sd_tri_init(&wall, v3(0, -1, -1), v3(0, 1, -1), v3(0, 0, 1)); /* plane x = 0 */
+        sd_cyl a = mkcyl(v3(hl - d, 0.0, 0.1), v3(1, 0, 0), r, hl); /* end disk flat on the wall */
+        e = one(CTF(1, SD_TRI_FACE), v3(1, 0, 0), d, v3(0.5 * d, 0.0, 0.1));
+        ct_case("log end against wall", a, &wall, &e);
+    }
+    /* log lying across a blade (vertical triangle's top edge), perpendicular: edge contact */
+    {
+        sd_tri blade;
+        sd_tri_init(&blade, v3(-0.1, 0, -0.2), v3(0.1, 0, -0.2), v3(0, 0, 0)); /* apex at origin */
+        sd_tri blade2;
+        sd_tri_init(&blade2, v3(-0.1, 0, -0.2), v3(0.1, 0, 0), v3(-0.1, 0, 0)); /* top edge z = 0 */
+        sd_cyl a = mkcyl(v3(0.01, 0.0, r - d), v3(0, 1, 0), r, hl);
+        e = one(CTF(0, SD_TRI_EDGE0 + 1), v3(0, 0, 1), d, v3(0.01, 0, -0.5 * d));
+        ct_case("log across blade edge", a, &blade2, &e);
+        /* on the apex vertex */
+        sd_cyl a2 = mkcyl(v3(0.0, 0.01, r - d), v3(0, 1, 0), r, hl);
+        sd_cyl a3 = a2;
+        a3.c.y = 0.0;
+        e = one(CTF(0, SD_TRI_VERT0 + 2), v3(0, 0, 1), d, v3(0, 0, -0.5 * d));
+        ct_case("log on blade apex", a3, &blade, &e);
+        /* log lying along the top edge of the blade: two contacts at the log's ends */
+        sd_cyl a4 = mkcyl(v3(0.0, 0.0, r - d), v3(1, 0, 0), r, hl);
+        e.n = 2;
+        e.feature[0] = CTF(3, SD_TRI_EDGE0 + 1);
+        e.normal[0] = v3(0, 0, 1);
+        e.overlap[0] = d;
+        e.point[0] = v3(-hl, 0, -0.5 * d);
+        e.feature[1] = CTF(4, SD_TRI_EDGE0 + 1);
+        e.normal[1] = v3(0, 0, 1);
+        e.overlap[1] = d;
+        e.point[1] = v3(hl, 0, -0.5 * d);
+        ct_case("log along blade edge", a4, &blade2, &e);
+        (void)a2;
+    }
+    /* log along the boundary edge of a floor, its lowest line just outside the triangle */
+    {
+        sd_tri t;
+        sd_tri_init(&t, v3(-1, 0, 0), v3(1, 0, 0), v3(0, 1, 0)); /* y >= 0 */
+        double y0 = -0.003;                                      /* axis beside the edge */
+        double z0 = sqrt(r * r - y0 * y0) - d;                   /* edge depth r - dist = d */
+        (void)z0;
+        double dist = r - d;
+        double zc = sqrt(dist * dist - y0 * y0);
+        sd_cyl a = mkcyl(v3(0.0, y0, zc), v3(1, 0, 0), r, hl);
+        sd_vec3 n = v3_normalize(v3(0, y0, zc)); /* from the edge (y = z = 0) to the axis */
+        e.n = 2;
+        e.feature[0] = CTF(3, SD_TRI_EDGE0 + 0);
+        e.normal[0] = n;
+        e.overlap[0] = d;
+        e.point[0] = v3_madd(v3(-hl, 0, 0), n, -0.5 * d);
+        e.feature[1] = CTF(4, SD_TRI_EDGE0 + 0);
+        e.normal[1] = n;
+        e.overlap[1] = d;
+        e.point[1] = v3_madd(v3(hl, 0, 0), n, -0.5 * d);
+        ct_case("log along floor boundary edge", a, &t, &e);
+    }
+    /* degenerate: cylinder through the triangle, centre on the plane; tiny triangle inside */
+    {
+        sd_cyl a = mkcyl(v3(0, 0, 0), v3(0, 0, 1), r, hl);
+        sd_manifold m;
+        sd_geom_cyl_tri(&a, &floor, &m);
+        CHECK(manifold_finite(&m));
+        CHECK(m.n >= 1);
+        sd_cyl b = mkcyl(v3(0, 0, 0), v3(1, 0, 0), r, hl);
+        sd_geom_cyl_tri(&b, &floor, &m);
+        CHECK(manifold_finite(&m));
+        CHECK(m.n >= 1);
+        sd_tri tiny;
+        sd_tri_init(&tiny, v3(0, 0, 0), v3(0.001, 0, 0), v3(0, 0.001, 0));
+        sd_geom_cyl_tri(&b, &tiny, &m);
+        CHECK(manifold_finite(&m));
+        CHECK(m.n >= 1);
+    }
+}
+
+/* random configurations: finite, and invariant under rigid motions */
+static void test_random_invariance(void)
+{
+    for (int it = 0; it < 2000; it++) {
+        sd_cyl a = mkcyl(v3(urange(-0.06, 0.06), urange(-0.06, 0.06), urange(-0.06, 0.06)),
+                         v3(urange(-1, 1), urange(-1, 1), urange(-1, 1)), 0.005, 0.05);
+        sd_cyl b = mkcyl(v3(0, 0, 0), v3(urange(-1, 1), urange(-1, 1), urange(-1, 1)), 0.009, 0.1);
+        sd_manifold m, mx, ms;
+        sd_geom_cyl_cyl(&a, &b, &m);
+        CHECK(manifold_finite(&m));
+        sd_geom_cyl_cyl(&b, &a, &ms);
+        CHECK(manifold_finite(&ms));
+        CHECK(ms.n == m.n);
+        for (int i = 0; i < m.n && ms.n == m.n; i++) {
+            int k = find_feature(&ms, cc_swap_feature(m.feature[i]));
+            CHECK(k >= 0);
+            if (k < 0) continue;
+            CHECK_NEAR(ms.overlap[k], m.overlap[i], 1e-12);
+            CHECK_VEC_NEAR(ms.normal[k], v3_neg(m.normal[i]), 1e-9);
+            CHECK_VEC_NEAR(ms.point[k], m.point[i], 1e-12);
+        }
+        xform x = rand_xform();
+        sd_cyl ax = xcyl(x, a), bx = xcyl(x, b);
+        sd_geom_cyl_cyl(&ax, &bx, &mx);
+        /* away from decision boundaries the contact set is the same */
+        if (mx.n == m.n) {
+            for (int i = 0; i < m.n; i++) {
+                int k = find_feature(&mx, m.feature[i]);
+                if (k < 0) continue;
+                CHECK_NEAR(mx.overlap[k], m.overlap[i], 1e-11);
+            }
+        }
+        sd_geom_sphere_cyl(a.c, urange(0.0025, 0.01), &b, &m);
+        CHECK(manifold_finite(&m));
+        sd_tri t;
+        sd_tri_init(&t, v3(urange(-0.1, 0.1), urange(-0.1, 0.1), urange(-0.1, 0.1)),
+                    v3(urange(-0.1, 0.1), urange(-0.1, 0.1), urange(-0.1, 0.1)),
+                    v3(urange(-0.1, 0.1), urange(-0.1, 0.1), urange(-0.1, 0.1)));
+        sd_geom_cyl_tri(&a, &t, &m);
+        CHECK(manifold_finite(&m));
+    }
+}
+
+int main(void)
+{
+    test_sphere_cyl();
+    test_cyl_cyl();
+    test_cyl_tri();
+    test_random_invariance();
+    return check_report("test_geom_cyl");
+}
