@@ -103,3 +103,29 @@ void sd_bodies_swap_remove(sd_bodies *b, int i)
     }
     b->n--;
 }
+
+typedef struct {
+    const int32_t *perm; /* new index -> old index */
+    int n;
+    void *scratch;
+} permute_ctx;
+
+static void permute_field(void *array, size_t elem, const char *name, void *ctx)
+{
+    (void)name;
+    permute_ctx *pc = ctx;
+    char *p = *(char **)array, *t = pc->scratch;
+    for (int i = 0; i < pc->n; i++) memcpy(t + (size_t)i * elem, p + (size_t)pc->perm[i] * elem, elem);
+    memcpy(p, t, (size_t)pc->n * elem);
+}
+
+sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm)
+{
+    /* the widest field is a quaternion */
+    void *scratch = malloc((size_t)(b->n + 1) * sizeof(sd_quat));
+    if (!scratch) return SD_ERR_NOMEM;
+    permute_ctx pc = {perm, b->n, scratch};
+    sd_bodies_for_each_field(b, permute_field, &pc);
+    free(scratch);
+    return SD_OK;
+}

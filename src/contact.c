@@ -44,7 +44,7 @@ static int narrow_bt(const sd_bodies *b, const sd_walls *wl, const sd_pair *p, s
 
 /* Apply the law to every point of a manifold, matching history slots by feature. */
 static int apply_manifold(const sd_world *w, const sd_law *law, const sd_manifold *m, int ia, int ib,
-                          int b_is_static, sd_hist *slots, int cap, sd_pair_out *out)
+                          int b_is_static, double sqm, sd_hist *slots, int cap, sd_pair_out *out)
 {
     const sd_bodies *b = &w->b;
     sd_hist old[SD_MANIFOLD_MAX];
@@ -54,11 +54,6 @@ static int apply_manifold(const sd_world *w, const sd_law *law, const sd_manifol
         slots[s].feature = -1;
     }
     sd_vec3 fa = v3(0, 0, 0), ta = v3(0, 0, 0), tb = v3(0, 0, 0);
-    double ma = b->mass[ia];
-    double m_eff;
-    if (b_is_static || b->fixed[ib]) m_eff = ma;
-    else if (b->fixed[ia]) m_eff = b->mass[ib];
-    else m_eff = ma * b->mass[ib] / (ma + b->mass[ib]);
     int used = 0;
     for (int k = 0; k < m->n && used < cap; k++) {
         sd_vec3 ra = v3_sub(m->point[k], b->pos[ia]);
@@ -75,7 +70,7 @@ static int apply_manifold(const sd_world *w, const sd_law *law, const sd_manifol
                 break;
             }
         sd_vec3 f;
-        sd_contact_law(law, m_eff, m->normal[k], m->overlap[k], v3_sub(va, vb), w->def.dt, &shear, &f);
+        sd_contact_law(law, sqm, m->normal[k], m->overlap[k], v3_sub(va, vb), w->def.dt, &shear, &f);
         slots[used].feature = m->feature[k];
         slots[used].shear = shear;
         used++;
@@ -87,6 +82,38 @@ static int apply_manifold(const sd_world *w, const sd_law *law, const sd_manifol
     out->t_a = ta;
     out->t_b = tb;
     return used;
+}
+
+/* Sphere–sphere, the most common pair, without the manifold round trip: the same kernel
+ * (case 1) and the same law, with an early exit for the many candidates not in contact. */
+static int sphere_sphere_fast(const sd_world *w, const sd_law *law, const sd_pair *p, sd_hist *h, sd_pair_out *out)
+{
+    const sd_bodies *b = &w->b;
+    const int ia = p->a, ib = p->b;
+    sd_vec3 d = v3_sub(b->pos[ia], b->pos[ib]);
+    double ra = b->radius[ia], rb = b->radius[ib], rs = ra + rb;
+    double d2 = v3_norm2(d);
+    if (d2 >= rs * rs) {
+        h->feature = -1;
+        out->f_a = out->t_a = out->t_b = v3(0, 0, 0);
+        return 0;
+    }
+    double dist = sqrt(d2);
+    sd_vec3 n = dist > 1e-300 ? v3_scale(d, 1.0 / dist) : v3(0.0, 0.0, 1.0);
+    double ov = rs - dist;
+    /* contact point midway between the surfaces: lever arms along the normal */
+    sd_vec3 lever_a = v3_scale(n, -(ra - 0.5 * ov)), lever_b = v3_scale(n, rb - 0.5 * ov);
+    sd_vec3 va = v3_add(b->vel[ia], v3_cross(b->omega[ia], lever_a));
+    sd_vec3 vb = v3_add(b->vel[ib], v3_cross(b->omega[ib], lever_b));
+    sd_vec3 shear = h->feature == 0 ? h->shear : v3(0, 0, 0);
+    sd_vec3 f;
+    sd_contact_law(law, p->sqrt_m_eff, n, ov, v3_sub(va, vb), w->def.dt, &shear, &f);
+    h->feature = 0;
+    h->shear = shear;
+    out->f_a = f;
+    out->t_a = v3_cross(lever_a, f);
+    out->t_b = v3_neg(v3_cross(lever_b, f));
+    return 1;
 }
 
 /* Global id of a triangle feature: kind in the low 2 bits (0 face, 1 edge, 2 vertex). */
@@ -182,9 +209,13 @@ sd_status sd_contact_compute(sd_world *w)
 #pragma omp parallel for schedule(static) reduction(+ : count) if (nbb > SD_OMP_MIN_ITEMS)
     for (int k = 0; k < nbb; k++) {
         const sd_pair *p = &w->bb.p[k];
+        if (p->kind == SD_PAIR_SS) {
+            count += sphere_sphere_fast(w, &law, p, &w->bb.hist[p->off], &w->bb.out[k]);
+            continue;
+        }
         sd_manifold m;
         narrow_bb(b, p, &m);
-        count += apply_manifold(w, &law, &m, p->a, p->b, 0, &w->bb.hist[p->off], p->cap, &w->bb.out[k]);
+        count += apply_manifold(w, &law, &m, p->a, p->b, 0, p->sqrt_m_eff, &w->bb.hist[p->off], p->cap, &w->bb.out[k]);
     }
     const int nb = b->n;
 #pragma omp parallel for schedule(static) reduction(+ : count) if (nb > SD_OMP_MIN_ITEMS)
@@ -196,7 +227,7 @@ sd_status sd_contact_compute(sd_world *w)
         if (multi > 1) sd_contact_mesh_dedup(&w->w, w->bt.p, w->bt_man, from, to);
         for (int k = from; k < to; k++) {
             const sd_pair *p = &w->bt.p[k];
-            count += apply_manifold(w, &law, &w->bt_man[k], p->a, -1, 1, &w->bt.hist[p->off], p->cap,
+            count += apply_manifold(w, &law, &w->bt_man[k], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
                                     &w->bt.out[k]);
         }
     }

@@ -11,10 +11,15 @@
  * ParaView recipes:
  *  - spheres: Glyph filter, Glyph Type Sphere, Scale Array "diameter" (Sphere source radius
  *    is 0.5, so scale by the diameter), Scale Factor 1.
- *  - cylinders: Glyph filter, Glyph Type Cylinder, Orientation Array "axis", Scale Array
- *    "glyph_scale" with Vector Components scaling, Scale Factor 1, and Glyph Transform
- *    Rotate (0, 0, -90) (the Cylinder source lies along y; the orientation turns x onto the
- *    axis). glyph_scale = (L, 2r, 2r) for the unit-height, radius-0.5 source. */
+ *  - cylinders (ParaView >= 5.6 Glyph filter, which takes scale and orientation from separate
+ *    arrays): Glyph Type Cylinder, Orientation Array "axis", Scale Array "glyph_scale" with
+ *    Vector Scale Mode "Scale by Components", Scale Factor 1, Glyph Transform Rotate
+ *    (0, 0, -90) (the Cylinder source lies along y; the rotation puts it along x, which the
+ *    orientation turns onto the axis). glyph_scale = (L, 2r, 2r) for the unit-height,
+ *    radius-0.5 source. Not checked inside ParaView here; plain VTK's vtkGlyph3D cannot use
+ *    it (its component scaling reads the orientation vectors): there, or as a fallback, glyph
+ *    with Orientation "axis" and uniform Scale Array "length" (right length, but the diameter
+ *    comes out equal to L), or draw them with scripts/plot_side.py. */
 #ifndef SD_IO_VTK_H
 #define SD_IO_VTK_H
 

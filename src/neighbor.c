@@ -185,6 +185,7 @@ static sd_status push_pair(sd_pairlist *l, int32_t a, int32_t b, int kind)
     p->kind = (int16_t)kind;
     p->cap = (int16_t)hist_cap_of_kind[kind];
     p->off = l->nh;
+    p->sqrt_m_eff = 0.0;
     l->nh += p->cap;
     return SD_OK;
 }
@@ -209,6 +210,20 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l)
             l->hist[p->off + s] = w->old_hist[lo];
     }
     return SD_OK;
+}
+
+static void set_effective_masses(sd_world *w)
+{
+    const sd_bodies *b = &w->b;
+    for (int k = 0; k < w->bb.n; k++) {
+        sd_pair *p = &w->bb.p[k];
+        double ma = b->mass[p->a], mb = b->mass[p->b], m;
+        if (b->fixed[p->b]) m = ma;
+        else if (b->fixed[p->a]) m = mb;
+        else m = ma * mb / (ma + mb);
+        p->sqrt_m_eff = sqrt(m);
+    }
+    for (int k = 0; k < w->bt.n; k++) w->bt.p[k].sqrt_m_eff = sqrt(b->mass[w->bt.p[k].a]);
 }
 
 static int boxes_overlap(const int32_t *a, const int32_t *b)
@@ -250,6 +265,43 @@ static sd_status rebuild_triangle_grid(sd_world *w, double cell)
     return st;
 }
 
+/* Re-sort the store by the grid cell of each centre (stable counting sort), so that
+ * neighbours in space are neighbours in memory; the history was already taken out by gid. */
+static sd_status sort_bodies_by_cell(sd_world *w)
+{
+    sd_bodies *b = &w->b;
+    const sd_grid *g = &w->grid;
+    int n = b->n, ncell = g->nx * g->ny * g->nz;
+    int32_t *cell = malloc((size_t)(n + 1) * sizeof(int32_t));
+    int32_t *count = calloc((size_t)ncell + 1, sizeof(int32_t));
+    int32_t *perm = malloc((size_t)(n + 1) * sizeof(int32_t));
+    sd_status st = SD_OK;
+    if (!cell || !count || !perm) {
+        st = SD_ERR_NOMEM;
+        goto done;
+    }
+    int sorted = 1;
+    for (int i = 0; i < n; i++) {
+        sd_vec3 c = b->pos[i];
+        int r[6];
+        cell_range(g, c, c, r);
+        cell[i] = (r[2] * g->ny + r[1]) * g->nx + r[0];
+        if (i && cell[i] < cell[i - 1]) sorted = 0;
+        count[cell[i] + 1]++;
+    }
+    if (sorted) goto done;
+    for (int c = 0; c < ncell; c++) count[c + 1] += count[c];
+    for (int i = 0; i < n; i++) perm[count[cell[i]]++] = i;
+    st = sd_bodies_permute(b, perm);
+    if (st) goto done;
+    for (int i = 0; i < n; i++) w->gid_map[b->gid[i]] = i;
+done:
+    free(cell);
+    free(count);
+    free(perm);
+    return st;
+}
+
 int sd_neighbor_needs_rebuild(const sd_world *w)
 {
     return w->need_rebuild || w->rebuild_every_step || w->w.dirty ||
@@ -286,6 +338,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     long max_cells = 8L * b->n + 4096;
     st = grid_layout(&w->grid, lo, hi, cell, max_cells);
     if (st) return st;
+    if ((st = sort_bodies_by_cell(w))) return st;
     if (sd_grow((void **)&w->range, &w->range_cap, b->n + 1, sizeof(*w->range))) return SD_ERR_NOMEM;
     for (int i = 0; i < b->n; i++) {
         sd_vec3 l, h;
@@ -374,6 +427,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     }
     w->csr.bt_start[b->n] = w->bt.n;
 
+    set_effective_masses(w);
     if ((st = restore_history(w, &w->bb))) return st;
     if ((st = restore_history(w, &w->bt))) return st;
     w->n_old = 0;

@@ -317,9 +317,9 @@ static void plot(run_ctx *c, const char *name, const char *png, double xmin, dou
     if (!c->s->png_on || !c->s->vtk_on) return;
     char cmd[4096];
     snprintf(cmd, sizeof cmd,
-             "/usr/bin/python3 \"%s/scripts/plot_side.py\" --spheres \"%s/spheres_%s.vtp\" --cylinders \"%s/cylinders_%s.vtp\""
+             "/usr/bin/python3 \"%s/scripts/plot_side.py\" --spheres \"%s/spheres_%s.vtp\" --logs \"%s/cylinders_%s.vtp\" --xdam %g"
              " --xmin %g --xmax %g --out \"%s/%s\" >/dev/null 2>&1",
-             SD_SOURCE_DIR, c->dir, name, c->dir, name, xmin, xmax, c->dir, png);
+             SD_SOURCE_DIR, c->dir, name, c->dir, name, c->s->x_dam, xmin, xmax, c->dir, png);
     if (system(cmd) != 0 && c->o->log) fprintf(c->o->log, "note: picture %s not drawn (python3-matplotlib missing?)\n", png);
 }
 

@@ -59,6 +59,7 @@ typedef struct {
     int32_t off;
     int16_t cap;
     int16_t kind; /* SD_PAIR_* */
+    double sqrt_m_eff; /* sqrt of the effective mass (SPEC §3), set at rebuild */
 } sd_pair;
 
 /* Below this many items a parallel loop costs more in start-up than it saves. */
@@ -139,6 +140,8 @@ struct sd_world {
 sd_status sd_bodies_reserve(sd_bodies *b, int cap);
 void sd_bodies_free(sd_bodies *b);
 void sd_bodies_swap_remove(sd_bodies *b, int i);
+/* Reorder every field: new index i takes old index perm[i]. */
+sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm);
 /* Iterate over the field table: calls fn(ptr, elem_size, ctx) for each field array. */
 typedef void (*sd_field_fn)(void *array, size_t elem_size, const char *name, void *ctx);
 void sd_bodies_for_each_field(sd_bodies *b, sd_field_fn fn, void *ctx);
@@ -161,8 +164,9 @@ typedef struct {
     double k_n, k_s, c_n_factor, c_s_factor, tan_phi, cohesion; /* c = factor * sqrt(m*) */
 } sd_law;
 sd_law sd_law_make(const sd_contact_def *d);
-/* Force on A from one contact; updates the shear spring in place. Returns the normal force. */
-double sd_contact_law(const sd_law *law, double m_eff, sd_vec3 n, double overlap, sd_vec3 v_rel,
+/* Force on A from one contact; updates the shear spring in place. Returns the normal force.
+ * sqrt_m_eff = sqrt(m_i m_j / (m_i + m_j)), or sqrt(m_i) against a fixed element. */
+double sd_contact_law(const sd_law *law, double sqrt_m_eff, sd_vec3 n, double overlap, sd_vec3 v_rel,
                       double dt, sd_vec3 *shear, sd_vec3 *force_a);
 
 /* contact.c */

@@ -37,12 +37,16 @@ static void add_quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d, in
 
 int main(void)
 {
-    const double L = 0.25, HWALL = 0.2, ZTOP = 0.11;
+    const double L = 0.25, HWALL = 0.2, ZTOP = 0.09, CLEAR = 5e-4;
     /* 376:891:3010:342 of 4619 scaled to 2000 */
     const double diam[4] = {0.020, 0.015, 0.010, 0.005};
     const int count[4] = {163, 386, 1303, 148};
     sd_world_def def = sd_world_def_default();
     def.gravity = v3(0, 0, -9.81);
+    /* settling aids (stated in docs/physics.md): damping ratio 0.5 instead of 0.2 and
+     * dt = 2e-5 s (still 12 steps per half period of the stiffest pair, 5 mm against 5 mm) */
+    def.contact.damping = 0.5;
+    def.dt = 2e-5;
     sd_world *w = NULL;
     CHECK(sd_world_create(&def, &w) == SD_OK);
 
@@ -58,7 +62,7 @@ int main(void)
     add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, 0, HWALL), v3(0, 0, HWALL), WALL_Y0);
     add_quad(w, v3(0, L, 0), v3(L, L, 0), v3(L, L, HWALL), v3(0, L, HWALL), WALL_Y1);
 
-    /* random sequential placement, largest first, rejection on overlap with a 1 mm clearance */
+    /* random sequential placement, largest first, rejection on overlap with a 0.5 mm clearance */
     int ntot = 0;
     for (int c = 0; c < 4; c++) ntot += count[c];
     sd_vec3 *pos = malloc((size_t)ntot * sizeof(*pos));
@@ -71,11 +75,11 @@ int main(void)
             double r = 0.5 * diam[c];
             for (;;) {
                 tries++;
-                sd_vec3 p = v3(r + 1e-3 + (L - 2 * r - 2e-3) * urand(), r + 1e-3 + (L - 2 * r - 2e-3) * urand(),
-                               r + 1e-3 + (ZTOP - 2 * r - 1e-3) * urand());
+                sd_vec3 p = v3(r + CLEAR + (L - 2 * (r + CLEAR)) * urand(), r + CLEAR + (L - 2 * (r + CLEAR)) * urand(),
+                               r + CLEAR + (ZTOP - 2 * r - CLEAR) * urand());
                 int ok = 1;
                 for (int q = 0; q < n && ok; q++) {
-                    double lim = r + rad[q] + 1e-3;
+                    double lim = r + rad[q] + CLEAR;
                     if (v3_norm2(v3_sub(p, pos[q])) < lim * lim) ok = 0;
                 }
                 if (ok) {
@@ -94,10 +98,11 @@ int main(void)
             mass_total += 1900.0 * 4.0 / 3.0 * M_PI * r * r * r;
         }
     CHECK(n == 2000);
+    printf("placed %d spheres in %ld tries\n", n, tries);
     const double weight = mass_total * 9.81;
 
     /* drop until at rest: max speed below 5 mm/s, at most 1.5 s */
-    const double t_max = 1.5, v_rest = 5e-3;
+    const double t_max = getenv("SD_PILE_TMAX") ? atof(getenv("SD_PILE_TMAX")) : 1.5, v_rest = 5e-3;
     double t0 = sd_now_for_test();
     double vmax = 0.0;
     long step = 0;
@@ -112,7 +117,7 @@ int main(void)
             double v = v3_norm(b.vel);
             if (v > vmax) vmax = v;
         }
-        if (step % 50000 == 0)
+        if (step % 5000 == 0)
             printf("t = %.2f s: max speed %.4f m/s, contacts %ld\n", sd_world_time(w), vmax,
                    sd_world_contact_count(w));
         if (vmax < v_rest) break;

@@ -16,7 +16,7 @@
  * case. Of the E and F candidates of one disk the shallower is kept (least penetration
  * direction); near-duplicates (close points, similar normals) are merged, keeping the deepest.
  * feature: 0 side-side; A's disk -/+: 1/2 against B's side, 3/4 against an end face of B;
- * B's disk -/+: 5/6 against A's side, 7/8 against an end face of A. */
+ * B's disk -/+: 5/6 against A's side, 7/8 against an end face of A; 9 deep-overlap fallback. */
 #include "cyl_common.h"
 
 typedef struct {
@@ -98,6 +98,51 @@ static int cc_disk_into(const sd_cyl *P, double e, const sd_cyl *Q, double tol, 
     return found;
 }
 
+/* Closest points of the two axis segments (Ericson, Real-Time Collision Detection, 5.1.9). */
+static void cc_seg_seg(const sd_cyl *a, const sd_cyl *b, sd_vec3 *pa, sd_vec3 *pb)
+{
+    sd_vec3 r = v3_sub(sd_cyl_end(a, -1.0), sd_cyl_end(b, -1.0));
+    double la = 2.0 * a->hl, lb = 2.0 * b->hl;
+    double ab = v3_dot(a->a, b->a), c = v3_dot(a->a, r) * la, f = v3_dot(b->a, r) * lb;
+    double A = la * la, E = lb * lb, B = ab * la * lb;
+    double den = A * E - B * B, s = 0.0, t;
+    if (den > 1e-20 * A * E) {
+        s = (B * f - c * E) / den;
+        s = s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s);
+    }
+    t = (B * s + f) / E;
+    if (t < 0.0) {
+        t = 0.0;
+        s = -c / A;
+    } else if (t > 1.0) {
+        t = 1.0;
+        s = (B - c) / A;
+    }
+    s = s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s);
+    *pa = v3_madd(sd_cyl_end(a, -1.0), a->a, s * la);
+    *pb = v3_madd(sd_cyl_end(b, -1.0), b->a, t * lb);
+}
+
+static int cc_inside(const sd_cyl *c, sd_vec3 x)
+{
+    sd_vec3 d = v3_sub(x, c->c);
+    double t = v3_dot(d, c->a);
+    return fabs(t) < c->hl && v3_norm2(v3_madd(d, c->a, -t)) < c->r * c->r;
+}
+
+/* Nearest point of the solid cylinder c to x. */
+static sd_vec3 cc_project(const sd_cyl *c, sd_vec3 x)
+{
+    sd_vec3 d = v3_sub(x, c->c);
+    double t = v3_dot(d, c->a);
+    sd_vec3 w = v3_madd(d, c->a, -t);
+    double rho = v3_norm(w);
+    if (t > c->hl) t = c->hl;
+    if (t < -c->hl) t = -c->hl;
+    if (rho > c->r) w = v3_scale(w, c->r / rho);
+    return v3_add(v3_madd(c->c, c->a, t), w);
+}
+
 int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
 {
     m->n = 0;
@@ -149,6 +194,54 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
         cp[nc] = c.p;
         cov[nc] = c.ov;
         nc++;
+    }
+    /* Fallback for deep, irregular overlaps that no feature pair above describes (e.g. the
+     * end of one log deep in the side of another near its end): look for a witness point
+     * inside both solids (closest points of the axis segments, end centres, then alternating
+     * projections onto the two solids, which converge into the intersection when it is not
+     * empty). If one is found, report one contact at it along the best of a few separating
+     * directions, with the separating-axis overlap along it (an upper bound of the depth). */
+    if (nc == 0) {
+        sd_vec3 pa, pb;
+        cc_seg_seg(a, b, &pa, &pb);
+        sd_vec3 w[7] = {v3_scale(v3_add(pa, pb), 0.5), pa, pb, sd_cyl_end(a, -1.0), sd_cyl_end(a, 1.0),
+                        sd_cyl_end(b, -1.0), sd_cyl_end(b, 1.0)};
+        int found = -1;
+        for (int k = 0; k < 7 && found < 0; k++)
+            if (cc_inside(a, w[k]) && cc_inside(b, w[k])) found = k;
+        if (found < 0) {
+            sd_vec3 x = w[0];
+            for (int it = 0; it < 64 && found < 0; it++) {
+                x = cc_project(b, cc_project(a, x));
+                if (cc_inside(a, x) && cc_inside(b, x)) {
+                    w[0] = x;
+                    found = 0;
+                }
+            }
+        }
+        if (found >= 0) {
+            sd_vec3 dirs[5] = {v3_sub(pa, pb), dc, a->a, b->a, v3_cross(a->a, b->a)};
+            double best = INFINITY;
+            sd_vec3 bn = v3(0.0, 0.0, 0.0);
+            for (int k = 0; k < 5; k++) {
+                double nn = v3_norm(dirs[k]);
+                if (!(nn > 1e-300)) continue;
+                sd_vec3 n = v3_scale(dirs[k], 1.0 / nn);
+                if (v3_dot(n, dc) < 0.0) n = v3_neg(n);
+                double ov = cc_sat_overlap(a, b, n);
+                if (ov < best) {
+                    best = ov;
+                    bn = n;
+                }
+            }
+            if (best > 0.0 && best < INFINITY) {
+                cn[nc] = bn;
+                cov[nc] = best;
+                cp[nc] = w[found];
+                cid[nc] = 9;
+                nc++;
+            }
+        }
     }
     /* deepest first (ties by feature id), merge near-duplicates, keep at most 4 */
     int order[5];

@@ -1,0 +1,125 @@
+/* Sphere-only flume benchmark (issue: engine core / speed). Reads a packing in the LAMMPS data
+ * format of ../shared/reference/lammps/gen_particles.py (atom-ID type diameter density x y z,
+ * flume frame), builds the same box as flume.in (floor z = 0 over 0..4 m, side walls y = 0 and
+ * 0.3 m, back wall x = 0, gate x = 0.3 m) out of triangles, and times the phases:
+ *   drop (dilute), settle, dense (settled bed at rest behind the gate), flow (gate removed).
+ * Prints particle-steps per second per phase and the time per engine phase.
+ * usage: bench_flume DATAFILE [ndrop nsettle ndense nflow] [--threads N] [--write-settled FILE] */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "world_internal.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+static int read_data(sd_world *w, const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        perror(path);
+        return -1;
+    }
+    char line[512];
+    int in_atoms = 0, n = 0;
+    while (fgets(line, sizeof line, f)) {
+        if (!strncmp(line, "Atoms", 5)) {
+            in_atoms = 1;
+            continue;
+        }
+        if (!in_atoms) continue;
+        int id, type;
+        double d, rho, x, y, z;
+        if (sscanf(line, "%d %d %lf %lf %lf %lf %lf", &id, &type, &d, &rho, &x, &y, &z) == 7) {
+            sd_sphere_def s = sd_sphere_def_default();
+            s.pos = v3(x, y, z);
+            s.radius = 0.5 * d;
+            s.density = rho;
+            s.tag = type - 1;
+            if (sd_world_add_sphere(w, &s) < 0) return -1;
+            n++;
+        }
+    }
+    fclose(f);
+    return n;
+}
+
+static void quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d, int group)
+{
+    sd_world_add_triangle(w, a, b, c, group);
+    sd_world_add_triangle(w, a, c, d, group);
+}
+
+static double phase(sd_world *w, const char *name, long steps, int n)
+{
+    if (steps <= 0) return 0;
+    sd_world_timers t0 = sd_world_get_timers(w);
+    double w0 = sd_now();
+    sd_status st = sd_world_run(w, steps);
+    double wall = sd_now() - w0;
+    sd_world_timers t1 = sd_world_get_timers(w);
+    if (st) fprintf(stderr, "%s: %s\n", name, sd_status_message(st));
+    double ps = (double)n * (double)steps / wall;
+    printf("PHASE %-7s steps %7ld wall %8.3f s  particle-steps/s %.4e  contacts %6ld  | neighbor %.3f contact %.3f "
+           "gather %.3f integrate %.3f rebuilds %ld\n",
+           name, steps, wall, ps, sd_world_contact_count(w), t1.neighbor - t0.neighbor, t1.contact - t0.contact,
+           t1.gather - t0.gather, t1.integrate - t0.integrate, t1.rebuilds - t0.rebuilds);
+    fflush(stdout);
+    return ps;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        fprintf(stderr, "usage: %s DATAFILE [ndrop nsettle ndense nflow] [--threads N] [--write-settled FILE]\n", argv[0]);
+        return 2;
+    }
+    long steps[4] = {20000, 40000, 20000, 20000};
+    int threads = 1, ns = 0;
+    const char *settled = NULL;
+    for (int i = 2; i < argc; i++) {
+        if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--write-settled") && i + 1 < argc) settled = argv[++i];
+        else if (ns < 4) steps[ns++] = atol(argv[i]);
+    }
+#ifdef _OPENMP
+    omp_set_num_threads(threads);
+#endif
+    sd_world_def d = sd_world_def_default(); /* paper's springs, Δt = 1e-5, 15° gravity */
+    sd_world *w;
+    if (sd_world_create(&d, &w)) return 1;
+    int n = read_data(w, argv[1]);
+    if (n <= 0) return 1;
+    const double L = 4.0, W = 0.3, H = 0.5;
+    quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, W, 0), v3(0, W, 0), 0);
+    quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, 0, H), v3(0, 0, H), 1);
+    quad(w, v3(0, W, 0), v3(L, W, 0), v3(L, W, H), v3(0, W, H), 1);
+    quad(w, v3(0, 0, 0), v3(0, W, 0), v3(0, W, H), v3(0, 0, H), 2);
+    quad(w, v3(L, 0, 0), v3(L, W, 0), v3(L, W, H), v3(L, 0, H), 2);
+    quad(w, v3(0.3, 0, 0), v3(0.3, W, 0), v3(0.3, W, H), v3(0.3, 0, H), 3);
+    printf("spheres %d threads %d\n", n, threads);
+    phase(w, "drop", steps[0], n);
+    phase(w, "settle", steps[1], n);
+    if (settled) {
+        FILE *f = fopen(settled, "w");
+        if (f) {
+            fprintf(f, "settled by sabodem\n\n%d atoms\n4 atom types\n\n0.0 4.0 xlo xhi\n0.0 0.3 ylo yhi\n0.0 0.5 zlo zhi\n\nAtoms\n\n", n);
+            for (int i = 0; i < n; i++) {
+                sd_body_state b;
+                sd_world_body(w, i, &b);
+                fprintf(f, "%d %d %.6f %.1f %.9f %.9f %.9f\n", i + 1, b.tag + 1, 2 * b.radius, 1900.0, b.pos.x, b.pos.y,
+                        b.pos.z);
+            }
+            fclose(f);
+        }
+    }
+    phase(w, "dense", steps[2], n);
+    sd_world_set_group_active(w, 3, 0);
+    phase(w, "flow", steps[3], n);
+    double cn = 2.0 * (double)sd_world_contact_count(w) / n;
+    printf("contacts per sphere (incl. walls) at end: %.3f\n", cn);
+    sd_world_destroy(w);
+    return 0;
+}

@@ -1,0 +1,405 @@
+/* Independent reference for the cylinder kernels by dense point sampling.
+ *
+ * For random overlapping (or nearly overlapping) pairs — log-log (phi 10 x 100 mm), log-sphere
+ * (r 2.5-10 mm), log-triangle — the reference overlap is the deepest penetration of a sampled
+ * surface point of either solid into the other: max over points x of A of depth_B(x) and over
+ * points y of B of depth_A(y), with depth = minus the exact signed distance (closed forms
+ * written here, independent of the kernels). A triangle is a thin plate: it touches the
+ * cylinder iff one of its points lies inside the cylinder; a cylinder point penetrates it when
+ * it projects inside the triangle and lies on the far side of the plane from the cylinder
+ * centre, as deep as the shorter way back (through the plane or around the nearest edge). Coarse surface grids are refined locally around the deepest
+ * sample. Reported: miss rate (kernel: no contact, reference: overlap > 0.01 mm), false
+ * contacts (kernel: contact, reference: gap > 0.01 mm), and the error of the kernel's deepest
+ * overlap against the reference. FAILS if a pair deeper than 0.5 mm is missed. */
+#include <stdint.h>
+#include <string.h>
+
+#include "check.h"
+#include "geom/geom.h"
+
+static uint64_t rng_state = 0x243f6a8885a308d3ULL;
+static double urand(void)
+{
+    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    z ^= z >> 31;
+    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+static double urange(double lo, double hi) { return lo + (hi - lo) * urand(); }
+static sd_vec3 rand_unit(void)
+{
+    for (;;) {
+        sd_vec3 v = v3(urange(-1, 1), urange(-1, 1), urange(-1, 1));
+        double n = v3_norm(v);
+        if (n > 0.1 && n <= 1.0) return v3_scale(v, 1.0 / n);
+    }
+}
+
+/* ---- exact signed distances (reference side; deliberately written independently) ---- */
+static double sdf_cyl(const sd_cyl *c, sd_vec3 x)
+{
+    sd_vec3 d = v3_sub(x, c->c);
+    double t = v3_dot(d, c->a);
+    double rho = sqrt(fmax(v3_norm2(d) - t * t, 0.0));
+    double dx = rho - c->r, dy = fabs(t) - c->hl;
+    double out = sqrt(fmax(dx, 0.0) * fmax(dx, 0.0) + fmax(dy, 0.0) * fmax(dy, 0.0));
+    return fmin(fmax(dx, dy), 0.0) + out;
+}
+
+/* ---- parametrised surface samples of a cylinder: part 0 side (u = t, v = angle),
+ * part 1/2 end disk -/+ (u = radius, v = angle) ---- */
+typedef struct {
+    sd_vec3 u, v; /* frame perpendicular to the axis */
+} frame;
+static frame cyl_frame(const sd_cyl *c)
+{
+    frame f;
+    f.u = v3_any_perp(c->a);
+    f.v = v3_cross(c->a, f.u);
+    return f;
+}
+static sd_vec3 cyl_point(const sd_cyl *c, const frame *f, int part, double pu, double pv)
+{
+    sd_vec3 dir = v3_add(v3_scale(f->u, cos(pv)), v3_scale(f->v, sin(pv)));
+    if (part == 0) return v3_add(v3_madd(c->c, c->a, pu), v3_scale(dir, c->r));
+    double e = part == 1 ? -1.0 : 1.0;
+    return v3_add(v3_madd(c->c, c->a, e * c->hl), v3_scale(dir, pu));
+}
+
+/* depth function of the "other" solid */
+typedef struct {
+    int kind; /* 0 cylinder, 1 sphere, 2 triangle plate seen from cylinder centre cc */
+    sd_cyl cyl;
+    sd_vec3 sc;
+    double sr;
+    sd_tri tri;
+    sd_vec3 cc;
+} other;
+
+static int in_triangle(const sd_tri *t, sd_vec3 p)
+{
+    for (int k = 0; k < 3; k++) {
+        sd_vec3 e = v3_sub(t->v[(k + 1) % 3], t->v[k]);
+        if (v3_dot(v3_cross(e, v3_sub(p, t->v[k])), t->n) < 0.0) return 0;
+    }
+    return 1;
+}
+
+static double seg_dist(sd_vec3 p, sd_vec3 a, sd_vec3 b)
+{
+    sd_vec3 ab = v3_sub(b, a);
+    double s = v3_dot(v3_sub(p, a), ab) / v3_norm2(ab);
+    s = s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s);
+    return v3_dist(p, v3_madd(a, ab, s));
+}
+
+static double depth_in(const other *o, sd_vec3 x)
+{
+    if (o->kind == 0) return -sdf_cyl(&o->cyl, x);
+    if (o->kind == 1) return o->sr - v3_dist(x, o->sc);
+    /* thin plate seen from the cylinder centre: a point beyond the plane over the triangle is
+     * as deep as the shorter way back, through the plane or around the nearest edge */
+    double sx = v3_dot(v3_sub(x, o->tri.v[0]), o->tri.n);
+    double scc = v3_dot(v3_sub(o->cc, o->tri.v[0]), o->tri.n);
+    if (sx * scc > 0.0 || !in_triangle(&o->tri, v3_madd(x, o->tri.n, -sx))) return -1.0;
+    double dd = fabs(sx);
+    for (int k = 0; k < 3; k++) dd = fmin(dd, seg_dist(x, o->tri.v[k], o->tri.v[(k + 1) % 3]));
+    return dd;
+}
+
+/* deepest sampled point of cylinder c's surface in o: coarse grid, then two local refinements */
+static double cyl_deepest(const sd_cyl *c, const other *o)
+{
+    frame f = cyl_frame(c);
+    const int nt = 201, na = 96, nr = 12;
+    double best = -INFINITY, bu = 0, bv = 0;
+    int bp = 0;
+    for (int part = 0; part < 3; part++) {
+        int nu = part == 0 ? nt : nr;
+        for (int i = 0; i < nu; i++) {
+            double pu = part == 0 ? -c->hl + 2.0 * c->hl * i / (nt - 1) : c->r * i / (nr - 1);
+            for (int j = 0; j < na; j++) {
+                double pv = 2.0 * M_PI * j / na;
+                double dd = depth_in(o, cyl_point(c, &f, part, pu, pv));
+                if (dd > best) {
+                    best = dd;
+                    bu = pu;
+                    bv = pv;
+                    bp = part;
+                }
+            }
+        }
+    }
+    double du = bp == 0 ? 2.0 * c->hl / (nt - 1) : c->r / (nr - 1), dv = 2.0 * M_PI / na;
+    for (int lev = 0; lev < 3; lev++) {
+        double cu = bu, cv = bv;
+        for (int i = -10; i <= 10; i++) {
+            double pu = cu + du * i / 10.0;
+            if (bp == 0 ? fabs(pu) > c->hl : (pu < 0.0 || pu > c->r)) continue;
+            for (int j = -10; j <= 10; j++) {
+                double pv = cv + dv * j / 10.0;
+                double dd = depth_in(o, cyl_point(c, &f, bp, pu, pv));
+                if (dd > best) {
+                    best = dd;
+                    bu = pu;
+                    bv = pv;
+                }
+            }
+        }
+        du /= 10.0;
+        dv /= 10.0;
+    }
+    return best;
+}
+
+static double sphere_deepest(sd_vec3 sc, double sr, const sd_cyl *c)
+{
+    /* latitude-longitude grid, then refinement */
+    const int nth = 120, nph = 240;
+    double best = -INFINITY, bt = 0, bph = 0;
+    for (int i = 0; i <= nth; i++) {
+        double th = M_PI * i / nth;
+        for (int j = 0; j < nph; j++) {
+            double ph = 2.0 * M_PI * j / nph;
+            sd_vec3 x = v3_add(sc, v3(sr * sin(th) * cos(ph), sr * sin(th) * sin(ph), sr * cos(th)));
+            double dd = -sdf_cyl(c, x);
+            if (dd > best) {
+                best = dd;
+                bt = th;
+                bph = ph;
+            }
+        }
+    }
+    double dt = M_PI / nth, dp = 2.0 * M_PI / nph;
+    for (int lev = 0; lev < 3; lev++) {
+        double ct = bt, cp = bph;
+        for (int i = -10; i <= 10; i++)
+            for (int j = -10; j <= 10; j++) {
+                double th = ct + dt * i / 10.0, ph = cp + dp * j / 10.0;
+                sd_vec3 x = v3_add(sc, v3(sr * sin(th) * cos(ph), sr * sin(th) * sin(ph), sr * cos(th)));
+                double dd = -sdf_cyl(c, x);
+                if (dd > best) {
+                    best = dd;
+                    bt = th;
+                    bph = ph;
+                }
+            }
+        dt /= 10.0;
+        dp /= 10.0;
+    }
+    return best;
+}
+
+static double tri_deepest(const sd_tri *t, const sd_cyl *c)
+{
+    /* barycentric grid with about 0.5 mm spacing, restricted to the cylinder's bounding sphere */
+    double len = fmax(v3_dist(t->v[0], t->v[1]), fmax(v3_dist(t->v[1], t->v[2]), v3_dist(t->v[2], t->v[0])));
+    int n = (int)(len / 0.0005) + 2;
+    double R = sqrt(c->r * c->r + c->hl * c->hl);
+    double best = -INFINITY, bu = 0, bv = 0;
+    sd_vec3 e1 = v3_sub(t->v[1], t->v[0]), e2 = v3_sub(t->v[2], t->v[0]);
+    for (int i = 0; i <= n; i++)
+        for (int j = 0; j <= n - i; j++) {
+            double u = (double)i / n, v = (double)j / n;
+            sd_vec3 x = v3_add(t->v[0], v3_add(v3_scale(e1, u), v3_scale(e2, v)));
+            if (v3_dist(x, c->c) > R) continue;
+            double dd = -sdf_cyl(c, x);
+            if (dd > best) {
+                best = dd;
+                bu = u;
+                bv = v;
+            }
+        }
+    if (best == -INFINITY) return best;
+    double du = 1.0 / n;
+    for (int lev = 0; lev < 3; lev++) {
+        double cu = bu, cv = bv;
+        for (int i = -10; i <= 10; i++)
+            for (int j = -10; j <= 10; j++) {
+                double u = cu + du * i / 10.0, v = cv + du * j / 10.0;
+                if (u < 0.0 || v < 0.0 || u + v > 1.0) continue;
+                double dd = -sdf_cyl(c, v3_add(t->v[0], v3_add(v3_scale(e1, u), v3_scale(e2, v))));
+                if (dd > best) {
+                    best = dd;
+                    bu = u;
+                    bv = v;
+                }
+            }
+        du /= 10.0;
+    }
+    return best;
+}
+
+/* ---- statistics ---- */
+typedef struct {
+    const char *name;
+    int pairs, ref_touch, kern_touch, missed, missed_deep, false_pos, both;
+    double err_sum, err2_sum, err_max, err_min, rel_max;
+    double worst_miss;
+    int within_1um, within_10um;
+    /* the same for shallow overlaps (reference <= 0.5 mm), the DEM regime */
+    int sh_n, sh_1um, sh_10um;
+    double sh_sum, sh2_sum, sh_min, sh_max;
+} stats;
+
+static void stats_add(stats *s, double ref, const sd_manifold *m)
+{
+    const double tol = 1e-5; /* 0.01 mm */
+    s->pairs++;
+    double kov = 0.0;
+    for (int i = 0; i < m->n; i++) kov = fmax(kov, m->overlap[i]);
+    if (ref > tol) s->ref_touch++;
+    if (m->n > 0) s->kern_touch++;
+    if (m->n == 0 && ref > tol) {
+        s->missed++;
+        if (ref > s->worst_miss) s->worst_miss = ref;
+        if (ref > 5e-4) s->missed_deep++;
+    }
+    if (m->n > 0 && ref < -tol) s->false_pos++;
+    if (m->n > 0 && ref > tol) {
+        double err = kov - ref;
+        s->both++;
+        s->err_sum += err;
+        s->err2_sum += err * err;
+        if (err > s->err_max) s->err_max = err;
+        if (err < s->err_min) s->err_min = err;
+        if (fabs(err) / ref > s->rel_max) s->rel_max = fabs(err) / ref;
+        if (fabs(err) <= 1e-6) s->within_1um++;
+        if (fabs(err) <= 1e-5) s->within_10um++;
+        if (ref <= 5e-4) {
+            s->sh_n++;
+            s->sh_sum += err;
+            s->sh2_sum += err * err;
+            if (err < s->sh_min) s->sh_min = err;
+            if (err > s->sh_max) s->sh_max = err;
+            if (fabs(err) <= 1e-6) s->sh_1um++;
+            if (fabs(err) <= 1e-5) s->sh_10um++;
+        }
+    }
+}
+
+static void stats_print(const stats *s)
+{
+    printf("%-12s pairs %5d  ref-touch %5d  kernel-touch %5d  missed %d (%.2f%%, worst %.4f mm)  "
+           "false %d (%.2f%%)\n",
+           s->name, s->pairs, s->ref_touch, s->kern_touch, s->missed,
+           s->ref_touch ? 100.0 * s->missed / s->ref_touch : 0.0, s->worst_miss * 1e3, s->false_pos,
+           s->kern_touch ? 100.0 * s->false_pos / s->kern_touch : 0.0);
+    if (s->both)
+        printf("%-12s overlap error (kernel - ref) mm: mean %+.5f rms %.5f min %+.5f max %+.5f; "
+               "|err| <= 1 um: %.1f%%, <= 10 um: %.1f%%\n",
+               "", s->err_sum / s->both * 1e3, sqrt(s->err2_sum / s->both) * 1e3, s->err_min * 1e3,
+               s->err_max * 1e3, 100.0 * s->within_1um / s->both, 100.0 * s->within_10um / s->both);
+    if (s->sh_n)
+        printf("%-12s  ref <= 0.5 mm (%d pairs): mean %+.5f rms %.5f min %+.5f max %+.5f; "
+               "|err| <= 1 um: %.1f%%, <= 10 um: %.1f%%\n",
+               "", s->sh_n, s->sh_sum / s->sh_n * 1e3, sqrt(s->sh2_sum / s->sh_n) * 1e3, s->sh_min * 1e3,
+               s->sh_max * 1e3, 100.0 * s->sh_1um / s->sh_n, 100.0 * s->sh_10um / s->sh_n);
+}
+
+static sd_cyl rand_log(sd_vec3 c)
+{
+    sd_cyl k;
+    k.c = c;
+    k.a = rand_unit();
+    k.r = 0.005;
+    k.hl = 0.05;
+    return k;
+}
+/* random point on the surface of c (area-weighted between side and ends) */
+static sd_vec3 rand_surface(const sd_cyl *c)
+{
+    frame f = cyl_frame(c);
+    double side = 4.0 * M_PI * c->r * c->hl, ends = 2.0 * M_PI * c->r * c->r;
+    double ang = urange(0.0, 2.0 * M_PI);
+    if (urand() * (side + ends) < side) return cyl_point(c, &f, 0, urange(-c->hl, c->hl), ang);
+    return cyl_point(c, &f, urand() < 0.5 ? 1 : 2, c->r * sqrt(urand()), ang);
+}
+static double ext(const sd_cyl *c, sd_vec3 u)
+{
+    return c->hl * fabs(v3_dot(c->a, u)) + c->r * v3_norm(v3_cross(c->a, u));
+}
+
+int main(int argc, char **argv)
+{
+    int n_pairs = argc > 1 ? atoi(argv[1]) : 1500;
+    stats sc = {.name = "log-log", .err_min = INFINITY, .err_max = -INFINITY, .sh_min = INFINITY, .sh_max = -INFINITY};
+    stats ss = {.name = "log-sphere", .err_min = INFINITY, .err_max = -INFINITY, .sh_min = INFINITY, .sh_max = -INFINITY};
+    stats st = {.name = "log-tri", .err_min = INFINITY, .err_max = -INFINITY, .sh_min = INFINITY, .sh_max = -INFINITY};
+    sd_manifold m;
+    for (int it = 0; it < n_pairs; it++) {
+        /* log-log: offset along a random direction, a fraction of the sum of the extents */
+        sd_cyl b = rand_log(v3(0, 0, 0));
+        sd_cyl a = rand_log(v3(0, 0, 0));
+        sd_vec3 u = rand_unit();
+        double s;
+        if (it & 1) {
+            /* offset along a random direction, a fraction of the sum of the extents */
+            s = (ext(&a, u) + ext(&b, u)) * (1.02 - 0.6 * urand() * urand());
+            a.c = v3_scale(u, s);
+        } else {
+            /* a random surface point of A put within 2 mm of a random surface point of B */
+            sd_vec3 pa = rand_surface(&a), pb = rand_surface(&b);
+            a.c = v3_add(v3_sub(pb, pa), v3_scale(rand_unit(), urange(0.0, 0.002)));
+        }
+        sd_geom_cyl_cyl(&a, &b, &m);
+        other oa = {.kind = 0, .cyl = a}, ob = {.kind = 0, .cyl = b};
+        double ref = fmax(cyl_deepest(&a, &ob), cyl_deepest(&b, &oa));
+        stats_add(&sc, ref, &m);
+        CHECK(!(m.n == 0 && ref > 5e-4));
+        if (m.n == 0 && ref > 5e-4)
+            fprintf(stderr, "missed log-log: ref %.4f mm a.c (%g %g %g) a.a (%.17g %.17g %.17g) b.a (%.17g %.17g %.17g)\n",
+                    ref * 1e3, a.c.x, a.c.y, a.c.z, a.a.x, a.a.y, a.a.z, b.a.x, b.a.y, b.a.z);
+
+        /* log-sphere */
+        double sr = urange(0.0025, 0.01);
+        u = rand_unit();
+        s = (ext(&b, u) + sr) * (1.02 - 0.6 * urand() * urand());
+        sd_vec3 c = v3_scale(u, s);
+        if (it & 1) c = v3_add(rand_surface(&b), v3_scale(rand_unit(), urange(0.0, sr + 0.001)));
+        sd_geom_sphere_cyl(c, sr, &b, &m);
+        other os = {.kind = 1, .sc = c, .sr = sr};
+        ref = fmax(cyl_deepest(&b, &os), sphere_deepest(c, sr, &b));
+        stats_add(&ss, ref, &m);
+        CHECK(!(m.n == 0 && ref > 5e-4));
+
+        /* log-triangle: a random triangle in a plane at a random distance from the log */
+        sd_vec3 n = rand_unit();
+        double dist = ext(&b, n) * (it & 1 ? urange(0.9, 1.02) : 1.02 - 0.6 * urand() * urand());
+        sd_vec3 p0 = v3_scale(n, dist);
+        sd_vec3 t1 = v3_any_perp(n), t2 = v3_cross(n, t1);
+        sd_vec3 cen = v3_add(p0, v3_add(v3_scale(t1, urange(-0.05, 0.05)), v3_scale(t2, urange(-0.05, 0.05))));
+        sd_vec3 vv[3];
+        double size = urange(0.02, 0.12);
+        for (int k = 0; k < 3; k++) {
+            double ang = 2.0 * M_PI * k / 3.0 + urange(-0.6, 0.6);
+            double rr = size * urange(0.3, 1.0);
+            vv[k] = v3_add(cen, v3_add(v3_scale(t1, rr * cos(ang)), v3_scale(t2, rr * sin(ang))));
+        }
+        sd_tri t;
+        sd_tri_init(&t, vv[0], vv[1], vv[2]);
+        sd_geom_cyl_tri(&b, &t, &m);
+        other ot = {.kind = 2, .tri = t, .cc = b.c};
+        /* a thin triangle meets the cylinder iff one of its points is inside the cylinder:
+         * that decides touching; the depth is the deeper of the two measures */
+        ref = tri_deepest(&t, &b);
+        if (ref > 0.0) ref = fmax(ref, cyl_deepest(&b, &ot));
+        stats_add(&st, ref, &m);
+        if (getenv("SD_DEBUG_TRI")) {
+            double kov = 0.0;
+            for (int i = 0; i < m.n; i++) kov = fmax(kov, m.overlap[i]);
+            if ((m.n > 0 && ref > 1e-5 && ref < 5e-4 && kov - ref < -1e-5) || (m.n == 0 && ref > 5e-4)) {
+                printf("tri case: ref %.5f kern %.5f n %d\n  b.a=(%.17g,%.17g,%.17g)\n", ref * 1e3, kov * 1e3, m.n,
+                       b.a.x, b.a.y, b.a.z);
+                for (int k = 0; k < 3; k++) printf("  v%d=(%.17g,%.17g,%.17g)\n", k, vv[k].x, vv[k].y, vv[k].z);
+                for (int i = 0; i < m.n; i++) printf("  f=%d ov=%.5f\n", m.feature[i], m.overlap[i] * 1e3);
+            }
+        }
+        CHECK(!(m.n == 0 && ref > 5e-4));
+    }
+    stats_print(&sc);
+    stats_print(&ss);
+    stats_print(&st);
+    return check_report("test_geom_sampling");
+}
