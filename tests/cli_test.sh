@@ -3,6 +3,7 @@
 # directory; check validates; --set overrides; unknown options fail.
 set -u
 bin="$1"
+src_dir="$(cd "$(dirname "$0")/.." && pwd)"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -50,6 +51,22 @@ expect set-override 2 "--set:1:[0-9]+: contact.k_n: must be > 0" check "$tmp/goo
 expect set-unknown 2 "--set:1:1: unknown key 'contact.kn'" check "$tmp/good.yaml" --set contact.kn=5
 expect bad-option 2 "unknown or incomplete option" run "$tmp/good.yaml" --frobnicate
 expect params 0 "solver.dt" params
+
+# Ctrl-C: exit 130, summary and VTK series closed and valid
+"$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/int" --set output.png=false >"$tmp/int.log" 2>&1 &
+pid=$!
+sleep 3
+kill -INT $pid
+wait $pid
+code=$?
+if [ "$code" -eq 130 ] && /usr/bin/python3 -c "import json,sys; d=json.load(open('$tmp/int/summary.json')); sys.exit(d['status']!='interrupted')" \
+   && /usr/bin/python3 "$src_dir/scripts/check_vtk.py" "$tmp/int/series.pvd" >/dev/null && [ -z "$(ls "$tmp/int" | grep -E '\.tmp|XXXX')" ]; then
+  pass=$((pass + 1)); else echo "FAIL ctrl-c: exit $code"; cat "$tmp/int.log"; ls "$tmp/int"; fail=$((fail + 1)); fi
+
+# docs/scenario.md carries the same table the loader checks
+"$bin" params --markdown > "$tmp/params.md"
+if awk '/^## Keys/{f=1;next} f && NF' "$src_dir/docs/scenario.md" | diff -q - "$tmp/params.md" >/dev/null; then
+  pass=$((pass + 1)); else echo "FAIL docs/scenario.md is out of date: regenerate from 'sabodem params --markdown'"; fail=$((fail + 1)); fi
 
 echo "cli: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

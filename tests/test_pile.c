@@ -115,7 +115,11 @@ int main(void)
             sd_body_state b;
             sd_world_body_at(w, i, &b);
             double v = v3_norm(b.vel);
-            if (v > vmax) vmax = v;
+            if (v > vmax) {
+                vmax = v;
+                if (getenv("SD_PILE_DEBUG"))
+                    fprintf(stderr, "  fastest gid %d r %.4f pos %.4f %.4f %.4f vel %.4f %.4f %.4f om %.1f %.1f %.1f F %.3g %.3g %.3g\n", b.gid, b.radius, b.pos.x, b.pos.y, b.pos.z, b.vel.x, b.vel.y, b.vel.z, b.omega.x, b.omega.y, b.omega.z, b.force.x, b.force.y, b.force.z);
+            }
         }
         if (step % 5000 == 0)
             printf("t = %.2f s: max speed %.4f m/s, contacts %ld\n", sd_world_time(w), vmax,

@@ -127,7 +127,7 @@ static int cc_inside(const sd_cyl *c, sd_vec3 x)
 {
     sd_vec3 d = v3_sub(x, c->c);
     double t = v3_dot(d, c->a);
-    return fabs(t) < c->hl && v3_norm2(v3_madd(d, c->a, -t)) < c->r * c->r;
+    return fabs(t) <= c->hl && v3_norm2(v3_madd(d, c->a, -t)) <= c->r * c->r;
 }
 
 /* Nearest point of the solid cylinder c to x. */
@@ -209,21 +209,31 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
         int found = -1;
         for (int k = 0; k < 7 && found < 0; k++)
             if (cc_inside(a, w[k]) && cc_inside(b, w[k])) found = k;
+        sd_vec3 nxa = a->a, nxb = b->a; /* outward normals at the witness search point */
         if (found < 0) {
             sd_vec3 x = w[0];
-            for (int it = 0; it < 64 && found < 0; it++) {
-                x = cc_project(b, cc_project(a, x));
-                if (cc_inside(a, x) && cc_inside(b, x)) {
-                    w[0] = x;
+            for (int it = 0; it < 64; it++) x = cc_project(b, cc_project(a, x));
+            /* x is (nearly) in the intersection if there is one; step into both solids along
+             * the sum of their inward normals to get a strict witness */
+            int fa, fb;
+            sd_cyl_signed_dist(a, x, dc, &nxa, &fa);
+            sd_cyl_signed_dist(b, x, v3_neg(dc), &nxb, &fb);
+            sd_vec3 in = v3_normalize(v3_neg(v3_add(nxa, nxb)));
+            double h = a->r < b->r ? a->r : b->r;
+            for (int k = 0; k < 40 && found < 0; k++, h *= 0.5) {
+                sd_vec3 y = v3_madd(x, in, h);
+                if (cc_inside(a, y) && cc_inside(b, y)) {
+                    w[0] = y;
                     found = 0;
                 }
             }
         }
         if (found >= 0) {
-            sd_vec3 dirs[5] = {v3_sub(pa, pb), dc, a->a, b->a, v3_cross(a->a, b->a)};
+            sd_vec3 dirs[8] = {v3_sub(pa, pb), dc, a->a, b->a, v3_cross(a->a, b->a), nxb, v3_neg(nxa),
+                               v3_sub(nxb, nxa)};
             double best = INFINITY;
             sd_vec3 bn = v3(0.0, 0.0, 0.0);
-            for (int k = 0; k < 5; k++) {
+            for (int k = 0; k < 8; k++) {
                 double nn = v3_norm(dirs[k]);
                 if (!(nn > 1e-300)) continue;
                 sd_vec3 n = v3_scale(dirs[k], 1.0 / nn);
