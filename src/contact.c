@@ -116,6 +116,9 @@ static int sphere_sphere_fast(const sd_world *w, const sd_law *law, const sd_pai
     return 1;
 }
 
+/* Cylinder features from 3 up are the ends of a clipped support line (src/geom/cyl_tri.c). */
+#define SD_CYL_LINE_PART 3
+
 /* Global id of a triangle feature: kind in the low 2 bits (0 face, 1 edge, 2 vertex). */
 static int64_t tri_feature_gid(const sd_walls *wl, int t, int f)
 {
@@ -160,8 +163,15 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
                 for (int kk = 0; kk < o->n && !drop; kk++) {
                     if (q == p && kk == k) continue;
                     int fo = o->feature[kk];
-                    if ((fo >> SD_TRI_FEATURE_BITS) != part) continue;
                     int tfo = fo & ((1 << SD_TRI_FEATURE_BITS) - 1);
+                    if ((fo >> SD_TRI_FEATURE_BITS) != part) {
+                        /* a log's support line cut at a seam of a flat floor: the cut is an
+                         * artefact of the meshing, the face contacts carry the log */
+                        if (is_edge && part >= SD_CYL_LINE_PART && wl->edge_flat[id] && tfo == SD_TRI_FACE &&
+                            tri_has_edge(wl, tq, id))
+                            drop = 1;
+                        continue;
+                    }
                     if (tfo == SD_TRI_FACE) {
                         drop = is_edge ? tri_has_edge(wl, tq, id) : tri_has_vert(wl, tq, id);
                     } else if (tfo < SD_TRI_VERT0) {

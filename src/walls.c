@@ -37,6 +37,7 @@ void sd_walls_free(sd_walls *w)
     free(w->edge_id);
     free(w->vert_id);
     free(w->edge_vert);
+    free(w->edge_flat);
     free(w->force);
     memset(w, 0, sizeof(*w));
 }
@@ -115,6 +116,30 @@ sd_status sd_walls_weld(sd_walls *w)
         w->edge_id[ek[i].idx / 3][ek[i].idx % 3] = id;
     }
     w->n_edges = id + 1;
+    /* seams: an edge with exactly two triangles whose planes coincide */
+    uint8_t *flat = realloc(w->edge_flat, (size_t)(w->n_edges + 1));
+    int32_t *first = malloc((size_t)(w->n_edges + 1) * sizeof(int32_t));
+    int8_t *cnt = calloc((size_t)(w->n_edges + 1), 1);
+    if (!flat || !first || !cnt) {
+        if (flat) w->edge_flat = flat;
+        free(first);
+        free(cnt);
+        free(vk);
+        free(ek);
+        return SD_ERR_NOMEM;
+    }
+    w->edge_flat = flat;
+    for (int e = 0; e < w->n_edges; e++) flat[e] = 0;
+    for (int t = 0; t < w->n; t++)
+        for (int k = 0; k < 3; k++) {
+            int e = w->edge_id[t][k];
+            if (cnt[e] == 0) first[e] = t;
+            else if (cnt[e] == 1) flat[e] = fabs(v3_dot(w->tri[first[e]].n, w->tri[t].n)) > 1.0 - 1e-9;
+            else flat[e] = 0;
+            if (cnt[e] < 3) cnt[e]++;
+        }
+    free(first);
+    free(cnt);
     free(vk);
     free(ek);
     return SD_OK;

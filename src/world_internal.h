@@ -46,6 +46,7 @@ typedef struct {
     int32_t (*edge_id)[3];  /* welded global ids: shared edges and vertices get one id */
     int32_t (*vert_id)[3];
     int32_t (*edge_vert)[2]; /* per edge id: its two vertex ids (sized n_edges) */
+    uint8_t *edge_flat;      /* per edge id: shared by two coplanar triangles (a seam) */
     int n_edges, n_verts;
     sd_vec3 *force;          /* contact force on each triangle in the last step */
     int dirty;               /* welding and grid need rebuilding */
