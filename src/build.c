@@ -296,7 +296,8 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
         sd_placer *pl = sd_placer_create(v3(0, 0, -s->rough_dmax), v3(L, W, s->rough_dmax), s->rough_dmax);
         if (!pl) return SD_ERR_NOMEM;
         int fails = 0;
-        while (fails < 2000) {
+        double covered = 0.0, target = s->rough_coverage * L * W;
+        while (fails < 2000 && covered < target) {
             double d = sd_rng_range(rng, s->rough_dmin, s->rough_dmax), r = 0.5 * d;
             sd_vec3 c = v3(sd_rng_range(rng, r, L - r), sd_rng_range(rng, r, W - r), 0.0);
             if (s->dam_on && fabs(c.x - (s->x_dam + 0.5 * s->pipe_diam)) < r + 0.5 * s->pipe_diam + 1e-4) {
@@ -312,6 +313,7 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
                 continue;
             }
             fails = 0;
+            covered += M_PI * r * r;
             sd_placer_add(pl, c, v3(0, 0, 1), r, 0.0);
             sd_sphere_def sp = sd_sphere_def_default();
             sp.pos = c;

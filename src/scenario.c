@@ -59,6 +59,7 @@ static const sd_param params[] = {
     {"flume.roughness", P_BOOL, OFF(roughness_on), 0, 0, "-", 0, 1, 0, "fixed roughness spheres on the bed"},
     {"flume.roughness_dmin", P_DOUBLE, OFF(rough_dmin), 0, 0, "m", 0, 1, 1, "smallest roughness diameter"},
     {"flume.roughness_dmax", P_DOUBLE, OFF(rough_dmax), 0, 0, "m", 0, 1, 1, "largest roughness diameter"},
+    {"flume.roughness_coverage", P_DOUBLE, OFF(rough_coverage), 0, 0, "-", 0, 0.9, 1, "bed area fraction covered by roughness spheres (random placement stops there or when jammed)"},
     {"flume.pack_height", P_DOUBLE, OFF(pack_height), 0, 0, "m", 0, INF, 1, "top of the packing box above the bed"},
     {"spheres.diameters", P_DLIST, OFF(class_diam), OFF(n_classes), SD_MAX_CLASSES, "m", 0, 1, 1, "size classes (SPEC §8: 20, 15, 10, 5 mm)"},
     {"spheres.counts", P_ILIST, OFF(class_count), OFF(n_classes), SD_MAX_CLASSES, "-", 0, 1e7, 0, "count per class (376, 891, 3010, 342)"},
@@ -112,6 +113,7 @@ void sd_scenario_default(sd_scenario *s)
     s->roughness_on = 1;
     s->rough_dmin = 0.007;
     s->rough_dmax = 0.020;
+    s->rough_coverage = 0.5;
     s->pack_height = 0.45;
     s->n_classes = 4;
     double d[4] = {0.020, 0.015, 0.010, 0.005};

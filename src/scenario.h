@@ -41,7 +41,7 @@ typedef struct {
     int flume_on;
     double slope_deg, width, wall_height, x_gate, x_dam, x_end;
     int roughness_on;
-    double rough_dmin, rough_dmax;
+    double rough_dmin, rough_dmax, rough_coverage;
     int n_classes;
     double class_diam[SD_MAX_CLASSES];
     int class_count[SD_MAX_CLASSES];

@@ -150,6 +150,24 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
     double ra = sqrt(a->r * a->r + a->hl * a->hl), rb = sqrt(b->r * b->r + b->hl * b->hl);
     if (v3_norm2(dc) >= (ra + rb) * (ra + rb)) return 0; /* bounding spheres (eq 44) */
     double tol = 1e-9 * (a->r + a->hl + b->r + b->hl);
+    {
+        /* cheap exact rejections first: each cylinder lies inside the capsule around its axis
+         * segment, so axis segments farther apart than r_a + r_b cannot touch; then a few
+         * separating axes (segment gap direction, a x b, a, b, centre line) */
+        sd_vec3 qa, qb;
+        cc_seg_seg(a, b, &qa, &qb);
+        sd_vec3 gap = v3_sub(qa, qb);
+        double g2 = v3_norm2(gap), rr = a->r + b->r;
+        if (g2 >= rr * rr) return 0;
+        sd_vec3 axes[5] = {gap, v3_cross(a->a, b->a), a->a, b->a, dc};
+        for (int k = 0; k < 5; k++) {
+            double nn = v3_norm(axes[k]);
+            if (!(nn > 1e-12)) continue;
+            if (cc_sat_overlap(a, b, v3_scale(axes[k], 1.0 / nn)) <= 0.0 ||
+                cc_sat_overlap(a, b, v3_scale(axes[k], -1.0 / nn)) <= 0.0)
+                return 0;
+        }
+    }
 
     sd_vec3 cn[5], cp[5];
     double cov[5];

@@ -1,0 +1,323 @@
+/* Candidate search (SPEC §4): against an all-pairs O(N²) check, every overlapping pair is a
+ * candidate, every candidate has its gap within the margin (and every pair within the margin is
+ * a candidate); after moves smaller than margin/2 without rebuild, every contact is still a
+ * candidate; a move beyond margin/2 asks for a rebuild; tangential history survives rebuilds. */
+#include <string.h>
+
+#include "check.h"
+#include "world_internal.h"
+
+static uint64_t rng_state = 0x2545F4914F6CDD1DULL;
+static double urand(void)
+{
+    rng_state ^= rng_state >> 12;
+    rng_state ^= rng_state << 25;
+    rng_state ^= rng_state >> 27;
+    return (double)((rng_state * 2685821657736338717ULL) >> 11) / 9007199254740992.0;
+}
+
+static sd_world *new_world(void)
+{
+    sd_world_def def = sd_world_def_default();
+    def.check_dt = 0;
+    sd_world *w = NULL;
+    CHECK(sd_world_create(&def, &w) == SD_OK);
+    return w;
+}
+
+static double tri_dist(const sd_tri *t, sd_vec3 p)
+{
+    int f;
+    return v3_dist(sd_geom_closest_on_tri(t, p, &f), p);
+}
+
+/* Compare the candidate lists with the all-pairs truth. strict: also require every candidate to
+ * be within the margin and every pair within the margin to be a candidate (true right after a
+ * rebuild). Returns the number of overlapping pairs. */
+static long check_candidates(const sd_world *w, int strict, const char *label)
+{
+    const sd_bodies *b = &w->b;
+    const sd_walls *wl = &w->w;
+    int n = b->n, nt = wl->n;
+    double margin = w->def.margin;
+    unsigned char *bbm = calloc((size_t)n * n, 1);
+    unsigned char *btm = calloc((size_t)n * (nt > 0 ? nt : 1), 1);
+    long dup = 0, far = 0, missing = 0, within = 0, overl = 0;
+    for (int k = 0; k < w->bb.n; k++) {
+        const sd_pair *p = &w->bb.p[k];
+        int i = p->a < p->b ? p->a : p->b, j = p->a < p->b ? p->b : p->a;
+        if (bbm[(size_t)i * n + j]++) dup++;
+        double gap = v3_dist(b->pos[i], b->pos[j]) - b->radius[i] - b->radius[j];
+        if (gap > margin) far++;
+        if (b->fixed[i] && b->fixed[j]) far++;
+    }
+    for (int k = 0; k < w->bt.n; k++) {
+        const sd_pair *p = &w->bt.p[k];
+        if (btm[(size_t)p->a * nt + p->b]++) dup++;
+        if (tri_dist(&wl->tri[p->b], b->pos[p->a]) - b->radius[p->a] > margin) far++;
+    }
+    for (int i = 0; i < n; i++)
+        for (int j = i + 1; j < n; j++) {
+            if (b->fixed[i] && b->fixed[j]) continue;
+            double gap = v3_dist(b->pos[i], b->pos[j]) - b->radius[i] - b->radius[j];
+            if (gap < 0.0) {
+                overl++;
+                if (!bbm[(size_t)i * n + j]) missing++;
+            }
+            if (gap <= margin) {
+                within++;
+                if (strict && !bbm[(size_t)i * n + j]) missing++;
+            }
+        }
+    for (int i = 0; i < n; i++) {
+        if (b->fixed[i]) continue;
+        for (int t = 0; t < nt; t++) {
+            if (!wl->active[t]) continue;
+            double gap = tri_dist(&wl->tri[t], b->pos[i]) - b->radius[i];
+            if (gap < 0.0) {
+                overl++;
+                if (!btm[(size_t)i * nt + t]) missing++;
+            }
+            if (gap <= margin) {
+                within++;
+                if (strict && !btm[(size_t)i * nt + t]) missing++;
+            }
+        }
+    }
+    printf("%-28s bodies %4d tris %3d: candidates %6d + %5d, overlapping %6ld, within margin %6ld, missing %ld, "
+           "beyond margin %ld, duplicates %ld\n",
+           label, n, nt, w->bb.n, w->bt.n, overl, within, missing, far, dup);
+    CHECK(missing == 0);
+    CHECK(dup == 0);
+    if (strict) {
+        CHECK(far == 0);
+        CHECK(within == w->bb.n + w->bt.n);
+    }
+    free(bbm);
+    free(btm);
+    return overl;
+}
+
+static void add_tris(sd_world *w, double L, int random_tris)
+{
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++) {
+            double x0 = L * i / 4, x1 = L * (i + 1) / 4, y0 = L * j / 4, y1 = L * (j + 1) / 4;
+            sd_world_add_triangle(w, v3(x0, y0, 0), v3(x1, y0, 0), v3(x1, y1, 0), 0);
+            sd_world_add_triangle(w, v3(x0, y0, 0), v3(x1, y1, 0), v3(x0, y1, 0), 0);
+        }
+    for (int k = 0; k < random_tris; k++) {
+        sd_vec3 c = v3(L * urand(), L * urand(), L * urand());
+        sd_vec3 v[3];
+        for (int q = 0; q < 3; q++) v[q] = v3_add(c, v3(0.04 * (urand() - 0.5), 0.04 * (urand() - 0.5), 0.04 * (urand() - 0.5)));
+        CHECK(sd_world_add_triangle(w, v[0], v[1], v[2], 1 + k % 2) >= 0);
+    }
+}
+
+/* dense: jittered lattice with spacing below the mean diameter (many overlaps); loose: random */
+static void test_static(int dense)
+{
+    sd_world *w = new_world();
+    const int side = 9;
+    const double L = dense ? 0.0105 * side : 0.25;
+    add_tris(w, L, 12);
+    for (int i = 0; i < side; i++)
+        for (int j = 0; j < side; j++)
+            for (int k = 0; k < side; k++) {
+                sd_sphere_def s = sd_sphere_def_default();
+                s.radius = dense ? 0.0045 + 0.002 * urand() : 0.0025 + 0.0035 * urand();
+                if (dense) s.pos = v3(0.0105 * (i + 0.5 + 0.2 * (urand() - 0.5)), 0.0105 * (j + 0.5 + 0.2 * (urand() - 0.5)),
+                                      0.0105 * (k + 0.5 + 0.2 * (urand() - 0.5)));
+                else s.pos = v3(L * urand(), L * urand(), L * urand());
+                s.fixed = urand() < 0.1;
+                CHECK(sd_world_add_sphere(w, &s) >= 0);
+            }
+    /* one body flung far away must neither be lost nor blow up the grid */
+    sd_sphere_def s = sd_sphere_def_default();
+    s.pos = v3(50.0, -30.0, 20.0);
+    CHECK(sd_world_add_sphere(w, &s) >= 0);
+    sd_world_set_group_active(w, 2, 0); /* inactive triangles are never candidates */
+    CHECK(sd_neighbor_rebuild(w) == SD_OK);
+    long ov = check_candidates(w, 1, dense ? "dense, after rebuild" : "loose, after rebuild");
+    if (dense) CHECK(ov > 500);
+    for (int k = 0; k < w->bt.n; k++) CHECK(w->w.active[w->bt.p[k].b]);
+    /* move every moving body by less than margin/2 in a random direction, no rebuild */
+    double step = 0.49 * w->def.margin;
+    for (int i = 0; i < w->b.n; i++) {
+        if (w->b.fixed[i]) continue;
+        sd_vec3 d = v3(urand() - 0.5, urand() - 0.5, urand() - 0.5);
+        w->b.pos[i] = v3_madd(w->b.pos[i], v3_normalize(d), step * urand());
+    }
+    check_candidates(w, 0, dense ? "dense, moved < margin/2" : "loose, moved < margin/2");
+    sd_world_destroy(w);
+}
+
+/* Falling spheres onto a floor, rebuilds by margin and t_reset only: at every step without a
+ * pending rebuild, every contact must be a candidate. */
+static void test_dynamic(void)
+{
+    sd_world *w = new_world();
+    w->def.gravity = v3(0, 0, -9.81);
+    w->def.t_reset = 1.0; /* rebuilds only on displacement */
+    const double L = 0.08;
+    add_tris(w, L, 0);
+    for (int k = 0; k < 150; k++) {
+        sd_sphere_def s = sd_sphere_def_default();
+        s.radius = 0.0025 + 0.0025 * urand();
+        s.pos = v3(0.006 + (L - 0.012) * urand(), 0.006 + (L - 0.012) * urand(), 0.006 + 0.04 * urand());
+        s.vel = v3(0.5 * (urand() - 0.5), 0.5 * (urand() - 0.5), -0.5 - 1.5 * urand());
+        CHECK(sd_world_add_sphere(w, &s) >= 0);
+    }
+    long missing_steps = 0, checked = 0, max_contacts = 0;
+    long rebuilds0 = sd_world_get_timers(w).rebuilds;
+    for (int st = 0; st < 3000; st++) {
+        CHECK(sd_world_step(w) == SD_OK);
+        if (sd_world_contact_count(w) > max_contacts) max_contacts = sd_world_contact_count(w);
+        if (sd_neighbor_needs_rebuild(w) || st % 10) continue;
+        checked++;
+        const sd_bodies *b = &w->b;
+        /* inline quick check (the verbose one prints) */
+        for (int i = 0; i < b->n; i++)
+            for (int j = i + 1; j < b->n; j++) {
+                if (v3_dist(b->pos[i], b->pos[j]) >= b->radius[i] + b->radius[j]) continue;
+                int found = 0;
+                for (int k = 0; k < w->bb.n && !found; k++)
+                    found = (w->bb.p[k].a == i && w->bb.p[k].b == j) || (w->bb.p[k].a == j && w->bb.p[k].b == i);
+                if (!found) missing_steps++;
+            }
+        for (int i = 0; i < b->n; i++)
+            for (int t = 0; t < w->w.n; t++) {
+                if (tri_dist(&w->w.tri[t], b->pos[i]) >= b->radius[i]) continue;
+                int found = 0;
+                for (int k = w->csr.bt_start[i]; k < w->csr.bt_start[i + 1] && !found; k++) found = w->bt.p[k].b == t;
+                if (!found) missing_steps++;
+            }
+    }
+    long rebuilds = sd_world_get_timers(w).rebuilds - rebuilds0;
+    printf("dynamic: 3000 steps, %ld rebuilds (displacement-triggered), %ld checks, missing contacts %ld, "
+           "max contacts %ld\n",
+           rebuilds, checked, missing_steps, max_contacts);
+    CHECK(missing_steps == 0);
+    CHECK(rebuilds > 1 && rebuilds < 3000);
+    CHECK(max_contacts > 20);
+    sd_world_destroy(w);
+
+    /* a single move beyond margin/2 flags a rebuild */
+    w = new_world();
+    w->def.gravity = v3(0, 0, 0);
+    sd_sphere_def s = sd_sphere_def_default();
+    s.vel = v3(0.51 * w->def.margin / w->def.dt, 0, 0);
+    sd_world_add_sphere(w, &s);
+    CHECK(sd_world_step(w) == SD_OK);
+    CHECK(w->need_rebuild == 1);
+    sd_world_destroy(w);
+}
+
+/* first live history slot of the pair (kind, body gid) */
+static int find_hist(const sd_world *w, int bt, int gid, sd_vec3 *shear)
+{
+    const sd_pairlist *l = bt ? &w->bt : &w->bb;
+    int i = w->gid_map[gid];
+    for (int k = 0; k < l->n; k++) {
+        const sd_pair *p = &l->p[k];
+        if (p->a != i && p->b != i) continue;
+        for (int s = 0; s < p->cap; s++)
+            if (l->hist[p->off + s].feature >= 0) {
+                *shear = l->hist[p->off + s].shear;
+                return 1;
+            }
+    }
+    return 0;
+}
+
+/* sliding sphere on a floor of 2 triangles (bt history) and a sphere sliding off a fixed
+ * sphere (bb history) */
+static sd_world *history_world(int rebuild_every_step, int *gid_bt, int *gid_bb)
+{
+    sd_world_def def = sd_world_def_default();
+    def.gravity = v3(0, 0, -9.81);
+    def.contact.tan_phi = 0.1;
+    sd_world *w = NULL;
+    CHECK(sd_world_create(&def, &w) == SD_OK);
+    sd_world_set_rebuild_every_step(w, rebuild_every_step);
+    sd_world_add_triangle(w, v3(-0.1, -0.1, 0), v3(0.1, -0.1, 0), v3(0.1, 0.1, 0), 0);
+    sd_world_add_triangle(w, v3(-0.1, -0.1, 0), v3(0.1, 0.1, 0), v3(-0.1, 0.1, 0), 0);
+    sd_sphere_def s = sd_sphere_def_default();
+    s.radius = 0.01;
+    double m = s.density * 4.0 / 3.0 * M_PI * 1e-6;
+    s.pos = v3(-0.05, -0.02, 0.01 - m * 9.81 / def.contact.k_n);
+    s.vel = v3(0.8, 0.3, 0);
+    *gid_bt = sd_world_add_sphere(w, &s);
+    sd_sphere_def f = sd_sphere_def_default();
+    f.radius = 0.01;
+    f.fixed = 1;
+    f.pos = v3(0.05, 0.05, 0.1);
+    sd_world_add_sphere(w, &f);
+    double d = 0.02 - m * 9.81 / def.contact.k_n; /* about the equilibrium overlap */
+    s.pos = v3(0.05 + 0.003, 0.05 + 0.001, 0.1 + sqrt(d * d - 0.003 * 0.003 - 0.001 * 0.001));
+    s.vel = v3(0, 0, 0);
+    *gid_bb = sd_world_add_sphere(w, &s);
+    return w;
+}
+
+static void test_history(void)
+{
+    int gbt, gbb;
+    sd_world *w = history_world(0, &gbt, &gbb);
+    CHECK(sd_world_run(w, 300) == SD_OK);
+    sd_vec3 s_bt = v3(0, 0, 0), s_bb = v3(0, 0, 0), s2 = v3(0, 0, 0);
+    CHECK(find_hist(w, 1, gbt, &s_bt));
+    CHECK(find_hist(w, 0, gbb, &s_bb));
+    printf("history before rebuild: floor shear %.6g N (limit %.6g N), sphere shear %.6g N\n", v3_norm(s_bt),
+           0.1 * 0.01 * 0.01 * 0.01 * 4.0 / 3.0 * M_PI * 1900 * 9.81, v3_norm(s_bb));
+    CHECK(v3_norm(s_bt) > 0.0);
+    CHECK(v3_norm(s_bb) > 0.0);
+    CHECK(sd_neighbor_rebuild(w) == SD_OK);
+    CHECK(find_hist(w, 1, gbt, &s2));
+    CHECK(s2.x == s_bt.x && s2.y == s_bt.y && s2.z == s_bt.z);
+    CHECK(find_hist(w, 0, gbb, &s2));
+    CHECK(s2.x == s_bb.x && s2.y == s_bb.y && s2.z == s_bb.z);
+    /* adding a body elsewhere takes the history out by gid and puts it back */
+    sd_sphere_def far = sd_sphere_def_default();
+    far.pos = v3(1, 1, 1);
+    far.fixed = 1;
+    sd_world_add_sphere(w, &far);
+    CHECK(sd_neighbor_rebuild(w) == SD_OK);
+    CHECK(find_hist(w, 1, gbt, &s2));
+    CHECK(s2.x == s_bt.x && s2.y == s_bt.y && s2.z == s_bt.z);
+    CHECK(find_hist(w, 0, gbb, &s2));
+    CHECK(s2.x == s_bb.x && s2.y == s_bb.y && s2.z == s_bb.z);
+    sd_world_destroy(w);
+
+    /* rebuild every step vs by margin: the same trajectory */
+    int g1, g2, h1, h2;
+    sd_world *a = history_world(1, &g1, &h1), *b = history_world(0, &g2, &h2);
+    double dmax = 0.0;
+    for (int k = 0; k < 20000; k++) {
+        CHECK(sd_world_step(a) == SD_OK);
+        CHECK(sd_world_step(b) == SD_OK);
+    }
+    sd_body_state A, B;
+    int ids[2][2] = {{g1, g2}, {h1, h2}};
+    for (int q = 0; q < 2; q++) {
+        sd_world_body(a, ids[q][0], &A);
+        sd_world_body(b, ids[q][1], &B);
+        dmax = fmax(dmax, v3_dist(A.pos, B.pos));
+        CHECK_VEC_NEAR(A.pos, B.pos, 1e-12);
+        CHECK_VEC_NEAR(A.vel, B.vel, 1e-10);
+        CHECK_VEC_NEAR(A.omega, B.omega, 1e-8);
+    }
+    printf("rebuild every step vs by margin over 0.2 s: max position difference %.3g m (rebuilds %ld vs %ld)\n",
+           dmax, sd_world_get_timers(a).rebuilds, sd_world_get_timers(b).rebuilds);
+    sd_world_destroy(a);
+    sd_world_destroy(b);
+}
+
+int main(void)
+{
+    test_static(1);
+    test_static(0);
+    test_dynamic();
+    test_history();
+    return check_report("test_neighbor");
+}
