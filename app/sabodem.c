@@ -9,6 +9,7 @@
 #include "build.h"
 #include "run.h"
 #include "scenario.h"
+#include "sweep.h"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -27,10 +28,12 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: sabodem run FILE [-o DIR] [--set key=value]... [--threads N] [--seed S]\n"
             "       sabodem check FILE [--set key=value]...\n"
+            "       sabodem sweep FILE [-o DIR] [--parallel N]\n"
             "       sabodem params [--markdown]\n"
             "\n"
             "run     simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
             "check   validate the scenario and build its scene without running\n"
+            "sweep   run a matrix of cases x seeds in parallel (resumable), with CSV and figures\n"
             "params  list every scenario key with its type, unit, default and range\n");
 }
 
@@ -58,6 +61,35 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "params")) {
         sd_scenario_print_params(stdout, argc > 2 && !strcmp(argv[2], "--markdown"));
         return 0;
+    }
+    if (!strcmp(cmd, "sweep")) {
+        const char *file = NULL, *outdir = NULL;
+        int parallel = 0;
+        for (int i = 2; i < argc; i++) {
+            if ((!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) && i + 1 < argc) outdir = argv[++i];
+            else if (!strcmp(argv[i], "--parallel") && i + 1 < argc) parallel = atoi(argv[++i]);
+            else if (argv[i][0] == '-') {
+                fprintf(stderr, "sabodem: unknown or incomplete option '%s'\n", argv[i]);
+                return 2;
+            } else file = argv[i];
+        }
+        if (!file) {
+            fprintf(stderr, "sabodem: no sweep file given\n");
+            return 2;
+        }
+        char name[256], dirbuf[512];
+        if (!outdir) {
+            snprintf(dirbuf, sizeof dirbuf, "out/%s", basename_noext(file, name, sizeof name));
+            outdir = dirbuf;
+        }
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_sigint;
+        sigaction(SIGINT, &sa, NULL);
+        sigaction(SIGTERM, &sa, NULL);
+        int code = sd_sweep_run(file, outdir, parallel, &stop_flag, stdout, stderr);
+        if (code == 0 || code == 1) printf("sweep results in %s/results.csv, %s/cases.csv\n", outdir, outdir);
+        return code;
     }
     if (strcmp(cmd, "run") && strcmp(cmd, "check")) {
         fprintf(stderr, "sabodem: unknown command '%s'\n", cmd);

@@ -51,20 +51,6 @@ static double body_volume(const sd_bodies *b, int i)
 
 static int is_debris(const sd_bodies *b, int i) { return !b->fixed[i]; }
 
-static int mkdir_p(const char *path)
-{
-    char tmp[1024];
-    snprintf(tmp, sizeof tmp, "%s", path);
-    for (char *p = tmp + 1; *p; p++)
-        if (*p == '/') {
-            *p = 0;
-            if (mkdir(tmp, 0777) && errno != EEXIST) return -1;
-            *p = '/';
-        }
-    if (mkdir(tmp, 0777) && errno != EEXIST) return -1;
-    return 0;
-}
-
 /* Volume still upstream of the dam: centre upstream of the pipes' axis plane. */
 static double x_trap(const run_ctx *c) { return c->s->x_dam + 0.5 * c->s->pipe_diam; }
 
@@ -436,7 +422,7 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
     }
     /* only now, with valid input, does the output directory appear */
     snprintf(c.dir, sizeof c.dir, "%s", o->outdir);
-    if (mkdir_p(c.dir)) {
+    if (sd_mkdir_p(c.dir)) {
         fprintf(o->err, "%s: cannot create output directory: %s\n", c.dir, strerror(errno));
         sd_world_destroy(c.w);
         return 2;
@@ -579,6 +565,7 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         if (!code) code = 1;
     }
     res->n_passed = c.n_passed;
+    for (int k = 0; k < c.info.n_pipes; k++) res->peak_dam_force = fmax(res->peak_dam_force, c.pipe_peak[k]);
     res->steps = c.w->step;
     res->wall_time = sd_now() - c.wall0;
     for (int k = 0; k < 4; k++) res->phase_end[k] = c.phase_end[k];

@@ -19,6 +19,7 @@ typedef struct {
     double p_v;                    /* trap ratio (eq 55) */
     double p_v_class[SD_MAX_CLASSES];
     double p_v_logs;
+    double peak_dam_force; /* largest force on any one pipe, N */
     int n_upstream, n_passed, n_removed;
     double wall_time;
     double phase_end[4];           /* simulated time at the end of packing, flow, capture */

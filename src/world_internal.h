@@ -206,5 +206,7 @@ static inline int sd_grow(void **p, int *cap, int need, size_t elem)
 }
 
 double sd_now(void);
+/* mkdir -p; 0 on success. */
+int sd_mkdir_p(const char *path);
 
 #endif

@@ -1,0 +1,63 @@
+/* Checkpoint and restart: the whole state of a world in one versioned, checksummed binary
+ * file, written atomically, from which a run continues bit for bit as if never stopped.
+ *
+ * Saved: the world definition; every body field of the field table (bodies.c), in store order,
+ * with gid_map and next_gid; the triangles (vertices and normals as stored, groups, active
+ * flags, the last step's wall loads, the dirty flag); the triangle grid while it is current
+ * (its cell size depends on the bodies present when it was built, so it is not recomputed);
+ * both candidate pair lists with their effective masses and contact history slots (the pair
+ * order is the summation order); the history carried between a store change (add, remove,
+ * group switch) and the next rebuild; time, step, last_rebuild_time, need_rebuild,
+ * rebuild_every_step, the contact count and the timers; and an opaque blob of the driver's own
+ * state (phase, accumulators, rng). Recomputed on reading, deterministically: the body–body
+ * CSR and bt_start from the pair lists, the weld ids of the walls (a pure function of the
+ * vertices), scratch arrays. Nothing of the restore forces a candidate rebuild: the next
+ * rebuild happens at the step it would have happened at without the restart.
+ *
+ * File layout (all integers and doubles in the writer's native byte order, which the header
+ * records; a reader of the other byte order refuses the file):
+ *   header, 64 bytes:
+ *     0  char[8]  "SABODEMC"
+ *     8  u32      format version (SD_CHECKPOINT_VERSION)
+ *     12 u32      0x01020304 written natively (endianness check)
+ *     16 u8[8]    sizes: double, sd_vec3, sd_quat, int32, int64, sd_tri, 0, 0
+ *     24 f64      -1.5 (IEEE-754 binary64 check)
+ *     32 u64      payload length in bytes (the file is exactly 64 + that long)
+ *     40 u64      FNV-1a 64 of the payload
+ *     48 u64[2]   zero (reserved)
+ *   payload: sections in a fixed order, each u32 tag (4 ASCII chars), u32 0, u64 length,
+ *   then the content: DEF, BODY (n, field count, then per field: name, element size, the n
+ *   elements), GIDS, WALL, TGRD, PRBB, PRBT (pair lists), OLDH (carried history), TIME, XTRA.
+ * Every header byte is checked by value and the payload by its checksum, so a truncated,
+ * corrupted or foreign file is refused, and the content is range-checked before use. */
+#ifndef SD_IO_CHECKPOINT_H
+#define SD_IO_CHECKPOINT_H
+
+#include <stddef.h>
+
+#include "sabodem.h"
+
+#define SD_CHECKPOINT_VERSION 1u
+
+/* Write the state of w and the extra blob to path atomically: to path.tmp.XXXXXX in the same
+ * directory, fflush + fsync, rename over path (then the directory is fsynced, best effort).
+ * On any failure the previous file at path is untouched and the temporary file removed.
+ * SD_ERR_ARG: NULL path or world, or extra_len > 0 with extra NULL (nothing is written);
+ * SD_ERR_IO: the file could not be written (errno of the failing call is kept);
+ * SD_ERR_NOMEM. */
+sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *extra, size_t extra_len);
+
+/* Read a checkpoint into a new world (*out, destroy with sd_world_destroy) and the extra blob
+ * (*extra malloc'ed, free() it; NULL when extra_len is 0). extra, extra_len, msg may be NULL.
+ * SD_ERR_FORMAT for an empty, truncated, corrupted, foreign or incompatible file; SD_ERR_IO when
+ * it cannot be opened or read; SD_ERR_NOMEM. On failure *out is NULL, *extra NULL, and msg
+ * (msglen bytes, NUL-terminated) names the file and what is wrong. */
+sd_status sd_checkpoint_read(const char *path, sd_world **out, void **extra, size_t *extra_len, char *msg,
+                             size_t msglen);
+
+/* Test only: make the next writes fail (as a full disk would, errno ENOSPC) once more than
+ * nbytes bytes of a checkpoint have been written; -1 (the default) switches it off.
+ * Process-wide, not thread safe. */
+void sd_checkpoint_test_fail_after(long long nbytes);
+
+#endif
