@@ -252,6 +252,12 @@ void sd_contact_gather(sd_world *w)
 #pragma omp parallel for schedule(static) if (n > SD_OMP_MIN_ITEMS)
     for (int i = 0; i < n; i++) {
         sd_vec3 f = v3(0, 0, 0), t = v3(0, 0, 0);
+        if (b->fixed[i] && b->shape[i] == SD_SHAPE_SPHERE) {
+            /* bed roughness: nobody reads its load; dam pipes (fixed cylinders) are summed */
+            b->force[i] = f;
+            b->torque[i] = t;
+            continue;
+        }
         for (int k = w->csr.start[i]; k < w->csr.start[i + 1]; k++) {
             int e = w->csr.idx[k];
             const sd_pair_out *o = &w->bb.out[e >> 1];

@@ -110,6 +110,37 @@ static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const u
     return SD_OK;
 }
 
+/* Distance between the axis segments of two bodies (a sphere's segment is its centre). */
+static double seg_gap(const sd_bodies *b, int i, int j)
+{
+    sd_vec3 p1 = v3_madd(b->pos[i], b->axis[i], -b->hl[i]), d1 = v3_scale(b->axis[i], 2.0 * b->hl[i]);
+    sd_vec3 p2 = v3_madd(b->pos[j], b->axis[j], -b->hl[j]), d2 = v3_scale(b->axis[j], 2.0 * b->hl[j]);
+    sd_vec3 r = v3_sub(p1, p2);
+    double a = v3_dot(d1, d1), e = v3_dot(d2, d2), f = v3_dot(d2, r);
+    double s = 0.0, t = 0.0;
+    if (a <= 1e-30 && e <= 1e-30) return v3_norm(r);
+    if (a <= 1e-30) {
+        t = fmin(fmax(f / e, 0.0), 1.0);
+    } else {
+        double c = v3_dot(d1, r);
+        if (e <= 1e-30) {
+            s = fmin(fmax(-c / a, 0.0), 1.0);
+        } else {
+            double bb = v3_dot(d1, d2), den = a * e - bb * bb;
+            s = den > 1e-20 * a * e ? fmin(fmax((bb * f - c * e) / den, 0.0), 1.0) : 0.0;
+            t = (bb * s + f) / e;
+            if (t < 0.0) {
+                t = 0.0;
+                s = fmin(fmax(-c / a, 0.0), 1.0);
+            } else if (t > 1.0) {
+                t = 1.0;
+                s = fmin(fmax((bb - c) / a, 0.0), 1.0);
+            }
+        }
+    }
+    return v3_norm(v3_sub(v3_madd(p1, d1, s), v3_madd(p2, d2, t)));
+}
+
 static uint64_t pair_key(int32_t gid_a, int kind, int32_t id_b)
 {
     return ((uint64_t)(uint32_t)gid_a << 32) | ((uint64_t)(uint32_t)kind << 29) | (uint64_t)(uint32_t)id_b;
@@ -374,6 +405,10 @@ sd_status sd_neighbor_rebuild(sd_world *w)
                         body_box(b, j, hm, &lj, &hj);
                         if (li.x > hj.x || lj.x > hi_.x || li.y > hj.y || lj.y > hi_.y || li.z > hj.z || lj.z > hi_.z)
                             continue;
+                        if (b->shape[i] != SD_SHAPE_SPHERE || b->shape[j] != SD_SHAPE_SPHERE) {
+                            /* capsule test: a cylinder lies within radius r of its axis segment */
+                            if (seg_gap(b, i, j) > b->radius[i] + b->radius[j] + w->def.margin) continue;
+                        }
                         int a = i, bb = j;
                         if (b->shape[a] > b->shape[bb] || (b->shape[a] == b->shape[bb] && b->gid[a] > b->gid[bb])) {
                             a = j;

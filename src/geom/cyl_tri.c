@@ -195,7 +195,15 @@ int sd_geom_cyl_tri(const sd_cyl *a, const sd_tri *t, sd_manifold *m)
             best_strict = pen <= dep + tol;
         }
     }
-    int use_edge = best_k >= 0 && (fm.n == 0 || (best_strict && best_pen < pen_face - tol));
+    /* Compare with the deepest face contact on this triangle, not with pen_face (the depth of
+     * the whole cylinder below the infinite plane, possibly over a neighbouring triangle): on a
+     * flat mesh an edge under a log lies in the plane and its separating-axis overlap ties with
+     * the face contacts beside it, but a log tilted by ~1e-9 rad reaches lower over the next
+     * triangle, and the edge contact would then replace this triangle's rim contact. */
+    double face_dep = 0.0;
+    for (int i = 0; i < fm.n; i++)
+        if (fm.overlap[i] > face_dep) face_dep = fm.overlap[i];
+    int use_edge = best_k >= 0 && (fm.n == 0 || (best_strict && best_pen < face_dep - tol));
     if (!use_edge) {
         *m = fm;
         return m->n;

@@ -1,0 +1,960 @@
+/* Checkpoint and restart (layout and guarantees in io_checkpoint.h). */
+#include "io_checkpoint.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "world_internal.h"
+
+/* The file stores these structures field by field or as arrays of doubles; a new field in any
+ * of them must be added to the checkpoint (and SD_CHECKPOINT_VERSION bumped): these
+ * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
+ * on. */
+#if defined(__x86_64__) || defined(__aarch64__)
+_Static_assert(sizeof(struct sd_world) == 840, "struct sd_world changed: update io_checkpoint.c");
+_Static_assert(sizeof(sd_world_def) == 96, "sd_world_def changed: update io_checkpoint.c");
+_Static_assert(sizeof(sd_walls) == 88, "sd_walls changed: update io_checkpoint.c");
+_Static_assert(sizeof(sd_pair) == 24, "sd_pair changed: update io_checkpoint.c");
+_Static_assert(sizeof(sd_hist) == 32, "sd_hist changed: update io_checkpoint.c");
+_Static_assert(sizeof(sd_grid) == 72, "sd_grid changed: update io_checkpoint.c");
+_Static_assert(sizeof(sd_world_timers) == 48, "sd_world_timers changed: update io_checkpoint.c");
+#endif
+_Static_assert(sizeof(double) == 8, "double must be IEEE-754 binary64");
+_Static_assert(sizeof(sd_vec3) == 3 * sizeof(double), "sd_vec3 must be three packed doubles");
+_Static_assert(sizeof(sd_quat) == 4 * sizeof(double), "sd_quat must be four packed doubles");
+_Static_assert(sizeof(sd_tri) == 4 * sizeof(sd_vec3), "sd_tri must be four packed vectors");
+
+#define HEADER_SIZE 64
+static const char magic[8] = {'S', 'A', 'B', 'O', 'D', 'E', 'M', 'C'};
+static const uint32_t endian_tag = 0x01020304u;
+static const double probe = -1.5;
+static const uint8_t type_sizes[8] = {sizeof(double), sizeof(sd_vec3), sizeof(sd_quat), sizeof(int32_t),
+                                      sizeof(int64_t), sizeof(sd_tri), 0, 0};
+
+static long long fail_after = -1;
+
+void sd_checkpoint_test_fail_after(long long nbytes) { fail_after = nbytes < 0 ? -1 : nbytes; }
+
+static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
+{
+    const unsigned char *q = p;
+    for (size_t k = 0; k < n; k++) {
+        h ^= q[k];
+        h *= 1099511628211ULL;
+    }
+    return h;
+}
+#define FNV_OFFSET 1469598103934665603ULL
+
+/* ---------------------------------------------------------------- writing ---- */
+
+typedef struct {
+    FILE *f;        /* NULL: only count (sizing a section) */
+    uint64_t hash;  /* FNV-1a of the payload so far */
+    uint64_t len;   /* payload bytes so far */
+    int err;        /* errno of the first failure */
+} writer;
+
+static void put(writer *wr, const void *p, size_t n)
+{
+    if (wr->err || n == 0) return;
+    if (!wr->f) {
+        wr->len += n;
+        return;
+    }
+    if (fail_after >= 0 && (unsigned long long)HEADER_SIZE + wr->len + n > (unsigned long long)fail_after) {
+        /* injected failure: write what fits, then fail as a full disk does */
+        long long room = fail_after - HEADER_SIZE - (long long)wr->len;
+        if (room > 0) (void)fwrite(p, 1, (size_t)room, wr->f);
+        wr->err = ENOSPC;
+        return;
+    }
+    if (fwrite(p, 1, n, wr->f) != n) {
+        wr->err = errno ? errno : EIO;
+        return;
+    }
+    wr->hash = fnv1a(wr->hash, p, n);
+    wr->len += n;
+}
+
+static void put_i32(writer *wr, int32_t v) { put(wr, &v, sizeof(v)); }
+static void put_i64(writer *wr, int64_t v) { put(wr, &v, sizeof(v)); }
+static void put_u64(writer *wr, uint64_t v) { put(wr, &v, sizeof(v)); }
+static void put_f64(writer *wr, double v) { put(wr, &v, sizeof(v)); }
+static void put_vec3(writer *wr, sd_vec3 v) { put(wr, &v, sizeof(v)); }
+
+typedef void (*section_fn)(writer *wr, const sd_world *w, const void *ctx);
+
+/* A section: tag, zero, content length (found by a counting pass), content. */
+static void section(writer *wr, const char tag[4], section_fn fn, const sd_world *w, const void *ctx)
+{
+    writer cnt = {NULL, 0, 0, 0};
+    fn(&cnt, w, ctx);
+    put(wr, tag, 4);
+    put_i32(wr, 0);
+    put_u64(wr, cnt.len);
+    uint64_t before = wr->len;
+    fn(wr, w, ctx);
+    if (!wr->err && wr->len - before != cnt.len) wr->err = EIO; /* cannot happen: same function */
+}
+
+static void sec_def(writer *wr, const sd_world *w, const void *ctx)
+{
+    (void)ctx;
+    const sd_world_def *d = &w->def;
+    put_vec3(wr, d->gravity);
+    put_f64(wr, d->dt);
+    put_f64(wr, d->margin);
+    put_f64(wr, d->t_reset);
+    put_f64(wr, d->contact.k_n);
+    put_f64(wr, d->contact.k_s);
+    put_f64(wr, d->contact.damping);
+    put_f64(wr, d->contact.tan_phi);
+    put_f64(wr, d->contact.cohesion);
+    put_i32(wr, d->threads);
+    put_i32(wr, d->check_dt);
+}
+
+typedef struct {
+    writer *wr;
+    int n;
+    int count;
+} field_wctx;
+
+static void count_field(void *array, size_t elem, const char *name, void *ctx)
+{
+    (void)array;
+    (void)elem;
+    (void)name;
+    ((field_wctx *)ctx)->count++;
+}
+
+static void write_field(void *array, size_t elem, const char *name, void *ctx)
+{
+    field_wctx *fc = ctx;
+    size_t len = strlen(name);
+    uint8_t l8 = (uint8_t)len;
+    put(fc->wr, &l8, 1);
+    put(fc->wr, name, len);
+    put_i32(fc->wr, (int32_t)elem);
+    if (fc->n > 0) put(fc->wr, *(void **)array, (size_t)fc->n * elem);
+}
+
+static void sec_body(writer *wr, const sd_world *w, const void *ctx)
+{
+    (void)ctx;
+    sd_bodies *b = (sd_bodies *)&w->b; /* the field table hands out the arrays; only read here */
+    field_wctx fc = {wr, b->n, 0};
+    sd_bodies_for_each_field(b, count_field, &fc);
+    put_i32(wr, b->n);
+    put_i32(wr, fc.count);
+    sd_bodies_for_each_field(b, write_field, &fc);
+}
+
+static void sec_gids(writer *wr, const sd_world *w, const void *ctx)
+{
+    (void)ctx;
+    put_i32(wr, w->next_gid);
+    if (w->next_gid > 0) put(wr, w->gid_map, (size_t)w->next_gid * sizeof(int32_t));
+}
+
+static void sec_wall(writer *wr, const sd_world *w, const void *ctx)
+{
+    (void)ctx;
+    const sd_walls *wl = &w->w;
+    put_i32(wr, wl->n);
+    if (wl->n > 0) {
+        put(wr, wl->tri, (size_t)wl->n * sizeof(sd_tri));
+        put(wr, wl->group, (size_t)wl->n * sizeof(int32_t));
+        put(wr, wl->active, (size_t)wl->n);
+        put(wr, wl->force, (size_t)wl->n * sizeof(sd_vec3));
+    }
+    put_i32(wr, wl->dirty);
+}
+
+/* The triangle grid is current when the walls are not dirty and there are walls; its cell size
+ * came from the bodies present when it was built, so it is saved, not recomputed. */
+static int tgrid_current(const sd_world *w) { return !w->w.dirty && w->w.n > 0; }
+
+static void sec_tgrid(writer *wr, const sd_world *w, const void *ctx)
+{
+    (void)ctx;
+    int present = tgrid_current(w);
+    put_i32(wr, present);
+    if (!present) return;
+    const sd_grid *g = &w->tgrid;
+    int ncell = g->nx * g->ny * g->nz;
+    put_f64(wr, g->cell);
+    put_i32(wr, g->nx);
+    put_i32(wr, g->ny);
+    put_i32(wr, g->nz);
+    put_vec3(wr, g->lo);
+    put(wr, g->cell_start, (size_t)(ncell + 1) * sizeof(int32_t));
+    put_i32(wr, g->cell_start[ncell]);
+    put(wr, g->items, (size_t)g->cell_start[ncell] * sizeof(int32_t));
+    put(wr, w->trange, (size_t)w->w.n * sizeof(*w->trange));
+}
+
+static void sec_pairs(writer *wr, const sd_world *w, const void *ctx)
+{
+    (void)w;
+    const sd_pairlist *l = ctx;
+    put_i32(wr, l->n);
+    put_i32(wr, l->nh);
+    for (int k = 0; k < l->n; k++) {
+        const sd_pair *p = &l->p[k];
+        put_i32(wr, p->a);
+        put_i32(wr, p->b);
+        put_i32(wr, p->off);
+        put(wr, &p->cap, sizeof(p->cap));
+        put(wr, &p->kind, sizeof(p->kind));
+        put_f64(wr, p->sqrt_m_eff);
+    }
+    for (int k = 0; k < l->nh; k++) {
+        put_i32(wr, l->hist[k].feature);
+        put_vec3(wr, l->hist[k].shear);
+    }
+}
+
+static void sec_oldh(writer *wr, const sd_world *w, const void *ctx)
+{
+    (void)ctx;
+    put_i32(wr, w->keys_collected);
+    put_i32(wr, w->n_old);
+    if (w->n_old > 0) put(wr, w->old_keys, (size_t)w->n_old * sizeof(uint64_t));
+    for (int k = 0; k < w->n_old; k++) {
+        put_i32(wr, w->old_hist[k].feature);
+        put_vec3(wr, w->old_hist[k].shear);
+    }
+}
+
+static void sec_time(writer *wr, const sd_world *w, const void *ctx)
+{
+    (void)ctx;
+    put_f64(wr, w->time);
+    put_i64(wr, w->step);
+    put_f64(wr, w->last_rebuild_time);
+    put_i32(wr, w->need_rebuild);
+    put_i32(wr, w->rebuild_every_step);
+    put_i64(wr, w->contacts);
+    put_f64(wr, w->timers.integrate);
+    put_f64(wr, w->timers.neighbor);
+    put_f64(wr, w->timers.contact);
+    put_f64(wr, w->timers.gather);
+    put_f64(wr, w->timers.other);
+    put_i64(wr, w->timers.rebuilds);
+}
+
+typedef struct {
+    const void *p;
+    size_t n;
+} blob;
+
+static void sec_extra(writer *wr, const sd_world *w, const void *ctx)
+{
+    (void)w;
+    const blob *x = ctx;
+    put_u64(wr, (uint64_t)x->n);
+    put(wr, x->p, x->n);
+}
+
+static void make_header(unsigned char h[HEADER_SIZE], uint64_t plen, uint64_t hash)
+{
+    uint32_t version = SD_CHECKPOINT_VERSION;
+    memset(h, 0, HEADER_SIZE);
+    memcpy(h, magic, 8);
+    memcpy(h + 8, &version, 4);
+    memcpy(h + 12, &endian_tag, 4);
+    memcpy(h + 16, type_sizes, 8);
+    memcpy(h + 24, &probe, 8);
+    memcpy(h + 32, &plen, 8);
+    memcpy(h + 40, &hash, 8);
+}
+
+/* fsync the directory holding path, so that the rename is durable (best effort). */
+static void sync_dir(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    char *dir;
+    if (!slash) dir = strdup(".");
+    else if (slash == path) dir = strdup("/");
+    else {
+        dir = malloc((size_t)(slash - path) + 1);
+        if (dir) {
+            memcpy(dir, path, (size_t)(slash - path));
+            dir[slash - path] = '\0';
+        }
+    }
+    if (!dir) return;
+    int fd = open(dir, O_RDONLY);
+    if (fd >= 0) {
+        (void)fsync(fd);
+        close(fd);
+    }
+    free(dir);
+}
+
+sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *extra, size_t extra_len)
+{
+    if (!path || !*path || !w || (extra_len > 0 && !extra)) return SD_ERR_ARG;
+    size_t plen = strlen(path);
+    char *tmp = malloc(plen + sizeof(".tmp.XXXXXX"));
+    if (!tmp) return SD_ERR_NOMEM;
+    memcpy(tmp, path, plen);
+    memcpy(tmp + plen, ".tmp.XXXXXX", sizeof(".tmp.XXXXXX"));
+    int fd = mkstemp(tmp);
+    if (fd < 0) {
+        int e = errno;
+        free(tmp);
+        errno = e;
+        return SD_ERR_IO;
+    }
+    (void)fchmod(fd, 0644); /* mkstemp gives 0600 */
+    FILE *f = fdopen(fd, "wb");
+    if (!f) {
+        int e = errno;
+        close(fd);
+        unlink(tmp);
+        free(tmp);
+        errno = e;
+        return SD_ERR_IO;
+    }
+    writer wr = {f, FNV_OFFSET, 0, 0};
+    unsigned char hdr[HEADER_SIZE];
+    make_header(hdr, 0, 0); /* placeholder: length and checksum filled in at the end */
+    if (fail_after >= 0 && fail_after < HEADER_SIZE) wr.err = ENOSPC;
+    else if (fwrite(hdr, 1, HEADER_SIZE, f) != HEADER_SIZE) wr.err = errno ? errno : EIO;
+
+    blob x = {extra, extra_len};
+    section(&wr, "DEF ", sec_def, w, NULL);
+    section(&wr, "BODY", sec_body, w, NULL);
+    section(&wr, "GIDS", sec_gids, w, NULL);
+    section(&wr, "WALL", sec_wall, w, NULL);
+    section(&wr, "TGRD", sec_tgrid, w, NULL);
+    section(&wr, "PRBB", sec_pairs, w, &w->bb);
+    section(&wr, "PRBT", sec_pairs, w, &w->bt);
+    section(&wr, "OLDH", sec_oldh, w, NULL);
+    section(&wr, "TIME", sec_time, w, NULL);
+    section(&wr, "XTRA", sec_extra, w, &x);
+
+    if (!wr.err) {
+        make_header(hdr, wr.len, wr.hash);
+        if (fseek(f, 0, SEEK_SET) != 0 || fwrite(hdr, 1, HEADER_SIZE, f) != HEADER_SIZE) wr.err = errno ? errno : EIO;
+    }
+    if (!wr.err && fflush(f) != 0) wr.err = errno ? errno : EIO;
+    if (!wr.err && fsync(fileno(f)) != 0) wr.err = errno ? errno : EIO;
+    if (fclose(f) != 0 && !wr.err) wr.err = errno ? errno : EIO;
+    if (!wr.err && rename(tmp, path) != 0) wr.err = errno ? errno : EIO;
+    if (wr.err) {
+        unlink(tmp);
+        free(tmp);
+        errno = wr.err;
+        return SD_ERR_IO;
+    }
+    free(tmp);
+    sync_dir(path);
+    return SD_OK;
+}
+
+/* ---------------------------------------------------------------- reading ---- */
+
+typedef struct {
+    const unsigned char *p;
+    size_t n, pos;
+    int bad;
+} cursor;
+
+static const void *take(cursor *c, size_t n)
+{
+    if (c->bad || n > c->n - c->pos) {
+        c->bad = 1;
+        return NULL;
+    }
+    const void *q = c->p + c->pos;
+    c->pos += n;
+    return q;
+}
+
+static void get(cursor *c, void *dst, size_t n)
+{
+    const void *q = take(c, n);
+    if (q) memcpy(dst, q, n);
+    else memset(dst, 0, n);
+}
+
+static int32_t get_i32(cursor *c)
+{
+    int32_t v;
+    get(c, &v, sizeof(v));
+    return v;
+}
+static int64_t get_i64(cursor *c)
+{
+    int64_t v;
+    get(c, &v, sizeof(v));
+    return v;
+}
+static uint64_t get_u64(cursor *c)
+{
+    uint64_t v;
+    get(c, &v, sizeof(v));
+    return v;
+}
+static double get_f64(cursor *c)
+{
+    double v;
+    get(c, &v, sizeof(v));
+    return v;
+}
+static sd_vec3 get_vec3(cursor *c)
+{
+    sd_vec3 v;
+    get(c, &v, sizeof(v));
+    return v;
+}
+
+/* A count of elements of `elem` bytes that must still fit in the cursor. */
+static int get_count(cursor *c, size_t elem)
+{
+    int32_t v = get_i32(c);
+    if (c->bad || v < 0 || v >= INT_MAX / 8 || (elem > 0 && (size_t)v > (c->n - c->pos) / elem)) {
+        c->bad = 1;
+        return 0;
+    }
+    return v;
+}
+
+typedef struct {
+    const char *path;
+    char *msg;
+    size_t msglen;
+} rd_ctx;
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+static sd_status fail(const rd_ctx *r, const char *fmt, ...)
+{
+    if (r->msg && r->msglen > 0) {
+        int k = snprintf(r->msg, r->msglen, "%s: ", r->path);
+        if (k >= 0 && (size_t)k < r->msglen) {
+            va_list ap;
+            va_start(ap, fmt);
+            vsnprintf(r->msg + k, r->msglen - (size_t)k, fmt, ap);
+            va_end(ap);
+        }
+    }
+    return SD_ERR_FORMAT;
+}
+
+/* Open the next section, which must carry `tag`; *sec covers its content. */
+static sd_status open_section(const rd_ctx *r, cursor *c, const char *tag, cursor *sec)
+{
+    size_t at = c->pos;
+    const unsigned char *t = take(c, 4);
+    int32_t zero = get_i32(c);
+    uint64_t len = get_u64(c);
+    if (c->bad) return fail(r, "section %s missing at payload offset %zu", tag, at);
+    if (memcmp(t, tag, 4) != 0 || zero != 0) return fail(r, "section %s expected at payload offset %zu", tag, at);
+    if (len > c->n - c->pos) return fail(r, "section %s overruns the payload", tag);
+    sec->p = c->p + c->pos;
+    sec->n = (size_t)len;
+    sec->pos = 0;
+    sec->bad = 0;
+    c->pos += (size_t)len;
+    return SD_OK;
+}
+
+static sd_status close_section(const rd_ctx *r, const cursor *sec, const char *tag)
+{
+    if (sec->bad) return fail(r, "section %s is malformed (short or out-of-range counts)", tag);
+    if (sec->pos != sec->n) return fail(r, "section %s has %zu unexpected trailing bytes", tag, sec->n - sec->pos);
+    return SD_OK;
+}
+
+typedef struct {
+    char name[256];
+    uint32_t elem;
+    const unsigned char *data;
+    int used;
+} file_field;
+
+typedef struct {
+    file_field *ff;
+    int nff, n;
+    const rd_ctx *r;
+    sd_status st;
+} field_rctx;
+
+static void read_field(void *array, size_t elem, const char *name, void *ctx)
+{
+    field_rctx *fc = ctx;
+    if (fc->st) return;
+    for (int k = 0; k < fc->nff; k++) {
+        file_field *f = &fc->ff[k];
+        if (strcmp(f->name, name) != 0) continue;
+        if (f->elem != elem) {
+            fc->st = fail(fc->r, "body field '%s' has %u-byte elements, this build uses %zu (incompatible build)",
+                          name, f->elem, elem);
+            return;
+        }
+        if (fc->n > 0) memcpy(*(void **)array, f->data, (size_t)fc->n * elem);
+        f->used = 1;
+        return;
+    }
+    fc->st = fail(fc->r, "body field '%s' is missing (written by an incompatible build)", name);
+}
+
+static sd_status read_bodies(const rd_ctx *r, cursor *c, sd_world *w)
+{
+    int n = get_count(c, 0);
+    int nf = get_count(c, 5);
+    if (c->bad) return SD_OK; /* reported by close_section */
+    file_field *ff = calloc((size_t)nf + 1, sizeof(*ff));
+    if (!ff) return SD_ERR_NOMEM;
+    for (int k = 0; k < nf && !c->bad; k++) {
+        uint8_t len;
+        get(c, &len, 1);
+        const char *nm = take(c, len);
+        if (!nm) break;
+        memcpy(ff[k].name, nm, len);
+        ff[k].name[len] = '\0';
+        int32_t elem = get_i32(c);
+        if (elem <= 0 || elem > 4096) {
+            c->bad = 1;
+            break;
+        }
+        ff[k].elem = (uint32_t)elem;
+        if ((size_t)n > (c->n - c->pos) / (size_t)elem) {
+            c->bad = 1;
+            break;
+        }
+        ff[k].data = take(c, (size_t)n * (size_t)elem);
+    }
+    if (c->bad) {
+        free(ff);
+        return SD_OK;
+    }
+    if (sd_bodies_reserve(&w->b, n)) {
+        free(ff);
+        return SD_ERR_NOMEM;
+    }
+    w->b.n = n;
+    field_rctx fc = {ff, nf, n, r, SD_OK};
+    sd_bodies_for_each_field(&w->b, read_field, &fc);
+    for (int k = 0; k < nf && !fc.st; k++)
+        if (!ff[k].used) fc.st = fail(r, "unknown body field '%s' (written by an incompatible build)", ff[k].name);
+    free(ff);
+    return fc.st;
+}
+
+static sd_status read_pairs(const rd_ctx *r, cursor *c, sd_world *w, sd_pairlist *l, int bt, const char *tag)
+{
+    int n = get_count(c, 24);
+    int nh = get_count(c, 0);
+    if (c->bad) return SD_OK;
+    if (sd_grow((void **)&l->p, &l->cap, n + 1, sizeof(sd_pair)) ||
+        sd_grow((void **)&l->out, &l->out_cap, n + 1, sizeof(sd_pair_out)) ||
+        sd_grow((void **)&l->hist, &l->hcap, nh + 1, sizeof(sd_hist)))
+        return SD_ERR_NOMEM;
+    int nb = w->b.n, nt = w->w.n;
+    for (int k = 0; k < n; k++) {
+        sd_pair *p = &l->p[k];
+        p->a = get_i32(c);
+        p->b = get_i32(c);
+        p->off = get_i32(c);
+        get(c, &p->cap, sizeof(p->cap));
+        get(c, &p->kind, sizeof(p->kind));
+        p->sqrt_m_eff = get_f64(c);
+        if (c->bad) return SD_OK;
+        int ok = p->a >= 0 && p->a < nb && p->cap >= 1 && p->cap <= SD_MANIFOLD_MAX && p->off >= 0 &&
+                 p->off <= nh - p->cap;
+        if (bt) ok = ok && (p->kind == SD_PAIR_ST || p->kind == SD_PAIR_CT) && p->b >= 0 && p->b < nt &&
+                     (k == 0 || l->p[k - 1].a <= p->a);
+        else ok = ok && (p->kind == SD_PAIR_SS || p->kind == SD_PAIR_SC || p->kind == SD_PAIR_CC) && p->b >= 0 &&
+                  p->b < nb && p->b != p->a;
+        if (!ok) return fail(r, "section %s: pair %d is out of range", tag, k);
+    }
+    if ((size_t)nh > (c->n - c->pos) / 28) {
+        c->bad = 1;
+        return SD_OK;
+    }
+    for (int k = 0; k < nh; k++) {
+        l->hist[k].feature = get_i32(c);
+        l->hist[k].shear = get_vec3(c);
+    }
+    l->n = n;
+    l->nh = nh;
+    return SD_OK;
+}
+
+static sd_status read_tgrid(const rd_ctx *r, cursor *c, sd_world *w)
+{
+    int present = get_i32(c);
+    if (c->bad) return SD_OK;
+    if (present != tgrid_current(w))
+        return fail(r, "section TGRD: triangle grid %s", present ? "saved for dirty walls" : "missing");
+    if (!present) return SD_OK;
+    sd_grid *g = &w->tgrid;
+    g->cell = get_f64(c);
+    g->nx = get_i32(c);
+    g->ny = get_i32(c);
+    g->nz = get_i32(c);
+    g->lo = get_vec3(c);
+    if (c->bad) return SD_OK;
+    if (!(g->cell > 0.0) || g->nx < 1 || g->ny < 1 || g->nz < 1 ||
+        (double)g->nx * g->ny * g->nz > (double)(INT_MAX / 8))
+        return fail(r, "section TGRD: bad grid dimensions");
+    int ncell = g->nx * g->ny * g->nz;
+    if ((size_t)ncell + 1 > (c->n - c->pos) / sizeof(int32_t)) {
+        c->bad = 1;
+        return SD_OK;
+    }
+    if (sd_grow((void **)&g->cell_start, &g->cap_cells, ncell + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    get(c, g->cell_start, (size_t)(ncell + 1) * sizeof(int32_t));
+    int nitems = get_count(c, sizeof(int32_t));
+    if (c->bad) return SD_OK;
+    if (g->cell_start[0] != 0 || g->cell_start[ncell] != nitems) return fail(r, "section TGRD: bad cell table");
+    for (int k = 0; k < ncell; k++)
+        if (g->cell_start[k + 1] < g->cell_start[k]) return fail(r, "section TGRD: bad cell table");
+    if (sd_grow((void **)&g->items, &g->cap_items, nitems + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    get(c, g->items, (size_t)nitems * sizeof(int32_t));
+    int nt = w->w.n;
+    for (int k = 0; k < nitems; k++)
+        if (g->items[k] < 0 || g->items[k] >= nt) return fail(r, "section TGRD: bad triangle index");
+    if (sd_grow((void **)&w->trange, &w->trange_cap, nt + 1, sizeof(*w->trange))) return SD_ERR_NOMEM;
+    get(c, w->trange, (size_t)nt * sizeof(*w->trange));
+    if (c->bad) return SD_OK;
+    const int dims[3] = {g->nx, g->ny, g->nz};
+    for (int t = 0; t < nt; t++)
+        for (int d = 0; d < 3; d++)
+            if (w->trange[t][d] < 0 || w->trange[t][d] > w->trange[t][d + 3] || w->trange[t][d + 3] >= dims[d])
+                return fail(r, "section TGRD: bad cell range of triangle %d", t);
+    return SD_OK;
+}
+
+/* Derived structures, exactly as sd_neighbor_rebuild leaves them for these pair lists. */
+static sd_status derive(sd_world *w)
+{
+    int n = w->b.n;
+    if (sd_grow((void **)&w->csr.start, &w->csr.cap_start, n + 2, sizeof(int32_t)) ||
+        sd_grow((void **)&w->csr.idx, &w->csr.cap_idx, 2 * w->bb.n + 1, sizeof(int32_t)) ||
+        sd_grow((void **)&w->csr.bt_start, &w->csr.cap_bt_start, n + 1, sizeof(int32_t)) ||
+        sd_grow((void **)&w->bt_man, &w->bt_man_cap, w->bt.n + 1, sizeof(sd_manifold)))
+        return SD_ERR_NOMEM;
+    memset(w->csr.start, 0, (size_t)(n + 2) * sizeof(int32_t));
+    for (int k = 0; k < w->bb.n; k++) {
+        w->csr.start[w->bb.p[k].a + 2]++;
+        w->csr.start[w->bb.p[k].b + 2]++;
+    }
+    for (int i = 0; i < n; i++) w->csr.start[i + 2] += w->csr.start[i + 1];
+    for (int k = 0; k < w->bb.n; k++) {
+        w->csr.idx[w->csr.start[w->bb.p[k].a + 1]++] = 2 * k;
+        w->csr.idx[w->csr.start[w->bb.p[k].b + 1]++] = 2 * k + 1;
+    }
+    /* body–triangle pairs are grouped by body in body order */
+    int k = 0;
+    for (int i = 0; i <= n; i++) {
+        while (k < w->bt.n && w->bt.p[k].a < i) k++;
+        w->csr.bt_start[i] = k;
+    }
+    /* the weld ids are a pure function of the vertices: the same as the saved run's (when the
+     * walls are dirty, the next rebuild welds again anyway) */
+    if (w->w.n > 0 && sd_walls_weld(&w->w)) return SD_ERR_NOMEM;
+    return SD_OK;
+}
+
+static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra, size_t *extra_len)
+{
+    sd_status st;
+    cursor c;
+    sd_world *w = NULL;
+
+    /* world definition */
+    if ((st = open_section(r, pl, "DEF ", &c))) return st;
+    sd_world_def def;
+    memset(&def, 0, sizeof(def));
+    def.gravity = get_vec3(&c);
+    def.dt = get_f64(&c);
+    def.margin = get_f64(&c);
+    def.t_reset = get_f64(&c);
+    def.contact.k_n = get_f64(&c);
+    def.contact.k_s = get_f64(&c);
+    def.contact.damping = get_f64(&c);
+    def.contact.tan_phi = get_f64(&c);
+    def.contact.cohesion = get_f64(&c);
+    def.threads = get_i32(&c);
+    def.check_dt = get_i32(&c);
+    if ((st = close_section(r, &c, "DEF "))) return st;
+    st = sd_world_create(&def, &w);
+    if (st == SD_ERR_ARG) return fail(r, "section DEF : invalid world definition");
+    if (st) return st;
+
+    /* bodies */
+    if ((st = open_section(r, pl, "BODY", &c)) || (st = read_bodies(r, &c, w)) || (st = close_section(r, &c, "BODY")))
+        goto out;
+
+    /* gid map */
+    if ((st = open_section(r, pl, "GIDS", &c))) goto out;
+    int ng = get_count(&c, sizeof(int32_t));
+    if (!c.bad) {
+        if (sd_grow((void **)&w->gid_map, &w->gid_cap, ng + 1, sizeof(int32_t))) {
+            st = SD_ERR_NOMEM;
+            goto out;
+        }
+        get(&c, w->gid_map, (size_t)ng * sizeof(int32_t));
+        w->next_gid = ng;
+    }
+    if ((st = close_section(r, &c, "GIDS"))) goto out;
+    {
+        const sd_bodies *b = &w->b;
+        int live = 0;
+        for (int g = 0; g < w->next_gid; g++) {
+            int i = w->gid_map[g];
+            if (i < -1 || i >= b->n || (i >= 0 && b->gid[i] != g)) {
+                st = fail(r, "section GIDS: gid %d maps to a wrong index", g);
+                goto out;
+            }
+            live += i >= 0;
+        }
+        if (live != b->n) {
+            st = fail(r, "section GIDS: %d live gids for %d bodies", live, b->n);
+            goto out;
+        }
+        for (int i = 0; i < b->n; i++)
+            if (b->shape[i] > SD_SHAPE_CYLINDER || b->fixed[i] > 1) {
+                st = fail(r, "section BODY: body %d has a bad shape or fixed flag", i);
+                goto out;
+            }
+    }
+
+    /* walls */
+    if ((st = open_section(r, pl, "WALL", &c))) goto out;
+    {
+        sd_walls *wl = &w->w;
+        int nt = get_count(&c, sizeof(sd_tri) + sizeof(int32_t) + 1 + sizeof(sd_vec3));
+        if (!c.bad) {
+            if (sd_walls_reserve(wl, nt + 1)) {
+                st = SD_ERR_NOMEM;
+                goto out;
+            }
+            wl->n = nt;
+            if (nt > 0) {
+                get(&c, wl->tri, (size_t)nt * sizeof(sd_tri));
+                get(&c, wl->group, (size_t)nt * sizeof(int32_t));
+                get(&c, wl->active, (size_t)nt);
+                get(&c, wl->force, (size_t)nt * sizeof(sd_vec3));
+            }
+            wl->dirty = get_i32(&c);
+        }
+        if ((st = close_section(r, &c, "WALL"))) goto out;
+        for (int t = 0; t < nt; t++)
+            if (wl->active[t] > 1) {
+                st = fail(r, "section WALL: bad active flag of triangle %d", t);
+                goto out;
+            }
+        if (wl->dirty != 0 && wl->dirty != 1) {
+            st = fail(r, "section WALL: bad dirty flag");
+            goto out;
+        }
+    }
+
+    if ((st = open_section(r, pl, "TGRD", &c)) || (st = read_tgrid(r, &c, w)) || (st = close_section(r, &c, "TGRD")))
+        goto out;
+    if ((st = open_section(r, pl, "PRBB", &c)) || (st = read_pairs(r, &c, w, &w->bb, 0, "PRBB")) ||
+        (st = close_section(r, &c, "PRBB")))
+        goto out;
+    if ((st = open_section(r, pl, "PRBT", &c)) || (st = read_pairs(r, &c, w, &w->bt, 1, "PRBT")) ||
+        (st = close_section(r, &c, "PRBT")))
+        goto out;
+
+    /* history carried to the next rebuild */
+    if ((st = open_section(r, pl, "OLDH", &c))) goto out;
+    w->keys_collected = get_i32(&c);
+    {
+        int m = get_count(&c, sizeof(uint64_t) + 28);
+        if (!c.bad) {
+            if (sd_grow((void **)&w->old_keys, &w->old_cap, m + 1, sizeof(uint64_t)) ||
+                sd_grow((void **)&w->old_hist, &w->old_hist_cap, m + 1, sizeof(sd_hist))) {
+                st = SD_ERR_NOMEM;
+                goto out;
+            }
+            get(&c, w->old_keys, (size_t)m * sizeof(uint64_t));
+            for (int k = 0; k < m; k++) {
+                w->old_hist[k].feature = get_i32(&c);
+                w->old_hist[k].shear = get_vec3(&c);
+            }
+            w->n_old = m;
+        }
+        if ((st = close_section(r, &c, "OLDH"))) goto out;
+        if (w->keys_collected != 0 && w->keys_collected != 1) {
+            st = fail(r, "section OLDH: bad flag");
+            goto out;
+        }
+        for (int k = 1; k < m; k++)
+            if (w->old_keys[k] < w->old_keys[k - 1]) {
+                st = fail(r, "section OLDH: keys not sorted");
+                goto out;
+            }
+    }
+
+    /* clock and flags */
+    if ((st = open_section(r, pl, "TIME", &c))) goto out;
+    w->time = get_f64(&c);
+    w->step = (long)get_i64(&c);
+    w->last_rebuild_time = get_f64(&c);
+    w->need_rebuild = get_i32(&c);
+    w->rebuild_every_step = get_i32(&c);
+    w->contacts = (long)get_i64(&c);
+    w->timers.integrate = get_f64(&c);
+    w->timers.neighbor = get_f64(&c);
+    w->timers.contact = get_f64(&c);
+    w->timers.gather = get_f64(&c);
+    w->timers.other = get_f64(&c);
+    w->timers.rebuilds = (long)get_i64(&c);
+    if ((st = close_section(r, &c, "TIME"))) goto out;
+    w->checked = 0; /* sd_world_check runs again at the next step; it passes as before */
+
+    /* the driver's blob */
+    if ((st = open_section(r, pl, "XTRA", &c))) goto out;
+    {
+        uint64_t len = get_u64(&c);
+        const void *data = NULL;
+        if (!c.bad && len <= c.n - c.pos) data = take(&c, (size_t)len);
+        else c.bad = 1;
+        if ((st = close_section(r, &c, "XTRA"))) goto out;
+        if (pl->pos != pl->n) {
+            st = fail(r, "%zu unexpected bytes after the last section", pl->n - pl->pos);
+            goto out;
+        }
+        if ((st = derive(w))) goto out;
+        if (extra) {
+            *extra = NULL;
+            if (len > 0) {
+                *extra = malloc((size_t)len);
+                if (!*extra) {
+                    st = SD_ERR_NOMEM;
+                    goto out;
+                }
+                memcpy(*extra, data, (size_t)len);
+            }
+        }
+        if (extra_len) *extra_len = (size_t)len;
+    }
+    *out = w;
+    return SD_OK;
+out:
+    sd_world_destroy(w);
+    return st;
+}
+
+/* Whole file into memory. */
+static sd_status slurp(const rd_ctx *r, unsigned char **data, size_t *size)
+{
+    *data = NULL;
+    *size = 0;
+    FILE *f = fopen(r->path, "rb");
+    if (!f) {
+        int e = errno;
+        if (r->msg && r->msglen) snprintf(r->msg, r->msglen, "%s: cannot open: %s", r->path, strerror(e));
+        errno = e;
+        return SD_ERR_IO;
+    }
+    size_t cap = 1 << 16, n = 0;
+    unsigned char *buf = malloc(cap);
+    if (!buf) {
+        fclose(f);
+        return SD_ERR_NOMEM;
+    }
+    for (;;) {
+        if (n == cap) {
+            unsigned char *q = cap <= SIZE_MAX / 2 ? realloc(buf, cap * 2) : NULL;
+            if (!q) {
+                free(buf);
+                fclose(f);
+                return SD_ERR_NOMEM;
+            }
+            buf = q;
+            cap *= 2;
+        }
+        size_t got = fread(buf + n, 1, cap - n, f);
+        n += got;
+        if (got == 0) break;
+    }
+    int err = ferror(f);
+    int e = errno;
+    fclose(f);
+    if (err) {
+        free(buf);
+        if (r->msg && r->msglen) snprintf(r->msg, r->msglen, "%s: read error: %s", r->path, strerror(e));
+        return SD_ERR_IO;
+    }
+    *data = buf;
+    *size = n;
+    return SD_OK;
+}
+
+sd_status sd_checkpoint_read(const char *path, sd_world **out, void **extra, size_t *extra_len, char *msg,
+                             size_t msglen)
+{
+    if (out) *out = NULL;
+    if (extra) *extra = NULL;
+    if (extra_len) *extra_len = 0;
+    if (msg && msglen) msg[0] = '\0';
+    if (!path || !out) return SD_ERR_ARG;
+    rd_ctx r = {path, msg, msglen};
+    unsigned char *data;
+    size_t size;
+    sd_status st = slurp(&r, &data, &size);
+    if (st) return st;
+
+    if (size == 0) st = fail(&r, "empty file (not a checkpoint, or a write that never finished)");
+    else if (memcmp(data, magic, size < 8 ? size : 8) != 0)
+        st = fail(&r, "not a sabodem checkpoint (bad magic)");
+    else if (size < HEADER_SIZE)
+        st = fail(&r, "truncated: %zu bytes, shorter than the %d-byte header", size, HEADER_SIZE);
+    if (st) goto done;
+    {
+        uint32_t version, tag;
+        double pr;
+        uint64_t plen, hash;
+        memcpy(&version, data + 8, 4);
+        memcpy(&tag, data + 12, 4);
+        memcpy(&pr, data + 24, 8);
+        memcpy(&plen, data + 32, 8);
+        memcpy(&hash, data + 40, 8);
+        int reserved_zero = 1;
+        for (int k = 48; k < HEADER_SIZE; k++) reserved_zero &= data[k] == 0;
+        if (tag != endian_tag) {
+            st = fail(&r, "written on a machine of the other byte order (or corrupted header)");
+        } else if (version != SD_CHECKPOINT_VERSION) {
+            st = fail(&r, "format version %u, this build reads version %u", (unsigned)version,
+                      (unsigned)SD_CHECKPOINT_VERSION);
+        } else if (memcmp(data + 16, type_sizes, 8) != 0 || memcmp(&pr, &probe, 8) != 0) {
+            st = fail(&r, "element sizes or floating-point format differ from this build (or corrupted header)");
+        } else if (!reserved_zero) {
+            st = fail(&r, "corrupted header (reserved bytes not zero)");
+        } else if (plen > size - HEADER_SIZE) {
+            st = fail(&r, "truncated: %zu bytes, the header announces %llu", size,
+                      (unsigned long long)plen + HEADER_SIZE);
+        } else if (plen < size - HEADER_SIZE) {
+            st = fail(&r, "%zu bytes after the announced end of the checkpoint (corrupted)",
+                      size - HEADER_SIZE - (size_t)plen);
+        } else if (fnv1a(FNV_OFFSET, data + HEADER_SIZE, (size_t)plen) != hash) {
+            st = fail(&r, "checksum mismatch (corrupted file)");
+        }
+        if (st) goto done;
+        cursor pl = {data + HEADER_SIZE, (size_t)plen, 0, 0};
+        st = parse(&r, &pl, out, extra, extra_len);
+    }
+done:
+    free(data);
+    return st;
+}
