@@ -30,6 +30,7 @@ static int read_data(sd_world *w, const char *path)
             continue;
         }
         if (!in_atoms) continue;
+        if ((line[0] >= 'A' && line[0] <= 'Z') || (line[0] >= 'a' && line[0] <= 'z')) break; /* next section */
         int id, type;
         double d, rho, x, y, z;
         if (sscanf(line, "%d %d %lf %lf %lf %lf %lf", &id, &type, &d, &rho, &x, &y, &z) == 7) {

@@ -165,10 +165,16 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
                     int fo = o->feature[kk];
                     int tfo = fo & ((1 << SD_TRI_FEATURE_BITS) - 1);
                     if ((fo >> SD_TRI_FEATURE_BITS) != part) {
-                        /* a log's support line cut at a seam of a flat floor: the cut is an
-                         * artefact of the meshing, the face contacts carry the log */
-                        if (is_edge && part >= SD_CYL_LINE_PART && wl->edge_flat[id] && tfo == SD_TRI_FACE &&
-                            tri_has_edge(wl, tq, id))
+                        /* a log on a seam of a flat floor (an edge shared by two coplanar
+                         * triangles): the seam is an artefact of the meshing. A contact of any
+                         * part of the log at the seam (a cut of its support line, or the seam
+                         * running under its side or end) is dropped when a triangle owning the
+                         * seam has a face contact; the two cuts of the support line at one seam
+                         * (a log across three or more triangles) are both dropped, the line's
+                         * ends (rims or boundary edges) carry the log */
+                        if (is_edge && wl->edge_flat[id] && tri_has_edge(wl, tq, id) &&
+                            (tfo == SD_TRI_FACE || (part >= SD_CYL_LINE_PART && (fo >> SD_TRI_FEATURE_BITS) >= SD_CYL_LINE_PART &&
+                                                    tri_feature_gid(wl, tq, fo) == gid)))
                             drop = 1;
                         continue;
                     }

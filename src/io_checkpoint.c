@@ -218,8 +218,10 @@ static void sec_pairs(writer *wr, const sd_world *w, const void *ctx)
         put_f64(wr, p->sqrt_m_eff);
     }
     for (int k = 0; k < l->nh; k++) {
-        put_i32(wr, l->hist[k].feature);
-        put_vec3(wr, l->hist[k].shear);
+        /* the shear of an empty slot is never read (and may be uninitialised): write zero */
+        int32_t f = l->hist[k].feature;
+        put_i32(wr, f);
+        put_vec3(wr, f >= 0 ? l->hist[k].shear : v3(0.0, 0.0, 0.0));
     }
 }
 

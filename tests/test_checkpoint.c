@@ -30,7 +30,7 @@ static void quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d, int gr
 static sd_world *make_scene(void)
 {
     sd_world_def def = sd_world_def_default(); /* 15° slope, friction 0.404, damping 0.2 */
-    def.dt = 2e-5;
+    def.dt = 4e-5;
     sd_world *w = NULL;
     CHECK(sd_world_create(&def, &w) == SD_OK);
     const double X = 0.12, Y = 0.08, H = 0.1, s = 0.04;
@@ -120,9 +120,9 @@ static int pairs_equal(const sd_pairlist *a, const sd_pairlist *b)
             memcmp(&p->sqrt_m_eff, &q->sqrt_m_eff, sizeof(double)) != 0)
             return 0;
     }
-    for (int k = 0; k < a->nh; k++)
+    for (int k = 0; k < a->nh; k++) /* the shear of an empty slot (feature -1) is never read */
         if (a->hist[k].feature != b->hist[k].feature ||
-            memcmp(&a->hist[k].shear, &b->hist[k].shear, sizeof(sd_vec3)) != 0)
+            (a->hist[k].feature >= 0 && memcmp(&a->hist[k].shear, &b->hist[k].shear, sizeof(sd_vec3)) != 0))
             return 0;
     return 1;
 }
@@ -247,7 +247,11 @@ static void restart_matches(sd_world *w, long more, const char *what)
     char path[128], path2[128];
     path_in_dir(path, sizeof(path), "ck.bin");
     path_in_dir(path2, sizeof(path2), "ck2.bin");
-    driver_state ds = {3, 1.25, {987654321ULL}};
+    driver_state ds;
+    memset(&ds, 0, sizeof(ds)); /* padding too: the blob is compared bytewise */
+    ds.phase = 3;
+    ds.accum = 1.25;
+    ds.rng.s = 987654321ULL;
     (void)sd_rng_next(&ds.rng);
     CHECK(sd_checkpoint_write(path, w, &ds, sizeof(ds)) == SD_OK);
     CHECK(count_temp_files() == 0);
@@ -265,7 +269,8 @@ static void restart_matches(sd_world *w, long more, const char *what)
     if (extra) {
         driver_state back;
         memcpy(&back, extra, sizeof(back));
-        CHECK(sd_rng_next(&back.rng) == sd_rng_next(&ds.rng));
+        sd_rng mine = ds.rng;
+        CHECK(back.phase == 3 && sd_rng_next(&back.rng) == sd_rng_next(&mine));
     }
     free(extra);
     /* nothing is lost: the restored world writes the same bytes */
@@ -300,17 +305,18 @@ static void test_restart(void)
     sd_world_destroy(w);
 
     w = make_scene();
-    run(w, 3000);
+    run(w, 3500);
     run_to_mid_interval(w);
     CHECK(!sd_neighbor_needs_rebuild(w) && steps_since_rebuild(w) > 0);
     CHECK(sd_world_contact_count(w) > 0);
-    CHECK(has_shear(&w->bb) && has_shear(&w->bt)); /* tangential history is live */
+    CHECK(has_shear(&w->bb));
+    CHECK(has_shear(&w->bt)); /* tangential history is live */
     int kinds[SD_PAIR_KINDS] = {0};
     for (int k = 0; k < w->bb.n; k++) kinds[w->bb.p[k].kind]++;
     for (int k = 0; k < w->bt.n; k++) kinds[w->bt.p[k].kind]++;
     for (int k = 0; k < SD_PAIR_KINDS; k++) CHECK(kinds[k] > 0);
     printf("mid-interval checkpoint at step %ld, %ld steps after the last rebuild\n", w->step, steps_since_rebuild(w));
-    restart_matches(w, 1500, "mid-interval restart");
+    restart_matches(w, 2000, "mid-interval restart");
 
     /* sensitivity: a restart that forced an extra candidate rebuild would not match */
     {
@@ -342,7 +348,7 @@ static void test_restart(void)
     CHECK(sd_world_remove_body(w, victim) == SD_OK);
     CHECK(sd_world_set_group_active(w, G_GATE, 0) == SD_OK);
     CHECK(w->keys_collected && w->n_old > 0 && w->w.dirty && w->need_rebuild);
-    restart_matches(w, 1500, "restart after remove + gate open");
+    restart_matches(w, 2000, "restart after remove + gate open");
     sd_world_destroy(w);
 }
 

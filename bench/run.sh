@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Side-by-side benchmark: sabodem and LAMMPS (Debian, gran/hooke/history) on the same initial
+# packing of the sphere-only flume (4619 spheres, SPEC §8 split, paper's springs, Δt = 1e-5 s),
+# in the same phases: dense settled bed at rest behind the gate, then flowing after the gate
+# is removed. Reports particle-steps per second (median of REPEAT runs) and the ratio, for
+# 1 and 2 threads / ranks; then the scaling benchmark. Results go to bench/results/.
+#   usage: bash bench/run.sh [REPEAT] [NDENSE] [NFLOW]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+REPEAT=${1:-3}
+NDENSE=${2:-10000}
+NFLOW=${3:-10000}
+bash scripts/setup.sh --bench
+cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build-bench -j "$(nproc)" --target bench_flume bench_scale >/dev/null
+out=bench/results
+mkdir -p "$out"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+ref=../shared/reference/lammps
+python3 "$ref/gen_particles.py" spec "$work/init.data" 12345 >/dev/null
+# settle once with LAMMPS (drop + settle); both codes then start from this settled bed
+(cd "$work" && OMP_NUM_THREADS=1 lmp -in "$OLDPWD/$ref/flume.in" -var data init.data -var ndrop 20000 \
+    -var nsettle 60000 -var ndense 0 -var nflow 0 -log settle.log >/dev/null)
+cp "$work/settled_lammps.data" "$work/settled.data"
+
+median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
+# LAMMPS "Loop time of T on P procs for N steps with A atoms" for the dense (3rd) and flow (4th) runs
+lammps_rates() {
+  awk '/^Loop time of/ {n++; t=$4; s=$9; a=$12; if (n==3) d=a*s/t; if (n==4) f=a*s/t} END {print d, f}' "$1"
+}
+echo "machine: $(lscpu | awk -F: '/Model name/ {gsub(/^ +/,"",$2); print $2}'), $(nproc) cores" | tee "$out/side_by_side.txt"
+for p in 1 2; do
+  : > "$work/l$p"; : > "$work/s$p"
+  for r in $(seq "$REPEAT"); do
+    if [ "$p" -eq 1 ]; then
+      (cd "$work" && OMP_NUM_THREADS=1 lmp -in "$OLDPWD/$ref/flume.in" -var data settled.data -var ndrop 0 -var nsettle 0 \
+          -var ndense "$NDENSE" -var nflow "$NFLOW" -log run.log >/dev/null)
+    else
+      (cd "$work" && OMP_NUM_THREADS=1 mpirun --allow-run-as-root -np 2 --bind-to core lmp -in "$OLDPWD/$ref/flume.in" \
+          -var data settled.data -var ndrop 0 -var nsettle 0 -var ndense "$NDENSE" -var nflow "$NFLOW" -log run.log >/dev/null)
+    fi
+    lammps_rates "$work/run.log" >> "$work/l$p"
+    ./build-bench/bench_flume "$work/settled.data" 0 0 "$NDENSE" "$NFLOW" --threads "$p" > "$work/sab.txt"
+    awk '/^PHASE dense/ {d=$9} /^PHASE flow/ {f=$9} END {print d, f}' "$work/sab.txt" >> "$work/s$p"
+  done
+  ld=$(awk '{print $1}' "$work/l$p" | median); lf=$(awk '{print $2}' "$work/l$p" | median)
+  sd=$(awk '{print $1}' "$work/s$p" | median); sf=$(awk '{print $2}' "$work/s$p" | median)
+  printf "%d thread(s)/rank(s), median of %d: dense  sabodem %.3e  LAMMPS %.3e  ratio %.2f | flow  sabodem %.3e  LAMMPS %.3e  ratio %.2f  (particle-steps/s)\n" \
+    "$p" "$REPEAT" "$sd" "$ld" "$(echo "$sd / $ld" | bc -l)" "$sf" "$lf" "$(echo "$sf / $lf" | bc -l)" | tee -a "$out/side_by_side.txt"
+done
+cat "$work/sab.txt" >> "$out/side_by_side.txt"
+./build-bench/bench_scale 2000 --threads 1 | tee "$out/scaling.txt"
