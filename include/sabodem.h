@@ -63,6 +63,7 @@ typedef struct {
     double t_reset;       /* candidate list rebuild interval, s */
     sd_contact_def contact;
     int threads;          /* OpenMP threads, 0 = runtime default */
+    int parallel_min;     /* loops shorter than this run on one thread (start-up costs more) */
     int check_dt;         /* 1: refuse a dt that is unstable for k_n and the smallest mass */
 } sd_world_def;
 

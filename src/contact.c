@@ -139,6 +139,40 @@ static int tri_has_vert(const sd_walls *wl, int t, int32_t v)
     return wl->vert_id[t][0] == v || wl->vert_id[t][1] == v || wl->vert_id[t][2] == v;
 }
 
+/* Flat-mesh rule for a log (cylinder–triangle pairs only). An edge of a flat floor shared by
+ * two coplanar triangles (a seam), or a vertex shared by coplanar triangles, lies in the plane:
+ * contacts of the log there are artefacts of the meshing (a cut of the log's support line, or
+ * the seam under its side or end face, which would push the log along the floor). Contact X at
+ * such a seam or vertex of triangle t is dropped when another contact Y of the same log is
+ *  - a face contact on a triangle owning the feature (any part of the log);
+ *  - a cut of the support line at the same seam while X is a cut too (both cuts go: the line's
+ *    ends, rims or boundary edges, carry the log);
+ *  - a cut of the support line on another triangle owning the feature while X is not a cut;
+ *  - an edge/vertex contact (not a cut) listed earlier on another triangle owning the feature
+ *    while X is not a cut (one of them is kept). */
+static int is_line_cut(const sd_walls *wl, int t, int f, sd_vec3 n)
+{
+    int tf = f & ((1 << SD_TRI_FEATURE_BITS) - 1);
+    return tf != SD_TRI_FACE && tf < SD_TRI_VERT0 && (f >> SD_TRI_FEATURE_BITS) >= SD_CYL_LINE_PART &&
+           fabs(v3_dot(n, wl->tri[t].n)) > 1.0 - 1e-12;
+}
+
+static int flat_mesh_drop(const sd_walls *wl, int t, int is_edge, int32_t id, int x_cut, int tq, int fo, sd_vec3 no,
+                          int y_first)
+{
+    if (is_edge) {
+        if (!wl->edge_flat[id] || !tri_has_edge(wl, tq, id)) return 0;
+    } else {
+        if (!tri_has_vert(wl, tq, id) || fabs(v3_dot(wl->tri[t].n, wl->tri[tq].n)) < 1.0 - 1e-12) return 0;
+    }
+    int tfo = fo & ((1 << SD_TRI_FEATURE_BITS) - 1);
+    if (tfo == SD_TRI_FACE) return 1;
+    int y_cut = is_line_cut(wl, tq, fo, no);
+    if (x_cut) return y_cut && is_edge && wl->edge_id[tq][tfo - SD_TRI_EDGE0] == id;
+    if (tq == t) return 0;
+    return y_cut || y_first;
+}
+
 /* Mesh rule: an edge contact is dropped when the same body part has a face contact on a
  * triangle owning that edge, or the same edge was already taken; a vertex contact when a face
  * or edge contact touches that vertex, or the vertex was already taken. A sphere rolling across
@@ -157,6 +191,14 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
             int is_edge = tf < SD_TRI_VERT0;
             int32_t id = is_edge ? wl->edge_id[t][tf - SD_TRI_EDGE0] : wl->vert_id[t][tf - SD_TRI_VERT0];
             int drop = 0;
+            if (pairs[p].kind == SD_PAIR_CT) {
+                int x_cut = is_line_cut(wl, t, f, m->normal[k]);
+                for (int q = from; q < to && !drop; q++)
+                    for (int kk = 0; kk < man[q].n && !drop; kk++)
+                        if (!(q == p && kk == k))
+                            drop = flat_mesh_drop(wl, t, is_edge, id, x_cut, pairs[q].b, man[q].feature[kk],
+                                                  man[q].normal[kk], q < p || (q == p && kk < k));
+            }
             for (int q = from; q < to && !drop; q++) {
                 const sd_manifold *o = &man[q];
                 int tq = pairs[q].b;
@@ -164,20 +206,7 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
                     if (q == p && kk == k) continue;
                     int fo = o->feature[kk];
                     int tfo = fo & ((1 << SD_TRI_FEATURE_BITS) - 1);
-                    if ((fo >> SD_TRI_FEATURE_BITS) != part) {
-                        /* a log on a seam of a flat floor (an edge shared by two coplanar
-                         * triangles): the seam is an artefact of the meshing. A contact of any
-                         * part of the log at the seam (a cut of its support line, or the seam
-                         * running under its side or end) is dropped when a triangle owning the
-                         * seam has a face contact; the two cuts of the support line at one seam
-                         * (a log across three or more triangles) are both dropped, the line's
-                         * ends (rims or boundary edges) carry the log */
-                        if (is_edge && wl->edge_flat[id] && tri_has_edge(wl, tq, id) &&
-                            (tfo == SD_TRI_FACE || (part >= SD_CYL_LINE_PART && (fo >> SD_TRI_FEATURE_BITS) >= SD_CYL_LINE_PART &&
-                                                    tri_feature_gid(wl, tq, fo) == gid)))
-                            drop = 1;
-                        continue;
-                    }
+                    if ((fo >> SD_TRI_FEATURE_BITS) != part) continue;
                     if (tfo == SD_TRI_FACE) {
                         drop = is_edge ? tri_has_edge(wl, tq, id) : tri_has_vert(wl, tq, id);
                     } else if (tfo < SD_TRI_VERT0) {
@@ -222,7 +251,7 @@ sd_status sd_contact_compute(sd_world *w)
     sd_law law = sd_law_make(&w->def.contact);
     long count = 0;
     const int nbb = w->bb.n;
-#pragma omp parallel for schedule(static) reduction(+ : count) if (nbb > SD_OMP_MIN_ITEMS)
+#pragma omp parallel for schedule(static) reduction(+ : count) if (nbb > w->def.parallel_min)
     for (int k = 0; k < nbb; k++) {
         const sd_pair *p = &w->bb.p[k];
         if (p->kind == SD_PAIR_SS) {
@@ -234,7 +263,7 @@ sd_status sd_contact_compute(sd_world *w)
         count += apply_manifold(w, &law, &m, p->a, p->b, 0, p->sqrt_m_eff, &w->bb.hist[p->off], p->cap, &w->bb.out[k]);
     }
     const int nb = b->n;
-#pragma omp parallel for schedule(static) reduction(+ : count) if (nb > SD_OMP_MIN_ITEMS)
+#pragma omp parallel for schedule(static) reduction(+ : count) if (nb > w->def.parallel_min)
     for (int i = 0; i < nb; i++) {
         int from = w->csr.bt_start[i], to = w->csr.bt_start[i + 1];
         if (from == to) continue;
@@ -255,7 +284,7 @@ void sd_contact_gather(sd_world *w)
 {
     sd_bodies *b = &w->b;
     const int n = b->n;
-#pragma omp parallel for schedule(static) if (n > SD_OMP_MIN_ITEMS)
+#pragma omp parallel for schedule(static) if (n > w->def.parallel_min)
     for (int i = 0; i < n; i++) {
         sd_vec3 f = v3(0, 0, 0), t = v3(0, 0, 0);
         if (b->fixed[i] && b->shape[i] == SD_SHAPE_SPHERE) {

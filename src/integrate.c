@@ -14,7 +14,7 @@ void sd_integrate(sd_world *w)
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
     const int n = b->n;
-#pragma omp parallel for schedule(static) reduction(| : moved) if (n > SD_OMP_MIN_ITEMS)
+#pragma omp parallel for schedule(static) reduction(| : moved) if (n > w->def.parallel_min)
     for (int i = 0; i < n; i++) {
         if (b->fixed[i]) continue;
         sd_vec3 f = v3_add(b->force[i], b->ext_force[i]);

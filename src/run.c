@@ -98,7 +98,7 @@ static void apply_fluid(run_ctx *c)
     const int n = b->n;
     const int capture = c->phase == PH_CAPTURE;
     const double h_d = c->h_d;
-#pragma omp parallel for schedule(static) if (n > SD_OMP_MIN_ITEMS)
+#pragma omp parallel for schedule(static) if (n > c->w->def.parallel_min)
     for (int i = 0; i < n; i++) {
         if (b->fixed[i]) continue;
         sd_fluid_element e;

@@ -21,6 +21,7 @@ sd_world_def sd_world_def_default(void)
     d.contact.tan_phi = 0.404;
     d.contact.cohesion = 0.0;
     d.threads = 0;
+    d.parallel_min = 2048;
     d.check_dt = 1;
     return d;
 }

@@ -63,9 +63,6 @@ typedef struct {
     double sqrt_m_eff; /* sqrt of the effective mass (SPEC §3), set at rebuild */
 } sd_pair;
 
-/* Below this many items a parallel loop costs more in start-up than it saves. */
-#define SD_OMP_MIN_ITEMS 2048
-
 enum { SD_PAIR_SS = 0, SD_PAIR_SC, SD_PAIR_CC, SD_PAIR_ST, SD_PAIR_CT, SD_PAIR_KINDS };
 
 typedef struct {
