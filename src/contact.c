@@ -9,6 +9,7 @@ void sd_pairlist_free(sd_pairlist *l)
 {
     free(l->p);
     free(l->out);
+    free(l->active);
     free(l->hist);
     memset(l, 0, sizeof(*l));
 }
@@ -95,7 +96,6 @@ static int sphere_sphere_fast(const sd_world *w, const sd_law *law, const sd_pai
     double d2 = v3_norm2(d);
     if (d2 >= rs * rs) {
         h->feature = -1;
-        out->f_a = out->t_a = out->t_b = v3(0, 0, 0);
         return 0;
     }
     double dist = sqrt(d2);
@@ -254,13 +254,17 @@ sd_status sd_contact_compute(sd_world *w)
 #pragma omp parallel for schedule(static) reduction(+ : count) if (nbb > w->def.parallel_min)
     for (int k = 0; k < nbb; k++) {
         const sd_pair *p = &w->bb.p[k];
+        int used;
         if (p->kind == SD_PAIR_SS) {
-            count += sphere_sphere_fast(w, &law, p, &w->bb.hist[p->off], &w->bb.out[k]);
-            continue;
+            used = sphere_sphere_fast(w, &law, p, &w->bb.hist[p->off], &w->bb.out[k]);
+        } else {
+            sd_manifold m;
+            narrow_bb(b, p, &m);
+            used = apply_manifold(w, &law, &m, p->a, p->b, 0, p->sqrt_m_eff, &w->bb.hist[p->off], p->cap,
+                                  &w->bb.out[k]);
         }
-        sd_manifold m;
-        narrow_bb(b, p, &m);
-        count += apply_manifold(w, &law, &m, p->a, p->b, 0, p->sqrt_m_eff, &w->bb.hist[p->off], p->cap, &w->bb.out[k]);
+        w->bb.active[k] = (uint8_t)(used > 0);
+        count += used;
     }
     const int nb = b->n;
 #pragma omp parallel for schedule(static) reduction(+ : count) if (nb > w->def.parallel_min)
@@ -272,8 +276,10 @@ sd_status sd_contact_compute(sd_world *w)
         if (multi > 1) sd_contact_mesh_dedup(&w->w, w->bt.p, w->bt_man, from, to);
         for (int k = from; k < to; k++) {
             const sd_pair *p = &w->bt.p[k];
-            count += apply_manifold(w, &law, &w->bt_man[k], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
-                                    &w->bt.out[k]);
+            int used = apply_manifold(w, &law, &w->bt_man[k], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off],
+                                      p->cap, &w->bt.out[k]);
+            w->bt.active[k] = (uint8_t)(used > 0);
+            count += used;
         }
     }
     w->contacts = count;
@@ -295,6 +301,7 @@ void sd_contact_gather(sd_world *w)
         }
         for (int k = w->csr.start[i]; k < w->csr.start[i + 1]; k++) {
             int e = w->csr.idx[k];
+            if (!w->bb.active[e >> 1]) continue;
             const sd_pair_out *o = &w->bb.out[e >> 1];
             if (e & 1) {
                 f = v3_sub(f, o->f_a);
@@ -305,6 +312,7 @@ void sd_contact_gather(sd_world *w)
             }
         }
         for (int k = w->csr.bt_start[i]; k < w->csr.bt_start[i + 1]; k++) {
+            if (!w->bt.active[k]) continue;
             f = v3_add(f, w->bt.out[k].f_a);
             t = v3_add(t, w->bt.out[k].t_a);
         }
@@ -314,6 +322,7 @@ void sd_contact_gather(sd_world *w)
     /* loads on the walls, in pair order (serial: few pairs, fixed order) */
     for (int t = 0; t < w->w.n; t++) w->w.force[t] = v3(0, 0, 0);
     for (int k = 0; k < w->bt.n; k++) {
+        if (!w->bt.active[k]) continue;
         int t = w->bt.p[k].b;
         w->w.force[t] = v3_sub(w->w.force[t], w->bt.out[k].f_a);
     }

@@ -226,6 +226,8 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l)
 {
     if (sd_grow((void **)&l->hist, &l->hcap, l->nh + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
     if (sd_grow((void **)&l->out, &l->out_cap, l->n + 1, sizeof(sd_pair_out))) return SD_ERR_NOMEM;
+    if (sd_grow((void **)&l->active, &l->active_cap, l->n + 1, 1)) return SD_ERR_NOMEM;
+    memset(l->active, 0, (size_t)l->n + 1);
     for (int k = 0; k < l->n; k++) {
         const sd_pair *p = &l->p[k];
         for (int s = 0; s < p->cap; s++) l->hist[p->off + s].feature = -1;

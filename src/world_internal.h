@@ -80,7 +80,8 @@ typedef struct {
     int n, cap;
     sd_pair *p;
     sd_pair_out *out;
-    int out_cap;
+    uint8_t *active; /* 1 when the pair touched in the last step (out[] valid) */
+    int out_cap, active_cap;
     int nh, hcap;
     sd_hist *hist;
 } sd_pairlist;
