@@ -4,6 +4,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -18,9 +19,10 @@
  * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
-_Static_assert(sizeof(struct sd_world) == 840, "struct sd_world changed: update io_checkpoint.c");
-_Static_assert(sizeof(sd_world_def) == 96, "sd_world_def changed: update io_checkpoint.c");
+_Static_assert(sizeof(struct sd_world) == 864, "struct sd_world changed: update io_checkpoint.c");
+_Static_assert(sizeof(sd_world_def) == 104, "sd_world_def changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_walls) == 88, "sd_walls changed: update io_checkpoint.c");
+_Static_assert(sizeof(sd_pairlist) == 56, "sd_pairlist changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_pair) == 24, "sd_pair changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_hist) == 32, "sd_hist changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_grid) == 72, "sd_grid changed: update io_checkpoint.c");
@@ -35,8 +37,8 @@ _Static_assert(sizeof(sd_tri) == 4 * sizeof(sd_vec3), "sd_tri must be four packe
 static const char magic[8] = {'S', 'A', 'B', 'O', 'D', 'E', 'M', 'C'};
 static const uint32_t endian_tag = 0x01020304u;
 static const double probe = -1.5;
-static const uint8_t type_sizes[8] = {sizeof(double), sizeof(sd_vec3), sizeof(sd_quat), sizeof(int32_t),
-                                      sizeof(int64_t), sizeof(sd_tri), 0, 0};
+static const uint8_t type_sizes[8] = {
+    sizeof(double), sizeof(sd_vec3), sizeof(sd_quat), sizeof(int32_t), sizeof(int64_t), sizeof(sd_tri), 0, 0};
 
 static long long fail_after = -1;
 
@@ -56,10 +58,10 @@ static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
 /* ---------------------------------------------------------------- writing ---- */
 
 typedef struct {
-    FILE *f;        /* NULL: only count (sizing a section) */
-    uint64_t hash;  /* FNV-1a of the payload so far */
-    uint64_t len;   /* payload bytes so far */
-    int err;        /* errno of the first failure */
+    FILE *f;       /* NULL: only count (sizing a section) */
+    uint64_t hash; /* FNV-1a of the payload so far */
+    uint64_t len;  /* payload bytes so far */
+    int err;       /* errno of the first failure */
 } writer;
 
 static void put(writer *wr, const void *p, size_t n)
@@ -119,6 +121,7 @@ static void sec_def(writer *wr, const sd_world *w, const void *ctx)
     put_f64(wr, d->contact.tan_phi);
     put_f64(wr, d->contact.cohesion);
     put_i32(wr, d->threads);
+    put_i32(wr, d->parallel_min);
     put_i32(wr, d->check_dt);
 }
 
@@ -285,8 +288,10 @@ static void sync_dir(const char *path)
 {
     const char *slash = strrchr(path, '/');
     char *dir;
-    if (!slash) dir = strdup(".");
-    else if (slash == path) dir = strdup("/");
+    if (!slash)
+        dir = strdup(".");
+    else if (slash == path)
+        dir = strdup("/");
     else {
         dir = malloc((size_t)(slash - path) + 1);
         if (dir) {
@@ -331,8 +336,10 @@ sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *e
     writer wr = {f, FNV_OFFSET, 0, 0};
     unsigned char hdr[HEADER_SIZE];
     make_header(hdr, 0, 0); /* placeholder: length and checksum filled in at the end */
-    if (fail_after >= 0 && fail_after < HEADER_SIZE) wr.err = ENOSPC;
-    else if (fwrite(hdr, 1, HEADER_SIZE, f) != HEADER_SIZE) wr.err = errno ? errno : EIO;
+    if (fail_after >= 0 && fail_after < HEADER_SIZE)
+        wr.err = ENOSPC;
+    else if (fwrite(hdr, 1, HEADER_SIZE, f) != HEADER_SIZE)
+        wr.err = errno ? errno : EIO;
 
     blob x = {extra, extra_len};
     section(&wr, "DEF ", sec_def, w, NULL);
@@ -387,8 +394,10 @@ static const void *take(cursor *c, size_t n)
 static void get(cursor *c, void *dst, size_t n)
 {
     const void *q = take(c, n);
-    if (q) memcpy(dst, q, n);
-    else memset(dst, 0, n);
+    if (q)
+        memcpy(dst, q, n);
+    else
+        memset(dst, 0, n);
 }
 
 static int32_t get_i32(cursor *c)
@@ -422,6 +431,8 @@ static sd_vec3 get_vec3(cursor *c)
     return v;
 }
 
+static int finite3(sd_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
 /* A count of elements of `elem` bytes that must still fit in the cursor. */
 static int get_count(cursor *c, size_t elem)
 {
@@ -442,7 +453,8 @@ typedef struct {
 #if defined(__GNUC__)
 __attribute__((format(printf, 2, 3)))
 #endif
-static sd_status fail(const rd_ctx *r, const char *fmt, ...)
+static sd_status
+fail(const rd_ctx *r, const char *fmt, ...)
 {
     if (r->msg && r->msglen > 0) {
         int k = snprintf(r->msg, r->msglen, "%s: ", r->path);
@@ -503,8 +515,8 @@ static void read_field(void *array, size_t elem, const char *name, void *ctx)
         file_field *f = &fc->ff[k];
         if (strcmp(f->name, name) != 0) continue;
         if (f->elem != elem) {
-            fc->st = fail(fc->r, "body field '%s' has %u-byte elements, this build uses %zu (incompatible build)",
-                          name, f->elem, elem);
+            fc->st = fail(fc->r, "body field '%s' has %u-byte elements, this build uses %zu (incompatible build)", name,
+                          f->elem, elem);
             return;
         }
         if (fc->n > 0) memcpy(*(void **)array, f->data, (size_t)fc->n * elem);
@@ -564,9 +576,12 @@ static sd_status read_pairs(const rd_ctx *r, cursor *c, sd_world *w, sd_pairlist
     if (c->bad) return SD_OK;
     if (sd_grow((void **)&l->p, &l->cap, n + 1, sizeof(sd_pair)) ||
         sd_grow((void **)&l->out, &l->out_cap, n + 1, sizeof(sd_pair_out)) ||
+        sd_grow((void **)&l->active, &l->active_cap, n + 1, 1) ||
         sd_grow((void **)&l->hist, &l->hcap, nh + 1, sizeof(sd_hist)))
         return SD_ERR_NOMEM;
+    memset(l->active, 0, (size_t)n + 1); /* out[] and active[] are rewritten by the next force pass */
     int nb = w->b.n, nt = w->w.n;
+    int next_off = 0; /* the slots of consecutive pairs follow each other (push_pair) */
     for (int k = 0; k < n; k++) {
         sd_pair *p = &l->p[k];
         p->a = get_i32(c);
@@ -576,14 +591,18 @@ static sd_status read_pairs(const rd_ctx *r, cursor *c, sd_world *w, sd_pairlist
         get(c, &p->kind, sizeof(p->kind));
         p->sqrt_m_eff = get_f64(c);
         if (c->bad) return SD_OK;
-        int ok = p->a >= 0 && p->a < nb && p->cap >= 1 && p->cap <= SD_MANIFOLD_MAX && p->off >= 0 &&
+        int ok = p->a >= 0 && p->a < nb && p->cap >= 1 && p->cap <= SD_MANIFOLD_MAX && p->off == next_off &&
                  p->off <= nh - p->cap;
-        if (bt) ok = ok && (p->kind == SD_PAIR_ST || p->kind == SD_PAIR_CT) && p->b >= 0 && p->b < nt &&
-                     (k == 0 || l->p[k - 1].a <= p->a);
-        else ok = ok && (p->kind == SD_PAIR_SS || p->kind == SD_PAIR_SC || p->kind == SD_PAIR_CC) && p->b >= 0 &&
-                  p->b < nb && p->b != p->a;
+        next_off += p->cap;
+        if (bt)
+            ok = ok && (p->kind == SD_PAIR_ST || p->kind == SD_PAIR_CT) && p->b >= 0 && p->b < nt &&
+                 (k == 0 || l->p[k - 1].a <= p->a);
+        else
+            ok = ok && (p->kind == SD_PAIR_SS || p->kind == SD_PAIR_SC || p->kind == SD_PAIR_CC) && p->b >= 0 &&
+                 p->b < nb && p->b != p->a;
         if (!ok) return fail(r, "section %s: pair %d is out of range", tag, k);
     }
+    if (next_off != nh) return fail(r, "section %s: %d history slots for pairs holding %d", tag, nh, next_off);
     if ((size_t)nh > (c->n - c->pos) / 28) {
         c->bad = 1;
         return SD_OK;
@@ -611,7 +630,7 @@ static sd_status read_tgrid(const rd_ctx *r, cursor *c, sd_world *w)
     g->nz = get_i32(c);
     g->lo = get_vec3(c);
     if (c->bad) return SD_OK;
-    if (!(g->cell > 0.0) || g->nx < 1 || g->ny < 1 || g->nz < 1 ||
+    if (!(g->cell > 0.0) || !isfinite(g->cell) || !finite3(g->lo) || g->nx < 1 || g->ny < 1 || g->nz < 1 ||
         (double)g->nx * g->ny * g->nz > (double)(INT_MAX / 8))
         return fail(r, "section TGRD: bad grid dimensions");
     int ncell = g->nx * g->ny * g->nz;
@@ -656,7 +675,8 @@ static sd_status derive(sd_world *w)
         w->csr.start[w->bb.p[k].a + 2]++;
         w->csr.start[w->bb.p[k].b + 2]++;
     }
-    for (int i = 0; i < n; i++) w->csr.start[i + 2] += w->csr.start[i + 1];
+    for (int i = 0; i < n; i++)
+        w->csr.start[i + 2] += w->csr.start[i + 1];
     for (int k = 0; k < w->bb.n; k++) {
         w->csr.idx[w->csr.start[w->bb.p[k].a + 1]++] = 2 * k;
         w->csr.idx[w->csr.start[w->bb.p[k].b + 1]++] = 2 * k + 1;
@@ -664,13 +684,28 @@ static sd_status derive(sd_world *w)
     /* body–triangle pairs are grouped by body in body order */
     int k = 0;
     for (int i = 0; i <= n; i++) {
-        while (k < w->bt.n && w->bt.p[k].a < i) k++;
+        while (k < w->bt.n && w->bt.p[k].a < i)
+            k++;
         w->csr.bt_start[i] = k;
     }
     /* the weld ids are a pure function of the vertices: the same as the saved run's (when the
      * walls are dirty, the next rebuild welds again anyway) */
     if (w->w.n > 0 && sd_walls_weld(&w->w)) return SD_ERR_NOMEM;
     return SD_OK;
+}
+
+/* What add_body guarantees of a body, so that a damaged file cannot hang or blow up the next
+ * rebuild (the checksum catches accidents; this catches a file made to pass it). */
+static int body_sane(const sd_bodies *b, int i)
+{
+    const sd_quat q = b->quat[i];
+    return finite3(b->pos[i]) && finite3(b->vel[i]) && finite3(b->omega[i]) && finite3(b->angmom[i]) && isfinite(q.w) &&
+           isfinite(q.x) && isfinite(q.y) && isfinite(q.z) && finite3(b->axis[i]) && finite3(b->force[i]) &&
+           finite3(b->torque[i]) && finite3(b->ext_force[i]) && finite3(b->pos_ref[i]) && finite3(b->axis_ref[i]) &&
+           isfinite(b->radius[i]) && b->radius[i] > 0.0 && isfinite(b->hl[i]) && b->hl[i] >= 0.0 &&
+           isfinite(b->mass[i]) && b->mass[i] > 0.0 && isfinite(b->inv_mass[i]) && b->inv_mass[i] > 0.0 &&
+           isfinite(b->inv_i_ax[i]) && b->inv_i_ax[i] > 0.0 && isfinite(b->inv_i_tr[i]) && b->inv_i_tr[i] > 0.0 &&
+           isfinite(b->bound_r[i]) && b->bound_r[i] > 0.0;
 }
 
 static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra, size_t *extra_len)
@@ -693,8 +728,11 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
     def.contact.tan_phi = get_f64(&c);
     def.contact.cohesion = get_f64(&c);
     def.threads = get_i32(&c);
+    def.parallel_min = get_i32(&c);
     def.check_dt = get_i32(&c);
     if ((st = close_section(r, &c, "DEF "))) return st;
+    if (!isfinite(def.dt) || !isfinite(def.margin) || !isfinite(def.t_reset))
+        return fail(r, "section DEF : invalid world definition");
     st = sd_world_create(&def, &w);
     if (st == SD_ERR_ARG) return fail(r, "section DEF : invalid world definition");
     if (st) return st;
@@ -731,8 +769,8 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
             goto out;
         }
         for (int i = 0; i < b->n; i++)
-            if (b->shape[i] > SD_SHAPE_CYLINDER || b->fixed[i] > 1) {
-                st = fail(r, "section BODY: body %d has a bad shape or fixed flag", i);
+            if (b->shape[i] > SD_SHAPE_CYLINDER || b->fixed[i] > 1 || !body_sane(b, i)) {
+                st = fail(r, "section BODY: body %d (gid %d) has a bad shape, flag or non-finite state", i, b->gid[i]);
                 goto out;
             }
     }
@@ -758,8 +796,9 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
         }
         if ((st = close_section(r, &c, "WALL"))) goto out;
         for (int t = 0; t < nt; t++)
-            if (wl->active[t] > 1) {
-                st = fail(r, "section WALL: bad active flag of triangle %d", t);
+            if (wl->active[t] > 1 || !finite3(wl->tri[t].v[0]) || !finite3(wl->tri[t].v[1]) ||
+                !finite3(wl->tri[t].v[2]) || !finite3(wl->tri[t].n) || !finite3(wl->force[t])) {
+                st = fail(r, "section WALL: triangle %d has a bad flag or non-finite vertices", t);
                 goto out;
             }
         if (wl->dirty != 0 && wl->dirty != 1) {
@@ -822,6 +861,10 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
     w->timers.other = get_f64(&c);
     w->timers.rebuilds = (long)get_i64(&c);
     if ((st = close_section(r, &c, "TIME"))) goto out;
+    if (!isfinite(w->time) || !isfinite(w->last_rebuild_time) || w->step < 0) {
+        st = fail(r, "section TIME: bad clock");
+        goto out;
+    }
     w->checked = 0; /* sd_world_check runs again at the next step; it passes as before */
 
     /* the driver's blob */
@@ -829,8 +872,10 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
     {
         uint64_t len = get_u64(&c);
         const void *data = NULL;
-        if (!c.bad && len <= c.n - c.pos) data = take(&c, (size_t)len);
-        else c.bad = 1;
+        if (!c.bad && len <= c.n - c.pos)
+            data = take(&c, (size_t)len);
+        else
+            c.bad = 1;
         if ((st = close_section(r, &c, "XTRA"))) goto out;
         if (pl->pos != pl->n) {
             st = fail(r, "%zu unexpected bytes after the last section", pl->n - pl->pos);
@@ -917,7 +962,8 @@ sd_status sd_checkpoint_read(const char *path, sd_world **out, void **extra, siz
     sd_status st = slurp(&r, &data, &size);
     if (st) return st;
 
-    if (size == 0) st = fail(&r, "empty file (not a checkpoint, or a write that never finished)");
+    if (size == 0)
+        st = fail(&r, "empty file (not a checkpoint, or a write that never finished)");
     else if (memcmp(data, magic, size < 8 ? size : 8) != 0)
         st = fail(&r, "not a sabodem checkpoint (bad magic)");
     else if (size < HEADER_SIZE)
@@ -933,7 +979,8 @@ sd_status sd_checkpoint_read(const char *path, sd_world **out, void **extra, siz
         memcpy(&plen, data + 32, 8);
         memcpy(&hash, data + 40, 8);
         int reserved_zero = 1;
-        for (int k = 48; k < HEADER_SIZE; k++) reserved_zero &= data[k] == 0;
+        for (int k = 48; k < HEADER_SIZE; k++)
+            reserved_zero &= data[k] == 0;
         if (tag != endian_tag) {
             st = fail(&r, "written on a machine of the other byte order (or corrupted header)");
         } else if (version != SD_CHECKPOINT_VERSION) {

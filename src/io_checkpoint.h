@@ -11,8 +11,13 @@
  * rebuild_every_step, the contact count and the timers; and an opaque blob of the driver's own
  * state (phase, accumulators, rng). Recomputed on reading, deterministically: the body–body
  * CSR and bt_start from the pair lists, the weld ids of the walls (a pure function of the
- * vertices), scratch arrays. Nothing of the restore forces a candidate rebuild: the next
- * rebuild happens at the step it would have happened at without the restart.
+ * vertices), scratch arrays. Not saved: the per-pair out[] and active[] (rewritten by the next
+ * force pass before the gather reads them), the body grid and cell ranges (rebuilt from scratch
+ * at every candidate rebuild), the history shear of empty slots (never read; written as 0).
+ * io_checkpoint.c asserts the sizes of the structures it serialises, so that a new field in
+ * sd_world, sd_world_def, sd_walls, sd_pairlist... fails the build until it is handled here.
+ * Nothing of the restore forces a candidate rebuild: the next rebuild happens at the step it
+ * would have happened at without the restart.
  *
  * File layout (all integers and doubles in the writer's native byte order, which the header
  * records; a reader of the other byte order refuses the file):

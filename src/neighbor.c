@@ -64,6 +64,9 @@ static void cell_range(const sd_grid *g, sd_vec3 lo, sd_vec3 hi, int32_t r[6])
 static sd_status grid_layout(sd_grid *g, sd_vec3 lo, sd_vec3 hi, double cell, long max_cells)
 {
     sd_vec3 ext = v3_sub(hi, lo);
+    /* a body flung to infinity (or NaN) would make the grid unbounded: report the blow-up */
+    if (!(isfinite(ext.x) && isfinite(ext.y) && isfinite(ext.z)) || !(cell > 0.0) || !isfinite(cell))
+        return SD_ERR_NONFINITE;
     for (;;) {
         double nx = floor(ext.x / cell) + 1, ny = floor(ext.y / cell) + 1, nz = floor(ext.z / cell) + 1;
         if (nx * ny * nz <= (double)max_cells) {

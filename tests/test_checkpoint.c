@@ -139,8 +139,7 @@ static void check_identical(sd_world *a, sd_world *b, const char *what)
     CHECK(sd_world_state_hash(a) == sd_world_state_hash(b));
     CHECK(a->b.n == b->b.n);
     CHECK(a->next_gid == b->next_gid);
-    if (a->next_gid == b->next_gid)
-        CHECK(memcmp(a->gid_map, b->gid_map, (size_t)a->next_gid * sizeof(int32_t)) == 0);
+    if (a->next_gid == b->next_gid) CHECK(memcmp(a->gid_map, b->gid_map, (size_t)a->next_gid * sizeof(int32_t)) == 0);
     field_list fa = {0}, fb = {0};
     sd_bodies_for_each_field(&a->b, collect_field, &fa);
     sd_bodies_for_each_field(&b->b, collect_field, &fb);
@@ -154,17 +153,15 @@ static void check_identical(sd_world *a, sd_world *b, const char *what)
     CHECK(pairs_equal(&a->bb, &b->bb));
     CHECK(pairs_equal(&a->bt, &b->bt));
     CHECK(a->w.n == b->w.n);
-    if (a->w.n == b->w.n && a->w.n > 0)
-        CHECK(memcmp(a->w.force, b->w.force, (size_t)a->w.n * sizeof(sd_vec3)) == 0);
-    if (check_failures != before) fprintf(stderr, "%s: restarted run differs\n", what);
-    else printf("%s: bit-identical (step %ld, %d bodies, %d+%d pairs, %ld rebuilds)\n", what, a->step, a->b.n,
-                a->bb.n, a->bt.n, a->timers.rebuilds);
+    if (a->w.n == b->w.n && a->w.n > 0) CHECK(memcmp(a->w.force, b->w.force, (size_t)a->w.n * sizeof(sd_vec3)) == 0);
+    if (check_failures != before)
+        fprintf(stderr, "%s: restarted run differs\n", what);
+    else
+        printf("%s: bit-identical (step %ld, %d bodies, %d+%d pairs, %ld rebuilds)\n", what, a->step, a->b.n, a->bb.n,
+               a->bt.n, a->timers.rebuilds);
 }
 
-static long steps_since_rebuild(const sd_world *w)
-{
-    return lround((w->time - w->last_rebuild_time) / w->def.dt);
-}
+static long steps_since_rebuild(const sd_world *w) { return lround((w->time - w->last_rebuild_time) / w->def.dt); }
 
 static void run(sd_world *w, long steps)
 {
@@ -312,9 +309,12 @@ static void test_restart(void)
     CHECK(has_shear(&w->bb));
     CHECK(has_shear(&w->bt)); /* tangential history is live */
     int kinds[SD_PAIR_KINDS] = {0};
-    for (int k = 0; k < w->bb.n; k++) kinds[w->bb.p[k].kind]++;
-    for (int k = 0; k < w->bt.n; k++) kinds[w->bt.p[k].kind]++;
-    for (int k = 0; k < SD_PAIR_KINDS; k++) CHECK(kinds[k] > 0);
+    for (int k = 0; k < w->bb.n; k++)
+        kinds[w->bb.p[k].kind]++;
+    for (int k = 0; k < w->bt.n; k++)
+        kinds[w->bt.p[k].kind]++;
+    for (int k = 0; k < SD_PAIR_KINDS; k++)
+        CHECK(kinds[k] > 0);
     printf("mid-interval checkpoint at step %ld, %ld steps after the last rebuild\n", w->step, steps_since_rebuild(w));
     restart_matches(w, 2000, "mid-interval restart");
 
@@ -331,8 +331,13 @@ static void test_restart(void)
             b->need_rebuild = 1;
             run(a, 1000);
             run(b, 1000);
-            printf("control: forcing one extra rebuild at the restart %s the state hash\n",
-                   sd_world_state_hash(a) != sd_world_state_hash(b) ? "changes" : "does not change");
+            /* the bodies' state may come out the same (the candidate sets are supersets of the
+             * contacts), but the comparison in check_identical sees the extra rebuild */
+            printf("control: one extra rebuild at the restart %s the state hash, rebuilds %ld vs %ld\n",
+                   sd_world_state_hash(a) != sd_world_state_hash(b) ? "changes" : "does not change", a->timers.rebuilds,
+                   b->timers.rebuilds);
+            CHECK(a->timers.rebuilds != b->timers.rebuilds ||
+                  memcmp(&a->last_rebuild_time, &b->last_rebuild_time, sizeof(double)) != 0);
         }
         sd_world_destroy(a);
         sd_world_destroy(b);
@@ -431,6 +436,41 @@ static void test_refused(void)
         check_refused(bad, "trailing byte", NULL);
         free(longer);
     }
+    /* a damaged payload whose checksum was made to match (a bug, or a crafted file): every
+     * count and index is range-checked, so the read refuses it or gives a usable world */
+    {
+        sd_rng rng = {42};
+        int refused = 0, accepted = 0;
+        for (int k = 0; k < 600; k++) {
+            unsigned char *m = malloc(n);
+            if (!m) break;
+            memcpy(m, data, n);
+            int nflip = 1 + (int)(sd_rng_next(&rng) % 3);
+            for (int f = 0; f < nflip; f++) {
+                size_t at = 64 + (size_t)(sd_rng_next(&rng) % (n - 64));
+                m[at] = (k & 1) ? (unsigned char)(m[at] ^ (1u << (sd_rng_next(&rng) % 8)))
+                                : (unsigned char)sd_rng_next(&rng);
+            }
+            uint64_t h = 1469598103934665603ULL;
+            for (size_t q = 64; q < n; q++) {
+                h ^= m[q];
+                h *= 1099511628211ULL;
+            }
+            memcpy(m + 40, &h, 8);
+            write_all(bad, m, n);
+            free(m);
+            r = NULL;
+            sd_status st = sd_checkpoint_read(bad, &r, NULL, NULL, NULL, 0);
+            CHECK(st == SD_OK || st == SD_ERR_FORMAT);
+            CHECK((st == SD_OK) == (r != NULL));
+            if (st == SD_OK)
+                accepted++;
+            else
+                refused++;
+            sd_world_destroy(r);
+        }
+        printf("payload damaged behind a matching checksum: %d refused, %d read\n", refused, accepted);
+    }
     free(data);
 
     /* a missing file is an I/O error, not a format error */
@@ -519,6 +559,6 @@ int main(void)
     test_restart();
     test_refused();
     test_failed_write();
-    if (!getenv("KEEP")) remove_dir(); else printf("kept %s\n", dir);
+    remove_dir();
     return check_report("test_checkpoint");
 }

@@ -125,8 +125,8 @@ static void test_lying(void)
     double fmax_dev = 0.0, wmax = 0.0;
     for (int k = 0; k < 50; k++) {
         CHECK(run_for(w, 0.01));
-        sd_vec3 f = sd_world_group_force(w, 0);
-        double dev = fabs(f.z - m * G) / (m * G);
+        sd_vec3 f = sd_world_group_force(w, 0); /* force on the floor: -support */
+        double dev = fabs(-f.z - m * G) / (m * G);
         if (dev > fmax_dev) fmax_dev = dev;
         sd_body_state b = body(w, id);
         double wn = v3_norm(b.omega);
@@ -152,21 +152,41 @@ static void test_lying(void)
 static void test_standing(void)
 {
     double m = log_mass(), hl = 0.5 * LEN_LOG;
-    {
+    for (int tilted = 0; tilted < 2; tilted++) {
         sd_world *w = make_world(v3(0, 0, -G), 1e-5, 0.404);
         add_floor(w, -0.1, 0.1, -0.1, 0.1, 2, 2);
-        /* standing on its end, centre off the seams, released 0.1 mm above the floor */
-        int id = add_log(w, v3(0.02, 0.03, hl + 1e-4), v3(0, 0, 1), v3(0, 0, 0), v3(0, 0, 0), 0);
-        CHECK(run_for(w, 0.4));
+        /* standing on its end, centre off the seams, released 0.1 mm above the floor. The second
+         * one is released 2 deg from vertical (below the tipping angle atan(r/hl) = 5.7 deg): it
+         * rocks from rim to rim (one contact at a time, SPEC case 8) and must not fall over; a
+         * slender block rocks long (Housner: 3 % of the energy lost per impact), so only the bound
+         * on the tilt is checked */
+        double ps = tilted ? 2.0 * M_PI / 180.0 : 0.0;
+        int id = add_log(w, v3(0.02, 0.03, hl + 1e-4 + R_LOG * sin(ps)), v3(sin(ps), 0, cos(ps)), v3(0, 0, 0),
+                         v3(0, 0, 0), 0);
+        double tilt_max = 0.0;
+        for (int k = 0; k < 100; k++) {
+            CHECK(run_for(w, 0.005));
+            sd_body_state b = body(w, id);
+            double tl = hypot(b.axis.x, b.axis.y);
+            if (k >= 20 && tl > tilt_max) tilt_max = tl;
+        }
         sd_body_state b = body(w, id);
         sd_vec3 f = sd_world_group_force(w, 0);
-        double tilt = sqrt(b.axis.x * b.axis.x + b.axis.y * b.axis.y);
-        printf("2 standing: tilt %.2e, z - (hl - mg/kn) %.2e m, support/mg-1 %.2e, |v| %.2e\n", tilt,
-               b.pos.z - (hl - m * G / KN), f.z / (m * G) - 1.0, v3_norm(b.vel));
-        CHECK(tilt < 1e-3);
-        CHECK_NEAR(b.pos.z, hl - m * G / KN, 1e-7);
-        CHECK_REL(f.z, m * G, 0.005);
-        CHECK(v3_norm(b.vel) < 1e-5);
+        double tilt = hypot(b.axis.x, b.axis.y);
+        printf("2 standing (released %.0f deg from vertical): tilt %.2e (max over 0.1-0.5 s %.2e), z - (hl - mg/kn) "
+               "%.2e m, support/mg-1 %.2e, |v| %.2e, contacts %ld\n",
+               ps * 180.0 / M_PI, tilt, tilt_max, b.pos.z - (hl - m * G / KN), -f.z / (m * G) - 1.0, v3_norm(b.vel),
+               sd_world_contact_count(w));
+        if (!tilted) {
+            CHECK(tilt_max < 1e-3);
+            CHECK_NEAR(b.pos.z, hl - m * G / KN, 1e-7);
+            CHECK_REL(-f.z, m * G, 0.005);
+            CHECK(v3_norm(b.vel) < 1e-5);
+        } else {
+            CHECK(tilt_max < atan(R_LOG / hl));
+            CHECK(b.pos.z > hl * cos(tilt_max) - 1e-4);
+        }
+        CHECK(sd_world_contact_count(w) == 1);
         sd_world_destroy(w);
     }
     {
@@ -227,7 +247,7 @@ static void run_slope(int across, double tan_phi)
             ts[ns] = t;
             xs[ns] = b.pos.x;
             ns++;
-            double dev = fabs(sd_world_group_force(w, 0).z + 0.0) / fn - 1.0;
+            double dev = -sd_world_group_force(w, 0).z / fn - 1.0;
             if (fabs(dev) > fn_dev) fn_dev = fabs(dev);
         }
         if (across) {
@@ -252,7 +272,7 @@ static void run_slope(int across, double tan_phi)
     CHECK(fn_dev < 0.02);
     if (across) {
         CHECK(slip_max < 0.01);
-        CHECK(wperp < 1e-3);
+        CHECK(wperp < 1e-4 * b.omega.y); /* no yaw or pitch beside the rolling */
         CHECK_NEAR(b.axis.y, 1.0, 1e-6);
     } else {
         CHECK(wperp < 1e-2);
@@ -278,12 +298,12 @@ static void test_sphere_on_end(void)
         sd_vec3 f = sd_world_group_force(w, 0);
         printf("4 sphere on end-face centre (log on floor): F_s/m_s g - 1 = %.2e, |F_s,xy| %.1e N, |v_s| %.2e, floor/((m+m_s)g) "
                "- 1 = %.2e, log tilt %.1e\n",
-               s.force.z / (ms * G) - 1.0, hypot(s.force.x, s.force.y), v3_norm(s.vel), f.z / ((m + ms) * G) - 1.0,
+               s.force.z / (ms * G) - 1.0, hypot(s.force.x, s.force.y), v3_norm(s.vel), -f.z / ((m + ms) * G) - 1.0,
                hypot(l.axis.x, l.axis.y));
         CHECK_REL(s.force.z, ms * G, 0.005);
         CHECK(hypot(s.force.x, s.force.y) < 1e-3 * ms * G);
         CHECK(v3_norm(s.vel) < 1e-5);
-        CHECK_REL(f.z, (m + ms) * G, 0.005);
+        CHECK_REL(-f.z, (m + ms) * G, 0.005);
         CHECK(hypot(l.axis.x, l.axis.y) < 1e-3);
         sd_world_destroy(w);
     }
@@ -345,8 +365,8 @@ static void test_free_spin(void)
     sd_world *w = make_world(v3(0, 0, 0), 1e-5, 0.404);
     double m = log_mass(), itr = log_itr(), iax = 0.5 * m * R_LOG * R_LOG;
     sd_vec3 a0 = v3_normalize(v3(0.3, -0.5, 0.8));
-    sd_vec3 om0 = v3(4.0, 2.5, -1.0);
-    om0 = v3_madd(om0, a0, 60.0); /* fast spin about the axis plus a tumbling part */
+    sd_vec3 om0 = v3(40.0, 25.0, -10.0);
+    om0 = v3_madd(om0, a0, 300.0 - v3_dot(om0, a0)); /* fast spin about the axis plus tumbling */
     int id = add_log(w, v3(0.1, 0.2, 0.3), a0, v3(0.01, 0.0, -0.02), om0, 0);
     sd_vec3 L0 = v3_madd(v3_scale(om0, itr), a0, (iax - itr) * v3_dot(om0, a0));
     double ke0 = sd_world_kinetic_energy(w);
@@ -379,7 +399,7 @@ static void test_free_spin(void)
     CHECK_REL(ke0, ke_th, 1e-14);
     CHECK(aerr < 1e-9);
     CHECK(spin_err < 1e-11);
-    CHECK(turns > 10.0);
+    CHECK(turns > 5.0);
     sd_world_destroy(w);
 }
 
@@ -451,6 +471,6 @@ int main(void)
     test_free_spin();
     pipe_impact(0.0, 0.404, 0.01);
     pipe_impact(0.03, 0.404, 0.03);
-    pipe_impact(0.03, 0.0, 0.03);
+    pipe_impact(0.03, 0.0, 0.01);
     return check_report("test_logs");
 }
