@@ -114,14 +114,20 @@ static void apply_fluid(run_ctx *c)
     }
 }
 
-static void update_h_d(run_ctx *c)
+double sd_run_capture_depth(const sd_scenario *s, const sd_world *w)
 {
-    const sd_bodies *b = &c->w->b;
-    double h = c->s->water_h, xd = c->s->x_dam, lo = xd - c->s->water_probe;
-    for (int i = 0; i < b->n; i++)
-        if (!b->fixed[i] && b->pos[i].x >= lo && b->pos[i].x <= xd && b->pos[i].z > h) h = b->pos[i].z;
-    c->h_d = h;
+    const sd_bodies *b = &w->b;
+    double h = s->water_h, xd = s->x_dam, lo = xd - s->water_probe;
+    for (int i = 0; i < b->n; i++) {
+        if (b->fixed[i] || b->pos[i].x < lo || b->pos[i].x > xd || b->pos[i].z <= h) continue;
+        /* the deposit sets the pond level; a log floating on the pond does not (docs/physics.md) */
+        if (!s->water_hd_floating && b->mass[i] <= s->water_rho * body_volume(b, i)) continue;
+        h = b->pos[i].z;
+    }
+    return h;
 }
+
+static void update_h_d(run_ctx *c) { c->h_d = sd_run_capture_depth(c->s, c->w); }
 
 static void remove_passed(run_ctx *c)
 {

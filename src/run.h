@@ -28,6 +28,11 @@ typedef struct {
 } sd_run_result;
 
 /* Build and run; returns 0 on success, 1 on a failed run, 2 on bad input, 130 when stopped. */
+/* Capture-phase depth h_D (SPEC §5, eqs 51-53): the highest centre among moving elements
+ * within water.probe upstream of the dam face, never below h. Elements lighter than water
+ * (floating logs) are left out unless water.h_d_floating is set. */
+double sd_run_capture_depth(const sd_scenario *s, const sd_world *w);
+
 int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *res);
 
 #endif

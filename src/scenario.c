@@ -82,6 +82,7 @@ static const sd_param params[] = {
     {"water.rho", P_DOUBLE, OFF(water_rho), 0, 0, "kg/m^3", 0, INF, 0, "water density ρ"},
     {"water.c_d", P_DOUBLE, OFF(water_cd), 0, 0, "-", 0, INF, 0, "drag coefficient C_D"},
     {"water.probe", P_DOUBLE, OFF(water_probe), 0, 0, "m", 0, INF, 1, "capture-phase probe length upstream of the dam"},
+    {"water.h_d_floating", P_BOOL, OFF(water_hd_floating), 0, 0, "-", 0, 1, 0, "let elements lighter than water (logs) set the capture depth h_D (the paper's literal rule: a log buoyed to h_D lifts h_D with it, without bound; see docs/physics.md)"},
     {"phases.packing_time", P_DOUBLE, OFF(packing_time), 0, 0, "s", 0, INF, 0, "packing (drop) time"},
     {"phases.flow_limit", P_DOUBLE, OFF(flow_limit), 0, 0, "s", 0, INF, 1, "longest flow phase"},
     {"phases.capture_limit", P_DOUBLE, OFF(capture_limit), 0, 0, "s", 0, INF, 1, "capture time limit (reconstructed 6 s)"},

@@ -59,6 +59,7 @@ typedef struct {
     /* water */
     int water_on;
     double water_u, water_h, water_rho, water_cd, water_probe;
+    int water_hd_floating; /* floating elements count in h_D (default 0: only those denser than water) */
     /* phases */
     double packing_time, capture_limit, quiet_time, ke_fraction, flow_limit;
     /* output */

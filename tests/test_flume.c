@@ -108,6 +108,42 @@ static void test_floating_log(void)
     sd_world_destroy(w);
 }
 
+/* Capture depth h_D: a sphere (SG 1.9) resting 50 mm up within the probe sets it; a log
+ * (SG 0.8) higher up does not, unless water.h_d_floating asks for the paper's literal rule;
+ * elements outside the probe or passed the dam face never count; h_D never falls below h. */
+static void test_capture_depth(void)
+{
+    sd_scenario s;
+    sd_scenario_default(&s);
+    sd_world *w;
+    CHECK(sd_world_create(&s.world, &w) == SD_OK);
+    CHECK_NEAR(sd_run_capture_depth(&s, w), s.water_h, 0.0); /* empty: h */
+    sd_sphere_def sp = sd_sphere_def_default();
+    sp.radius = 0.005;
+    sp.density = 1900;
+    sp.pos = v3(s.x_dam - 0.05, 0.1, 0.050);
+    sd_world_add_sphere(w, &sp);
+    sp.pos = v3(s.x_dam - s.water_probe - 0.01, 0.1, 0.300); /* upstream of the probe */
+    sd_world_add_sphere(w, &sp);
+    sp.pos = v3(s.x_dam + 0.01, 0.1, 0.250); /* passed the face */
+    sd_world_add_sphere(w, &sp);
+    sd_cylinder_def c = sd_cylinder_def_default();
+    c.radius = 0.005;
+    c.length = 0.1;
+    c.density = 800;
+    c.axis = v3(0, 1, 0);
+    c.pos = v3(s.x_dam - 0.03, 0.15, 0.200);
+    sd_world_add_cylinder(w, &c);
+    CHECK_NEAR(sd_run_capture_depth(&s, w), 0.050, 1e-15);
+    s.water_hd_floating = 1;
+    CHECK_NEAR(sd_run_capture_depth(&s, w), 0.200, 1e-15);
+    s.water_hd_floating = 0;
+    s.water_rho = 2000; /* a denser fluid: the spheres float too, h_D falls back to h */
+    CHECK_NEAR(sd_run_capture_depth(&s, w), s.water_h, 0.0);
+    sd_world_destroy(w);
+    sd_scenario_free(&s);
+}
+
 /* SPEC §8 layout: 4 columns at y = 0.048, 0.116, 0.184, 0.252 m; top beam underside 0.118 m;
  * intermediate beam underside at ℓ_V = 30, 40, 50 mm, none for ℓ/d_max = 5.9. */
 static void test_dam_layout(void)
@@ -149,6 +185,7 @@ int main(void)
 {
     test_dam_layout();
     test_floating_log();
+    test_capture_depth();
     test_reduced_flume();
     return check_report("test_flume");
 }
