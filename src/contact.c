@@ -3,7 +3,12 @@
  * fixed order so that 1 and N threads give the same bits. */
 #include <string.h>
 
+#include "contact_law.h"
 #include "world_internal.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 void sd_pairlist_free(sd_pairlist *l)
 {
@@ -44,8 +49,8 @@ static int narrow_bt(const sd_bodies *b, const sd_walls *wl, const sd_pair *p, s
 }
 
 /* Apply the law to every point of a manifold, matching history slots by feature. */
-static int apply_manifold(const sd_world *w, const sd_law *law, const sd_manifold *m, int ia, int ib,
-                          int b_is_static, double sqm, sd_hist *slots, int cap, sd_pair_out *out)
+static int apply_manifold(const sd_world *w, const sd_law *law, const sd_manifold *m, int ia, int ib, int b_is_static,
+                          double sqm, sd_hist *slots, int cap, sd_pair_out *out)
 {
     const sd_bodies *b = &w->b;
     sd_hist old[SD_MANIFOLD_MAX];
@@ -245,26 +250,71 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
     }
 }
 
+/* One thread (or too few pairs to split): the body-body forces are added to the bodies as
+ * each pair is computed, in pair order, which is the order the gather would sum them in, so
+ * the bits are the same as with the parallel compute-then-gather path. */
+static int bb_fused(const sd_world *w)
+{
+#ifdef _OPENMP
+    if (omp_get_max_threads() > 1 && w->bb.n > w->def.parallel_min) return 0;
+#endif
+    (void)w;
+    return 1;
+}
+
+static long bb_fused_pass(sd_world *w, const sd_law *law)
+{
+    sd_bodies *b = &w->b;
+    long count = 0;
+    for (int i = 0; i < b->n; i++)
+        b->force[i] = b->torque[i] = v3(0, 0, 0);
+    const int nbb = w->bb.n;
+    for (int k = 0; k < nbb; k++) {
+        const sd_pair *p = &w->bb.p[k];
+        sd_pair_out o;
+        int used;
+        if (p->kind == SD_PAIR_SS) {
+            used = sphere_sphere_fast(w, law, p, &w->bb.hist[p->off], &o);
+        } else {
+            sd_manifold m;
+            narrow_bb(b, p, &m);
+            used = apply_manifold(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, &w->bb.hist[p->off], p->cap, &o);
+        }
+        if (!used) continue;
+        count += used;
+        const int a = p->a, c = p->b;
+        b->force[a] = v3_add(b->force[a], o.f_a);
+        b->torque[a] = v3_add(b->torque[a], o.t_a);
+        b->force[c] = v3_sub(b->force[c], o.f_a);
+        b->torque[c] = v3_add(b->torque[c], o.t_b);
+    }
+    return count;
+}
+
 sd_status sd_contact_compute(sd_world *w)
 {
     const sd_bodies *b = &w->b;
     sd_law law = sd_law_make(&w->def.contact);
     long count = 0;
     const int nbb = w->bb.n;
+    if (bb_fused(w)) {
+        count = bb_fused_pass(w, &law);
+    } else {
 #pragma omp parallel for schedule(static) reduction(+ : count) if (nbb > w->def.parallel_min)
-    for (int k = 0; k < nbb; k++) {
-        const sd_pair *p = &w->bb.p[k];
-        int used;
-        if (p->kind == SD_PAIR_SS) {
-            used = sphere_sphere_fast(w, &law, p, &w->bb.hist[p->off], &w->bb.out[k]);
-        } else {
-            sd_manifold m;
-            narrow_bb(b, p, &m);
-            used = apply_manifold(w, &law, &m, p->a, p->b, 0, p->sqrt_m_eff, &w->bb.hist[p->off], p->cap,
-                                  &w->bb.out[k]);
+        for (int k = 0; k < nbb; k++) {
+            const sd_pair *p = &w->bb.p[k];
+            int used;
+            if (p->kind == SD_PAIR_SS) {
+                used = sphere_sphere_fast(w, &law, p, &w->bb.hist[p->off], &w->bb.out[k]);
+            } else {
+                sd_manifold m;
+                narrow_bb(b, p, &m);
+                used = apply_manifold(w, &law, &m, p->a, p->b, 0, p->sqrt_m_eff, &w->bb.hist[p->off], p->cap,
+                                      &w->bb.out[k]);
+            }
+            w->bb.active[k] = (uint8_t)(used > 0);
+            count += used;
         }
-        w->bb.active[k] = (uint8_t)(used > 0);
-        count += used;
     }
     const int nb = b->n;
 #pragma omp parallel for schedule(static) reduction(+ : count) if (nb > w->def.parallel_min)
@@ -272,12 +322,13 @@ sd_status sd_contact_compute(sd_world *w)
         int from = w->csr.bt_start[i], to = w->csr.bt_start[i + 1];
         if (from == to) continue;
         int multi = 0;
-        for (int k = from; k < to; k++) multi += narrow_bt(b, &w->w, &w->bt.p[k], &w->bt_man[k]) > 0;
+        for (int k = from; k < to; k++)
+            multi += narrow_bt(b, &w->w, &w->bt.p[k], &w->bt_man[k]) > 0;
         if (multi > 1) sd_contact_mesh_dedup(&w->w, w->bt.p, w->bt_man, from, to);
         for (int k = from; k < to; k++) {
             const sd_pair *p = &w->bt.p[k];
-            int used = apply_manifold(w, &law, &w->bt_man[k], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off],
-                                      p->cap, &w->bt.out[k]);
+            int used = apply_manifold(w, &law, &w->bt_man[k], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
+                                      &w->bt.out[k]);
             w->bt.active[k] = (uint8_t)(used > 0);
             count += used;
         }
@@ -290,6 +341,7 @@ void sd_contact_gather(sd_world *w)
 {
     sd_bodies *b = &w->b;
     const int n = b->n;
+    const int fused = bb_fused(w);
 #pragma omp parallel for schedule(static) if (n > w->def.parallel_min)
     for (int i = 0; i < n; i++) {
         sd_vec3 f = v3(0, 0, 0), t = v3(0, 0, 0);
@@ -299,18 +351,22 @@ void sd_contact_gather(sd_world *w)
             b->torque[i] = t;
             continue;
         }
-        for (int k = w->csr.start[i]; k < w->csr.start[i + 1]; k++) {
-            int e = w->csr.idx[k];
-            if (!w->bb.active[e >> 1]) continue;
-            const sd_pair_out *o = &w->bb.out[e >> 1];
-            if (e & 1) {
-                f = v3_sub(f, o->f_a);
-                t = v3_add(t, o->t_b);
-            } else {
-                f = v3_add(f, o->f_a);
-                t = v3_add(t, o->t_a);
+        if (fused) { /* body-body part already summed, in the same order */
+            f = b->force[i];
+            t = b->torque[i];
+        } else
+            for (int k = w->csr.start[i]; k < w->csr.start[i + 1]; k++) {
+                int e = w->csr.idx[k];
+                if (!w->bb.active[e >> 1]) continue;
+                const sd_pair_out *o = &w->bb.out[e >> 1];
+                if (e & 1) {
+                    f = v3_sub(f, o->f_a);
+                    t = v3_add(t, o->t_b);
+                } else {
+                    f = v3_add(f, o->f_a);
+                    t = v3_add(t, o->t_a);
+                }
             }
-        }
         for (int k = w->csr.bt_start[i]; k < w->csr.bt_start[i + 1]; k++) {
             if (!w->bt.active[k]) continue;
             f = v3_add(f, w->bt.out[k].f_a);
@@ -320,7 +376,8 @@ void sd_contact_gather(sd_world *w)
         b->torque[i] = t;
     }
     /* loads on the walls, in pair order (serial: few pairs, fixed order) */
-    for (int t = 0; t < w->w.n; t++) w->w.force[t] = v3(0, 0, 0);
+    for (int t = 0; t < w->w.n; t++)
+        w->w.force[t] = v3(0, 0, 0);
     for (int k = 0; k < w->bt.n; k++) {
         if (!w->bt.active[k]) continue;
         int t = w->bt.p[k].b;

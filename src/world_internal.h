@@ -163,10 +163,7 @@ typedef struct {
     double k_n, k_s, c_n_factor, c_s_factor, tan_phi, cohesion; /* c = factor * sqrt(m*) */
 } sd_law;
 sd_law sd_law_make(const sd_contact_def *d);
-/* Force on A from one contact; updates the shear spring in place. Returns the normal force.
- * sqrt_m_eff = sqrt(m_i m_j / (m_i + m_j)), or sqrt(m_i) against a fixed element. */
-double sd_contact_law(const sd_law *law, double sqrt_m_eff, sd_vec3 n, double overlap, sd_vec3 v_rel,
-                      double dt, sd_vec3 *shear, sd_vec3 *force_a);
+/* sd_contact_law (contact_law.h, inline in the contact loop): force on A from one contact. */
 
 /* contact.c */
 sd_status sd_contact_compute(sd_world *w);
