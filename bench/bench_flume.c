@@ -71,6 +71,40 @@ static double phase(sd_world *w, const char *name, long steps, int n)
     return ps;
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Bulk quantities for the cross-check with LAMMPS (bench/crosscheck.sh): mean and 95th
+ * percentile of the centre heights, sphere-sphere contacts per sphere by an all-pairs check
+ * (what LAMMPS's compute contact/atom counts: walls left out), the front (max x). */
+static void bulk(sd_world *w, const char *name, int n)
+{
+    double *z = malloc((size_t)n * sizeof(double));
+    sd_body_state *s = malloc((size_t)n * sizeof(sd_body_state));
+    if (!z || !s) exit(1);
+    double zsum = 0, xmax = -1e300;
+    for (int i = 0; i < n; i++) {
+        sd_world_body(w, i, &s[i]);
+        z[i] = s[i].pos.z;
+        zsum += z[i];
+        if (s[i].pos.x > xmax) xmax = s[i].pos.x;
+    }
+    long touching = 0;
+    for (int i = 0; i < n; i++)
+        for (int j = i + 1; j < n; j++) {
+            double rs = s[i].radius + s[j].radius;
+            if (v3_norm2(v3_sub(s[i].pos, s[j].pos)) < rs * rs) touching++;
+        }
+    qsort(z, (size_t)n, sizeof(double), cmp_double);
+    printf("BULK %-7s mean_z %.5f z95 %.5f contacts_per_sphere %.3f xmax %.4f\n", name, zsum / n, z[(int)(0.95 * (n - 1))],
+           2.0 * (double)touching / n, xmax);
+    free(z);
+    free(s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -103,6 +137,7 @@ int main(int argc, char **argv)
     printf("spheres %d threads %d\n", n, threads);
     phase(w, "drop", steps[0], n);
     phase(w, "settle", steps[1], n);
+    bulk(w, "settle", n);
     if (settled) {
         FILE *f = fopen(settled, "w");
         if (f) {
@@ -119,6 +154,7 @@ int main(int argc, char **argv)
     phase(w, "dense", steps[2], n);
     sd_world_set_group_active(w, 3, 0);
     phase(w, "flow", steps[3], n);
+    bulk(w, "flow", n);
     double cn = 2.0 * (double)sd_world_contact_count(w) / n;
     printf("contacts per sphere (incl. walls) at end: %.3f\n", cn);
     sd_world_destroy(w);
