@@ -47,7 +47,10 @@ for p in 1 2; do
   ld=$(awk '{print $1}' "$work/l$p" | median); lf=$(awk '{print $2}' "$work/l$p" | median)
   sd=$(awk '{print $1}' "$work/s$p" | median); sf=$(awk '{print $2}' "$work/s$p" | median)
   printf "%d thread(s)/rank(s), median of %d: dense  sabodem %.3e  LAMMPS %.3e  ratio %.2f | flow  sabodem %.3e  LAMMPS %.3e  ratio %.2f  (particle-steps/s)\n" \
-    "$p" "$REPEAT" "$sd" "$ld" "$(echo "$sd / $ld" | bc -l)" "$sf" "$lf" "$(echo "$sf / $lf" | bc -l)" | tee -a "$out/side_by_side.txt"
+    "$p" "$REPEAT" "$sd" "$ld" "$(awk -v a="$sd" -v b="$ld" 'BEGIN {print a / b}')" "$sf" "$lf" \
+    "$(awk -v a="$sf" -v b="$lf" 'BEGIN {print a / b}')" | tee -a "$out/side_by_side.txt"
 done
 cat "$work/sab.txt" >> "$out/side_by_side.txt"
-./build-bench/bench_scale 2000 --threads 1 | tee "$out/scaling.txt"
+# cost per particle-step against N: the same settled bed tiled to 1e3 .. 1e6 spheres
+./build-bench/bench_scale "$work/settled.data" 2000 --big --threads 1 | tee "$out/scaling.txt"
+./build-bench/bench_scale "$work/settled.data" 2000 --big --threads 2 | tee -a "$out/scaling.txt"

@@ -3,7 +3,7 @@
 # README's quick start, the Makefile and CI alike.
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libyaml-dev python3 python3-matplotlib python3-numpy)
-if [ "${1:-}" = "--bench" ]; then pkgs+=(lammps openmpi-bin bc); fi
+if [ "${1:-}" = "--bench" ]; then pkgs+=(lammps openmpi-bin); fi
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
