@@ -250,19 +250,39 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
     }
 }
 
-/* One thread (or too few pairs to split): the body-body forces are added to the bodies as
- * each pair is computed, in pair order, which is the order the gather would sum them in, so
- * the bits are the same as with the parallel compute-then-gather path. */
-static int bb_fused(const sd_world *w)
+/* Body-body forces are added to the bodies in pair order: each body's force is the sum of its
+ * pairs' contributions in ascending pair index, whatever the thread count, so 1 and N threads
+ * give the same bits.
+ * One thread: one pass over the pairs, adding as it goes.
+ * T threads: the bodies are split into T equal index ranges (the store is sorted by cell, so
+ * a range is a region of space) and thread t owns range t. Pass 1 computes, once each, the
+ * pairs whose two bodies have different owners ("cross" pairs, a thin layer at the range
+ * boundaries) into the pair's own slot, and finds for every owner the span of pair indices
+ * touching its bodies. Pass 2: each thread walks its span in ascending order, computing the
+ * pairs it owns both sides of and adding them, and adding the stored cross pairs to its side.
+ * Every pair is computed exactly once, and its history slot written by one thread only. */
+static int pair_force(const sd_world *w, const sd_law *law, int k, sd_pair_out *o)
 {
-#ifdef _OPENMP
-    if (omp_get_max_threads() > 1 && w->bb.n > w->def.parallel_min) return 0;
-#endif
-    (void)w;
-    return 1;
+    const sd_pair *p = &w->bb.p[k];
+    sd_hist *h = &w->bb.hist[p->off];
+    if (p->kind == SD_PAIR_SS) return sphere_sphere_fast(w, law, p, h, o);
+    sd_manifold m;
+    narrow_bb(&w->b, p, &m);
+    return apply_manifold(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, o);
 }
 
-static long bb_fused_pass(sd_world *w, const sd_law *law)
+static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
+{
+    if (as_b) {
+        b->force[i] = v3_sub(b->force[i], o->f_a);
+        b->torque[i] = v3_add(b->torque[i], o->t_b);
+    } else {
+        b->force[i] = v3_add(b->force[i], o->f_a);
+        b->torque[i] = v3_add(b->torque[i], o->t_a);
+    }
+}
+
+static long bb_serial_pass(sd_world *w, const sd_law *law)
 {
     sd_bodies *b = &w->b;
     long count = 0;
@@ -270,25 +290,97 @@ static long bb_fused_pass(sd_world *w, const sd_law *law)
         b->force[i] = b->torque[i] = v3(0, 0, 0);
     const int nbb = w->bb.n;
     for (int k = 0; k < nbb; k++) {
-        const sd_pair *p = &w->bb.p[k];
         sd_pair_out o;
-        int used;
-        if (p->kind == SD_PAIR_SS) {
-            used = sphere_sphere_fast(w, law, p, &w->bb.hist[p->off], &o);
-        } else {
-            sd_manifold m;
-            narrow_bb(b, p, &m);
-            used = apply_manifold(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, &w->bb.hist[p->off], p->cap, &o);
-        }
+        int used = pair_force(w, law, k, &o);
         if (!used) continue;
         count += used;
-        const int a = p->a, c = p->b;
-        b->force[a] = v3_add(b->force[a], o.f_a);
-        b->torque[a] = v3_add(b->torque[a], o.t_a);
-        b->force[c] = v3_sub(b->force[c], o.f_a);
-        b->torque[c] = v3_add(b->torque[c], o.t_b);
+        add_pair(b, w->bb.p[k].a, 0, &o);
+        add_pair(b, w->bb.p[k].b, 1, &o);
     }
     return count;
+}
+
+#define SD_MAX_OWNERS 64
+
+/* owner of body i when n bodies are split into T ranges [n t / T, n (t+1) / T) */
+static inline int owner_of(int i, int n, int T)
+{
+    int t = (int)(((long)i * T) / n);
+    if (t + 1 < T && i >= (int)(((long)n * (t + 1)) / T)) t++;
+    if (t > 0 && i < (int)(((long)n * t) / T)) t--;
+    return t;
+}
+
+#ifdef _OPENMP
+static long bb_owned_pass(sd_world *w, const sd_law *law, int T)
+{
+    sd_bodies *b = &w->b;
+    const int n = b->n, nbb = w->bb.n;
+    /* span[src][t]: lowest and highest pair index touching owner t, seen by chunk src */
+    int lo[SD_MAX_OWNERS][SD_MAX_OWNERS], hi[SD_MAX_OWNERS][SD_MAX_OWNERS];
+    long count = 0;
+#pragma omp parallel num_threads(T) reduction(+ : count)
+    {
+        const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
+        for (int src = tid; src < T; src += nthr) {
+            for (int t = 0; t < T; t++) {
+                lo[src][t] = nbb;
+                hi[src][t] = -1;
+            }
+            const int k0 = (int)(((long)nbb * src) / T), k1 = (int)(((long)nbb * (src + 1)) / T);
+            for (int k = k0; k < k1; k++) {
+                const sd_pair *p = &w->bb.p[k];
+                const int ta = owner_of(p->a, n, T), tb = owner_of(p->b, n, T);
+                if (k < lo[src][ta]) lo[src][ta] = k;
+                hi[src][ta] = k;
+                if (ta == tb) continue;
+                if (k < lo[src][tb]) lo[src][tb] = k;
+                hi[src][tb] = k;
+                int used = pair_force(w, law, k, &w->bb.out[k]);
+                w->bb.active[k] = (uint8_t)(used > 0);
+                count += used;
+            }
+        }
+#pragma omp barrier
+        for (int t = tid; t < T; t += nthr) {
+            const int i0 = (int)(((long)n * t) / T), i1 = (int)(((long)n * (t + 1)) / T);
+            for (int i = i0; i < i1; i++)
+                b->force[i] = b->torque[i] = v3(0, 0, 0);
+            int k0 = nbb, k1 = -1;
+            for (int src = 0; src < T; src++) {
+                if (lo[src][t] < k0) k0 = lo[src][t];
+                if (hi[src][t] > k1) k1 = hi[src][t];
+            }
+            for (int k = k0; k <= k1; k++) {
+                const sd_pair *p = &w->bb.p[k];
+                const int own_a = p->a >= i0 && p->a < i1, own_b = p->b >= i0 && p->b < i1;
+                if (own_a && own_b) {
+                    sd_pair_out o;
+                    int used = pair_force(w, law, k, &o);
+                    if (!used) continue;
+                    count += used;
+                    add_pair(b, p->a, 0, &o);
+                    add_pair(b, p->b, 1, &o);
+                } else if ((own_a || own_b) && w->bb.active[k]) {
+                    add_pair(b, own_a ? p->a : p->b, own_b, &w->bb.out[k]);
+                }
+            }
+        }
+    }
+    return count;
+}
+#endif
+
+/* how many owners the body-body pass uses: 1 (serial) for one thread or a small scene */
+static int bb_owners(const sd_world *w)
+{
+#ifdef _OPENMP
+    int T = omp_get_max_threads();
+    if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
+    if (T > 1 && w->bb.n > w->def.parallel_min && w->b.n >= 4 * T) return T;
+#endif
+    (void)w;
+    return 1;
 }
 
 sd_status sd_contact_compute(sd_world *w)
@@ -296,26 +388,13 @@ sd_status sd_contact_compute(sd_world *w)
     const sd_bodies *b = &w->b;
     sd_law law = sd_law_make(&w->def.contact);
     long count = 0;
-    const int nbb = w->bb.n;
-    if (bb_fused(w)) {
-        count = bb_fused_pass(w, &law);
-    } else {
-#pragma omp parallel for schedule(static) reduction(+ : count) if (nbb > w->def.parallel_min)
-        for (int k = 0; k < nbb; k++) {
-            const sd_pair *p = &w->bb.p[k];
-            int used;
-            if (p->kind == SD_PAIR_SS) {
-                used = sphere_sphere_fast(w, &law, p, &w->bb.hist[p->off], &w->bb.out[k]);
-            } else {
-                sd_manifold m;
-                narrow_bb(b, p, &m);
-                used = apply_manifold(w, &law, &m, p->a, p->b, 0, p->sqrt_m_eff, &w->bb.hist[p->off], p->cap,
-                                      &w->bb.out[k]);
-            }
-            w->bb.active[k] = (uint8_t)(used > 0);
-            count += used;
-        }
-    }
+    const int T = bb_owners(w);
+#ifdef _OPENMP
+    if (T > 1)
+        count = bb_owned_pass(w, &law, T);
+    else
+#endif
+        count = bb_serial_pass(w, &law);
     const int nb = b->n;
 #pragma omp parallel for schedule(static) reduction(+ : count) if (nb > w->def.parallel_min)
     for (int i = 0; i < nb; i++) {
@@ -341,7 +420,6 @@ void sd_contact_gather(sd_world *w)
 {
     sd_bodies *b = &w->b;
     const int n = b->n;
-    const int fused = bb_fused(w);
 #pragma omp parallel for schedule(static) if (n > w->def.parallel_min)
     for (int i = 0; i < n; i++) {
         sd_vec3 f = v3(0, 0, 0), t = v3(0, 0, 0);
@@ -351,22 +429,9 @@ void sd_contact_gather(sd_world *w)
             b->torque[i] = t;
             continue;
         }
-        if (fused) { /* body-body part already summed, in the same order */
-            f = b->force[i];
-            t = b->torque[i];
-        } else
-            for (int k = w->csr.start[i]; k < w->csr.start[i + 1]; k++) {
-                int e = w->csr.idx[k];
-                if (!w->bb.active[e >> 1]) continue;
-                const sd_pair_out *o = &w->bb.out[e >> 1];
-                if (e & 1) {
-                    f = v3_sub(f, o->f_a);
-                    t = v3_add(t, o->t_b);
-                } else {
-                    f = v3_add(f, o->f_a);
-                    t = v3_add(t, o->t_a);
-                }
-            }
+        /* the body-body part is already in force/torque, summed in pair order */
+        f = b->force[i];
+        t = b->torque[i];
         for (int k = w->csr.bt_start[i]; k < w->csr.bt_start[i + 1]; k++) {
             if (!w->bt.active[k]) continue;
             f = v3_add(f, w->bt.out[k].f_a);
