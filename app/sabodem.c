@@ -27,13 +27,21 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: sabodem run FILE [-o DIR] [--set key=value]... [--threads N] [--seed S]\n"
+            "                        [--checkpoint-at flow_end] [--restart CHECKPOINT]\n"
             "       sabodem check FILE [--set key=value]...\n"
-            "       sabodem sweep FILE [-o DIR] [--parallel N]\n"
+            "       sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch]\n"
             "       sabodem params [--markdown]\n"
             "\n"
             "run     simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
+            "          --checkpoint-at flow_end  also write DIR/flow_end.ckpt when the flow reaches the dam\n"
+            "          --restart CHECKPOINT      continue from such a checkpoint (the capture phase only);\n"
+            "                                    FILE may differ from the writer's scenario only in the\n"
+            "                                    dam layout and capture-phase keys (docs/sweep.md)\n"
             "check   validate the scenario and build its scene without running\n"
-            "sweep   run a matrix of cases x seeds in parallel (resumable), with CSV and figures\n"
+            "sweep   run a matrix of cases x seeds in parallel (resumable), with CSV and figures; runs\n"
+            "        that differ only in the dam layout share one packing + flow (docs/sweep.md)\n"
+            "          --dry-run    list the runs and shared flows, and what is already done\n"
+            "          --no-branch  every run packs and flows on its own\n"
             "params  list every scenario key with its type, unit, default and range\n");
 }
 
@@ -64,10 +72,19 @@ int main(int argc, char **argv)
     }
     if (!strcmp(cmd, "sweep")) {
         const char *file = NULL, *outdir = NULL;
-        int parallel = 0;
+        sd_sweep_opts so = {0, 0, 0};
         for (int i = 2; i < argc; i++) {
             if ((!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) && i + 1 < argc) outdir = argv[++i];
-            else if (!strcmp(argv[i], "--parallel") && i + 1 < argc) parallel = atoi(argv[++i]);
+            else if (!strcmp(argv[i], "--parallel") && i + 1 < argc) {
+                char *end;
+                long p = strtol(argv[++i], &end, 10);
+                if (*end || end == argv[i] || p < 1 || p > 4096) {
+                    fprintf(stderr, "sabodem: --parallel: expected a positive integer, got '%s'\n", argv[i]);
+                    return 2;
+                }
+                so.parallel = (int)p;
+            } else if (!strcmp(argv[i], "--dry-run")) so.dry_run = 1;
+            else if (!strcmp(argv[i], "--no-branch")) so.no_branch = 1;
             else if (argv[i][0] == '-') {
                 fprintf(stderr, "sabodem: unknown or incomplete option '%s'\n", argv[i]);
                 return 2;
@@ -87,8 +104,8 @@ int main(int argc, char **argv)
         sa.sa_handler = on_sigint;
         sigaction(SIGINT, &sa, NULL);
         sigaction(SIGTERM, &sa, NULL);
-        int code = sd_sweep_run(file, outdir, parallel, &stop_flag, stdout, stderr);
-        if (code == 0 || code == 1) printf("sweep results in %s/results.csv, %s/cases.csv\n", outdir, outdir);
+        int code = sd_sweep_run(file, outdir, &so, &stop_flag, stdout, stderr);
+        if ((code == 0 || code == 1) && !so.dry_run) printf("sweep results in %s/results.csv, %s/cases.csv\n", outdir, outdir);
         return code;
     }
     if (strcmp(cmd, "run") && strcmp(cmd, "check")) {
@@ -96,7 +113,8 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    const char *file = NULL, *outdir = NULL;
+    const char *file = NULL, *outdir = NULL, *restart = NULL;
+    int ckpt_flow_end = 0;
     const char **sets = calloc((size_t)argc + 2, sizeof(char *));
     char seedbuf[64], thrbuf[64];
     int nsets = 0;
@@ -112,7 +130,15 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--seed") && i + 1 < argc) {
             snprintf(seedbuf, sizeof seedbuf, "solver.seed=%s", argv[++i]);
             sets[nsets++] = seedbuf;
-        } else if (a[0] == '-') {
+        } else if (!strcmp(a, "--checkpoint-at") && i + 1 < argc && !strcmp(cmd, "run")) {
+            if (strcmp(argv[++i], "flow_end")) {
+                fprintf(stderr, "sabodem: --checkpoint-at: unknown point '%s' (the one point is flow_end)\n", argv[i]);
+                free(sets);
+                return 2;
+            }
+            ckpt_flow_end = 1;
+        } else if (!strcmp(a, "--restart") && i + 1 < argc && !strcmp(cmd, "run")) restart = argv[++i];
+        else if (a[0] == '-') {
             fprintf(stderr, "sabodem: unknown or incomplete option '%s'\n", a);
             usage(stderr);
             free(sets);
@@ -170,7 +196,16 @@ int main(int argc, char **argv)
     sa.sa_handler = on_sigint;
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
-    sd_run_opts o = {outdir, isatty(fileno(stderr)), &stop_flag, stderr, stderr};
+    if ((ckpt_flow_end || restart) && !s.flume_on) {
+        fprintf(stderr, "%s: --%s needs a flume scenario (flume.on: true)\n", file, restart ? "restart" : "checkpoint-at");
+        sd_scenario_free(&s);
+        return 2;
+    }
+    char ckpt_path[600];
+    snprintf(ckpt_path, sizeof ckpt_path, "%s/flow_end.ckpt", outdir);
+    sd_run_opts o = {.outdir = outdir, .progress_tty = isatty(fileno(stderr)), .stop = &stop_flag, .log = stderr, .err = stderr};
+    o.checkpoint_flow_end = ckpt_flow_end ? ckpt_path : NULL;
+    o.restart = restart;
     sd_run_result r;
     int code = sd_run_scenario(&s, &o, &r);
     if (code == 0 || code == 130) {

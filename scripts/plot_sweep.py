@@ -3,7 +3,8 @@
 
 usage: plot_sweep.py SWEEP_DIR
 
-Reads SWEEP_DIR/results.csv (one row per run, written by `sabodem sweep`), writes
+Reads SWEEP_DIR/results.csv (one row per run, written by `sabodem sweep`; columns in
+docs/sweep.md), writes
 SWEEP_DIR/cases.csv and, with matplotlib (Debian's python3-matplotlib, Agg backend):
   fig16_pv_vs_kw.png     trap ratio vs woody volume ratio K_w, at l_V/d_max = 2.0 (Fig. 16)
   fig17_pv_vs_lv.png     trap ratio vs l_V/d_max, at K_w = 5 % (Fig. 17)
@@ -42,7 +43,7 @@ def main():
         print("no finished runs")
         return 0
     fixed = {"case", "seed", "p_v", "p_v_class0", "p_v_class1", "p_v_class2", "p_v_class3", "p_v_logs",
-             "peak_dam_force_N", "passed", "wall_s", "capture_limit_s"}
+             "peak_dam_force_N", "passed", "wall_s", "capture_limit_s", "flow_wall_s", "branched", "state_hash"}
     vary = [k for k in rows[0].keys() if k not in fixed]
     cases = {}
     for r in rows:

@@ -238,7 +238,49 @@ int sd_build_log_count(const sd_scenario *s)
     return (int)lround(s->log_kw * vs / (1.0 - s->log_kw) / vlog);
 }
 
-static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *info, sd_rng *rng, FILE *err)
+sd_status sd_build_dam(sd_world *w, const sd_scenario *s, sd_build_info *info)
+{
+    if (!s->dam_on) return SD_OK;
+    double W = s->width;
+    double col_y[SD_MAX_PIPES], beam_z[SD_MAX_PIPES];
+    int nc, nb;
+    sd_build_dam_layout(s, col_y, &nc, beam_z, &nb);
+    double r = 0.5 * s->pipe_diam, xc = s->x_dam + r;
+    double top = beam_z[nb - 1] + r;
+    for (int k = 0; k < nc; k++) {
+        sd_cylinder_def c = sd_cylinder_def_default();
+        c.pos = v3(xc, col_y[k], 0.5 * top);
+        c.axis = v3(0, 0, 1);
+        c.radius = r;
+        c.length = top;
+        c.density = 7850.0;
+        c.fixed = 1;
+        c.tag = SD_TAG_PIPE;
+        int g = sd_world_add_cylinder(w, &c);
+        if (g < 0) return (sd_status)-g;
+        info->pipe_gid[info->n_pipes] = g;
+        info->pipe_is_column[info->n_pipes] = 1;
+        info->pipe_coord[info->n_pipes++] = col_y[k];
+    }
+    for (int k = 0; k < nb; k++) {
+        sd_cylinder_def c = sd_cylinder_def_default();
+        c.pos = v3(xc, 0.5 * W, beam_z[k]);
+        c.axis = v3(0, 1, 0);
+        c.radius = r;
+        c.length = W;
+        c.density = 7850.0;
+        c.fixed = 1;
+        c.tag = SD_TAG_PIPE;
+        int g = sd_world_add_cylinder(w, &c);
+        if (g < 0) return (sd_status)-g;
+        info->pipe_gid[info->n_pipes] = g;
+        info->pipe_is_column[info->n_pipes] = 0;
+        info->pipe_coord[info->n_pipes++] = beam_z[k];
+    }
+    return SD_OK;
+}
+
+static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *info, sd_rng *rng, FILE *err, int with_dam)
 {
     double W = s->width, H = s->wall_height, L = s->x_end;
     sd_status st;
@@ -251,44 +293,8 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
                        SD_GROUP_GATE, 0)))
         return st;
 
-    /* grid dam of fixed cylinders; upstream face at x_dam */
-    if (s->dam_on) {
-        double col_y[SD_MAX_PIPES], beam_z[SD_MAX_PIPES];
-        int nc, nb;
-        sd_build_dam_layout(s, col_y, &nc, beam_z, &nb);
-        double r = 0.5 * s->pipe_diam, xc = s->x_dam + r;
-        double top = beam_z[nb - 1] + r;
-        for (int k = 0; k < nc; k++) {
-            sd_cylinder_def c = sd_cylinder_def_default();
-            c.pos = v3(xc, col_y[k], 0.5 * top);
-            c.axis = v3(0, 0, 1);
-            c.radius = r;
-            c.length = top;
-            c.density = 7850.0;
-            c.fixed = 1;
-            c.tag = SD_TAG_PIPE;
-            int g = sd_world_add_cylinder(w, &c);
-            if (g < 0) return (sd_status)-g;
-            info->pipe_gid[info->n_pipes] = g;
-            info->pipe_is_column[info->n_pipes] = 1;
-            info->pipe_coord[info->n_pipes++] = col_y[k];
-        }
-        for (int k = 0; k < nb; k++) {
-            sd_cylinder_def c = sd_cylinder_def_default();
-            c.pos = v3(xc, 0.5 * W, beam_z[k]);
-            c.axis = v3(0, 1, 0);
-            c.radius = r;
-            c.length = W;
-            c.density = 7850.0;
-            c.fixed = 1;
-            c.tag = SD_TAG_PIPE;
-            int g = sd_world_add_cylinder(w, &c);
-            if (g < 0) return (sd_status)-g;
-            info->pipe_gid[info->n_pipes] = g;
-            info->pipe_is_column[info->n_pipes] = 0;
-            info->pipe_coord[info->n_pipes++] = beam_z[k];
-        }
-    }
+    /* grid dam of fixed cylinders; upstream face at x_dam (a run adds it later: sd_build_dam) */
+    if (s->dam_on && with_dam && (st = sd_build_dam(w, s, info))) return st;
 
     /* bed roughness: fixed spheres centred on the bed plane, random without overlap; random
      * sequential adsorption until 2000 tries in a row fail (jamming coverage ~0.5) */
@@ -389,6 +395,11 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
 
 sd_status sd_build_scene(sd_world *w, const sd_scenario *s, sd_build_info *info, FILE *err)
 {
+    return sd_build_scene_ex(w, s, info, err, 1);
+}
+
+sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *info, FILE *err, int with_dam)
+{
     memset(info, 0, sizeof(*info));
     info->first_moving_gid = -1;
     sd_rng rng = {(uint64_t)s->seed * 0x9E3779B97F4A7C15ULL + 12345};
@@ -452,6 +463,6 @@ sd_status sd_build_scene(sd_world *w, const sd_scenario *s, sd_build_info *info,
             }
         sd_placer_destroy(pl);
     }
-    if (s->flume_on && (st = build_flume(w, s, info, &rng, err))) return st;
+    if (s->flume_on && (st = build_flume(w, s, info, &rng, err, with_dam))) return st;
     return SD_OK;
 }

@@ -33,6 +33,14 @@ void sd_placer_add(sd_placer *p, sd_vec3 pos, sd_vec3 axis, double r, double hl)
 
 /* The scene of a scenario: explicit elements, box, pile, flume with everything in it. */
 sd_status sd_build_scene(sd_world *w, const sd_scenario *s, sd_build_info *info, FILE *err);
+/* The same; with_dam = 0 leaves the grid dam's pipes out (the run driver builds the scene so
+ * and adds them with sd_build_dam at the start of the capture phase, so that packing and flow
+ * do not depend on the dam layout and a sweep can branch into layouts from one flow). The bed
+ * roughness keeps the dam foot clear either way. */
+sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *info, FILE *err, int with_dam);
+/* The grid dam of fixed cylinders, upstream face at flume.x_dam (nothing when dam.on is
+ * false); appends the pipes to info's pipe lists. */
+sd_status sd_build_dam(sd_world *w, const sd_scenario *s, sd_build_info *info);
 /* Grid dam layout from l_h / l_v / top_beam or the explicit lists (SPEC §8). */
 int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double *beam_z, int *n_beam);
 /* Number of logs from logs.count or logs.k_w and the sphere volume (eq 54). */

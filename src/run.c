@@ -10,8 +10,13 @@
 
 #include "build.h"
 #include "fluid.h"
+#include "io_checkpoint.h"
 #include "io_vtk.h"
 #include "world_internal.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 enum { PH_PACK = 0, PH_FLOW = 1, PH_CAPTURE = 2, PH_DONE = 3, PH_RUN = 4 };
 static const char *phase_names[] = {"packing", "flow", "capture", "done", "run"};
@@ -41,6 +46,12 @@ typedef struct {
     sd_vtk_series pvd;
     int pvd_on;
     double wall0;
+    double phase_t0, phase_w0; /* simulated and wall time at the start of the current phase */
+    int flow_ended;            /* the flow phase has ended; the capture starts at the next step */
+    int dam_built;             /* the pipes are in the world (sd_build_dam at the capture start) */
+    const char *restarted_from;
+    double flow_wall;          /* wall time from the start to the flow end, build included (a restarted
+                                * run: that of the run that wrote the checkpoint) */
 } run_ctx;
 
 static double body_volume(const sd_bodies *b, int i)
@@ -141,12 +152,22 @@ static void remove_passed(run_ctx *c)
     }
 }
 
+/* Downstream extent of an element beyond its centre along x: r for a sphere, and for a log
+ * the farthest point of the cylinder, hl |a_x| + r sqrt(1 - a_x^2). */
+static double x_extent(const sd_bodies *b, int i)
+{
+    if (b->shape[i] == SD_SHAPE_SPHERE) return b->radius[i];
+    double ax = b->axis[i].x;
+    return b->hl[i] * fabs(ax) + b->radius[i] * sqrt(fmax(0.0, 1.0 - ax * ax));
+}
+
+/* The front: the farthest downstream surface of any moving element. */
 static double front_x(const run_ctx *c)
 {
     const sd_bodies *b = &c->w->b;
     double f = -INFINITY;
     for (int i = 0; i < b->n; i++)
-        if (!b->fixed[i] && b->pos[i].x + b->bound_r[i] > f) f = b->pos[i].x + b->bound_r[i];
+        if (!b->fixed[i] && b->pos[i].x + x_extent(b, i) > f) f = b->pos[i].x + x_extent(b, i);
     return f;
 }
 
@@ -344,6 +365,13 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
     fprintf(f, "{\n  \"scenario\": \"%s\",\n  \"status\": \"%s\",\n  \"exit_code\": %d,\n", s->path, status_msg, status_code);
     fprintf(f, "  \"simulated_time_s\": %.6f,\n  \"steps\": %ld,\n  \"wall_time_s\": %.3f,\n", c->w->time, c->w->step,
             sd_now() - c->wall0);
+    fprintf(f, "  \"state_hash\": \"%016llx\",\n", (unsigned long long)sd_world_state_hash(c->w));
+    if (c->restarted_from) {
+        fprintf(f, "  \"restarted_from\": \"");
+        for (const char *q = c->restarted_from; *q; q++)
+            fprintf(f, *q == '"' || *q == '\\' ? "\\%c" : "%c", *q);
+        fprintf(f, "\",\n  \"restart_flow_wall_s\": %.3f,\n", c->flow_wall);
+    }
     sd_world_timers tm = sd_world_get_timers(c->w);
     fprintf(f, "  \"timers_s\": {\"neighbor\": %.3f, \"contact\": %.3f, \"gather\": %.3f, \"integrate\": %.3f, \"rebuilds\": %ld},\n",
             tm.neighbor, tm.contact, tm.gather, tm.integrate, tm.rebuilds);
@@ -405,6 +433,386 @@ static void accumulate_pipes(run_ctx *c)
     c->dam_force_now = tot;
 }
 
+/* ---------------------------------------------------------------- branching ---- */
+
+/* The capture phase begins: the grid dam's pipes go in now, not at the build, so that packing
+ * and flow do not depend on the dam layout (SPEC §6, docs/physics.md "Flow end and branching").
+ * A straight run and a run restarted from a flow-end checkpoint both come through here. */
+static sd_status capture_start(run_ctx *c)
+{
+    const sd_scenario *s = c->s;
+    sd_status st = sd_build_dam(c->w, s, &c->info);
+    if (st) return st;
+    c->dam_built = 1;
+    c->phase = PH_CAPTURE;
+    c->phase_t0 = c->w->time;
+    c->phase_w0 = sd_now();
+    c->last_cross_time = c->w->time;
+    update_h_d(c);
+    snapshot(c, "arrival");
+    plot(c, "arrival", "side_arrival.png", s->x_dam - 1.2, s->x_end);
+    return SD_OK;
+}
+
+/* The driver's state in the checkpoint's extra blob: a tagged, versioned byte string. It is
+ * written only at the flow end (before the pipes exist), so the pipe accumulators are zero and
+ * not stored. The build's random numbers are spent before the first step; the driver draws
+ * none later, so there is no rng state to carry. */
+#define BLOB_MAGIC "SDRUNv1"
+
+typedef struct {
+    unsigned char *p;
+    size_t n, cap;
+    int err;
+} bbuf;
+
+static void bput(bbuf *b, const void *p, size_t n)
+{
+    if (b->err) return;
+    if (b->n + n > b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : 1024;
+        while (cap < b->n + n) cap *= 2;
+        unsigned char *q = realloc(b->p, cap);
+        if (!q) {
+            b->err = 1;
+            return;
+        }
+        b->p = q;
+        b->cap = cap;
+    }
+    memcpy(b->p + b->n, p, n);
+    b->n += n;
+}
+static void bput_i32(bbuf *b, int32_t v) { bput(b, &v, sizeof v); }
+static void bput_i64(bbuf *b, int64_t v) { bput(b, &v, sizeof v); }
+static void bput_u64(bbuf *b, uint64_t v) { bput(b, &v, sizeof v); }
+static void bput_f64(bbuf *b, double v) { bput(b, &v, sizeof v); }
+
+typedef struct {
+    const unsigned char *p;
+    size_t n, pos;
+    int bad;
+} bcur;
+
+static void bget(bcur *c, void *dst, size_t n)
+{
+    if (c->bad || n > c->n - c->pos) {
+        c->bad = 1;
+        memset(dst, 0, n);
+        return;
+    }
+    memcpy(dst, c->p + c->pos, n);
+    c->pos += n;
+}
+static int32_t bget_i32(bcur *c)
+{
+    int32_t v;
+    bget(c, &v, sizeof v);
+    return v;
+}
+static int64_t bget_i64(bcur *c)
+{
+    int64_t v;
+    bget(c, &v, sizeof v);
+    return v;
+}
+static uint64_t bget_u64(bcur *c)
+{
+    uint64_t v;
+    bget(c, &v, sizeof v);
+    return v;
+}
+static double bget_f64(bcur *c)
+{
+    double v;
+    bget(c, &v, sizeof v);
+    return v;
+}
+
+static long file_len(FILE *f)
+{
+    if (!f || fflush(f)) return -1;
+    return ftell(f);
+}
+
+static void state_pack(const run_ctx *c, bbuf *b, long series_len, long traj_len)
+{
+    bput(b, BLOB_MAGIC, 8);
+    bput_u64(b, sd_scenario_branch_hash(c->s));
+    bput_i32(b, c->phase);
+    bput_i32(b, c->flow_ended);
+    bput_i32(b, c->dam_built);
+    bput_i32(b, c->n_passed);
+    bput_i32(b, c->flow_len_done);
+    bput_i32(b, c->n_snap);
+    bput_i32(b, c->info.n_rough);
+    bput_i32(b, c->info.n_spheres);
+    bput_i32(b, c->info.n_logs);
+    bput_i32(b, c->info.first_moving_gid);
+    for (int k = 0; k < SD_MAX_CLASSES; k++) bput_f64(b, c->vol_total_class[k]);
+    bput_f64(b, c->vol_total_logs);
+    for (int k = 0; k < SD_MAX_CLASSES; k++) bput_f64(b, c->vol_passed_class[k]);
+    bput_f64(b, c->vol_passed_logs);
+    bput_f64(b, c->h_d);
+    bput_f64(b, c->last_cross_time);
+    bput_f64(b, c->ke_peak);
+    bput_f64(b, c->dam_force_now);
+    for (int k = 0; k < 4; k++) bput_f64(b, c->phase_end[k]);
+    for (int k = 0; k < 4; k++) bput_f64(b, c->phase_wall[k]);
+    bput_f64(b, c->flow_len);
+    bput_f64(b, c->flow_q05);
+    bput_f64(b, c->flow_q95);
+    bput_f64(b, c->flow_front);
+    bput_f64(b, c->flow_len_time);
+    bput_f64(b, c->phase_t0);
+    bput_f64(b, sd_now() - c->wall0);
+    bput_i64(b, series_len);
+    bput_i64(b, traj_len);
+    /* the VTK series so far (file names relative to the output directory) */
+    int np = c->pvd_on ? (int)c->pvd.n : 0;
+    bput_i32(b, np);
+    for (int k = 0; k < np; k++) {
+        int32_t len = (int32_t)strlen(c->pvd.file[k]);
+        bput_f64(b, c->pvd.time[k]);
+        bput_i32(b, c->pvd.part[k]);
+        bput_i32(b, len);
+        bput(b, c->pvd.file[k], (size_t)len);
+    }
+}
+
+typedef struct {
+    long series_len, traj_len;
+    double wall_before;
+    int npvd;
+    double *pvd_time;
+    int *pvd_part;
+    char **pvd_file;
+} restored;
+
+static void restored_free(restored *r)
+{
+    for (int k = 0; k < r->npvd; k++) free(r->pvd_file[k]);
+    free(r->pvd_time);
+    free(r->pvd_part);
+    free(r->pvd_file);
+    memset(r, 0, sizeof *r);
+}
+
+/* 0 on success; otherwise writes why to msg. */
+static int state_unpack(run_ctx *c, const void *blob, size_t len, restored *r, char *msg, size_t msglen)
+{
+    memset(r, 0, sizeof *r);
+    bcur b = {blob, len, 0, 0};
+    char magic[8];
+    bget(&b, magic, 8);
+    if (b.bad || memcmp(magic, BLOB_MAGIC, 8)) {
+        snprintf(msg, msglen, "holds no run-driver state of this version (not written by 'sabodem run' at a flow end)");
+        return -1;
+    }
+    uint64_t h = bget_u64(&b);
+    if (h != sd_scenario_branch_hash(c->s)) {
+        snprintf(msg, msglen,
+                 "was written for other scenario parameters than %s (a restart may change only the capture-phase keys:"
+                 " dam.l_h, dam.l_v, dam.top_beam, dam.columns, dam.beams, phases.capture_limit, phases.quiet_time,"
+                 " phases.ke_fraction, water.probe, water.h_d_floating)",
+                 c->s->path);
+        return -1;
+    }
+    c->phase = bget_i32(&b);
+    c->flow_ended = bget_i32(&b);
+    c->dam_built = bget_i32(&b);
+    c->n_passed = bget_i32(&b);
+    c->flow_len_done = bget_i32(&b);
+    c->n_snap = bget_i32(&b);
+    c->info.n_rough = bget_i32(&b);
+    c->info.n_spheres = bget_i32(&b);
+    c->info.n_logs = bget_i32(&b);
+    c->info.first_moving_gid = bget_i32(&b);
+    for (int k = 0; k < SD_MAX_CLASSES; k++) c->vol_total_class[k] = bget_f64(&b);
+    c->vol_total_logs = bget_f64(&b);
+    for (int k = 0; k < SD_MAX_CLASSES; k++) c->vol_passed_class[k] = bget_f64(&b);
+    c->vol_passed_logs = bget_f64(&b);
+    c->h_d = bget_f64(&b);
+    c->last_cross_time = bget_f64(&b);
+    c->ke_peak = bget_f64(&b);
+    c->dam_force_now = bget_f64(&b);
+    for (int k = 0; k < 4; k++) c->phase_end[k] = bget_f64(&b);
+    for (int k = 0; k < 4; k++) c->phase_wall[k] = bget_f64(&b);
+    c->flow_len = bget_f64(&b);
+    c->flow_q05 = bget_f64(&b);
+    c->flow_q95 = bget_f64(&b);
+    c->flow_front = bget_f64(&b);
+    c->flow_len_time = bget_f64(&b);
+    c->phase_t0 = bget_f64(&b);
+    r->wall_before = bget_f64(&b);
+    r->series_len = (long)bget_i64(&b);
+    r->traj_len = (long)bget_i64(&b);
+    int np = bget_i32(&b);
+    if (b.bad || np < 0 || (size_t)np > (b.n - b.pos) / 16) {
+        snprintf(msg, msglen, "run-driver state is truncated or malformed");
+        return -1;
+    }
+    r->pvd_time = calloc((size_t)np + 1, sizeof(double));
+    r->pvd_part = calloc((size_t)np + 1, sizeof(int));
+    r->pvd_file = calloc((size_t)np + 1, sizeof(char *));
+    if (!r->pvd_time || !r->pvd_part || !r->pvd_file) {
+        snprintf(msg, msglen, "out of memory");
+        restored_free(r);
+        return -1;
+    }
+    for (int k = 0; k < np && !b.bad; k++) {
+        r->pvd_time[k] = bget_f64(&b);
+        r->pvd_part[k] = bget_i32(&b);
+        int32_t l = bget_i32(&b);
+        if (b.bad || l <= 0 || l > 255 || (size_t)l > b.n - b.pos) {
+            b.bad = 1;
+            break;
+        }
+        r->pvd_file[k] = malloc((size_t)l + 1);
+        if (!r->pvd_file[k]) {
+            b.bad = 1;
+            break;
+        }
+        r->npvd = k + 1;
+        bget(&b, r->pvd_file[k], (size_t)l);
+        r->pvd_file[k][l] = '\0';
+        if (strchr(r->pvd_file[k], '/')) b.bad = 1;
+    }
+    if (b.bad || b.pos != b.n) {
+        snprintf(msg, msglen, "run-driver state is truncated or malformed");
+        restored_free(r);
+        return -1;
+    }
+    int ok = c->phase == PH_FLOW && c->flow_ended == 1 && c->dam_built == 0 && c->n_passed >= 0 &&
+             c->n_snap >= 0 && r->series_len >= 0 && r->traj_len >= -1 && isfinite(c->phase_t0) && isfinite(c->h_d);
+    if (!ok) {
+        snprintf(msg, msglen, "is not a flow-end checkpoint of a flume run");
+        restored_free(r);
+        return -1;
+    }
+    return 0;
+}
+
+static void dir_of(const char *path, char *buf, size_t n)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash) snprintf(buf, n, ".");
+    else if (slash == path) snprintf(buf, n, "/");
+    else snprintf(buf, n, "%.*s", (int)(slash - path), path);
+}
+
+static int same_dir(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+/* dst := the first len bytes of src (len < 0: all of it); src and dst may be the same file. */
+static int copy_prefix(const char *src, const char *dst, long len, char *msg, size_t msglen)
+{
+    FILE *f = fopen(src, "rb");
+    if (!f) {
+        snprintf(msg, msglen, "%s: cannot open: %s", src, strerror(errno));
+        return -1;
+    }
+    size_t cap = 1 << 16, n = 0;
+    char *buf = malloc(cap);
+    while (buf) {
+        if (n == cap) {
+            char *q = realloc(buf, cap * 2);
+            if (!q) {
+                free(buf);
+                buf = NULL;
+                break;
+            }
+            buf = q;
+            cap *= 2;
+        }
+        size_t got = fread(buf + n, 1, cap - n, f);
+        n += got;
+        if (got == 0 || (len >= 0 && n >= (size_t)len)) break;
+    }
+    fclose(f);
+    if (!buf) {
+        snprintf(msg, msglen, "%s: out of memory", src);
+        return -1;
+    }
+    if (len >= 0 && n < (size_t)len) {
+        snprintf(msg, msglen, "%s: %zu bytes, shorter than the %ld the checkpoint recorded (not the checkpoint's own output?)",
+                 src, n, len);
+        free(buf);
+        return -1;
+    }
+    if (len >= 0) n = (size_t)len;
+    char tmp[1400];
+    snprintf(tmp, sizeof tmp, "%s.tmp", dst);
+    FILE *g = fopen(tmp, "wb");
+    int bad = !g || fwrite(buf, 1, n, g) != n;
+    if (g && fclose(g)) bad = 1;
+    if (!bad && rename(tmp, dst)) bad = 1;
+    free(buf);
+    if (bad) {
+        snprintf(msg, msglen, "%s: cannot write: %s", dst, strerror(errno));
+        unlink(tmp);
+        return -1;
+    }
+    return 0;
+}
+
+/* The outputs of packing and flow continue in the new run's directory: the time series up to
+ * the checkpoint (the recorded lengths) and, when the checkpoint lives elsewhere, the VTK
+ * files listed in the series. */
+static int restore_outputs(run_ctx *c, const restored *r, char *msg, size_t msglen)
+{
+    char src[1100], a[1300], b[1300];
+    dir_of(c->restarted_from, src, sizeof src);
+    snprintf(a, sizeof a, "%s/series.csv", src);
+    snprintf(b, sizeof b, "%s/series.csv", c->dir);
+    if (copy_prefix(a, b, r->series_len, msg, msglen)) return -1;
+    if (c->s->n_traj > 0 && r->traj_len >= 0) {
+        snprintf(a, sizeof a, "%s/trajectories.csv", src);
+        snprintf(b, sizeof b, "%s/trajectories.csv", c->dir);
+        if (copy_prefix(a, b, r->traj_len, msg, msglen)) return -1;
+    }
+    if (c->s->vtk_on && !same_dir(src, c->dir)) {
+        for (int k = -1; k < r->npvd; k++) {
+            const char *name = k < 0 ? "walls.vtp" : r->pvd_file[k];
+            snprintf(a, sizeof a, "%s/%s", src, name);
+            snprintf(b, sizeof b, "%s/%s", c->dir, name);
+            char why[1400];
+            if (copy_prefix(a, b, -1, why, sizeof why) && c->o->log)
+                fprintf(c->o->log, "note: %s (the VTK series of the new run lacks it)\n", why);
+        }
+    }
+    return 0;
+}
+
+static sd_status checkpoint_flow_end(run_ctx *c, const char *path)
+{
+    long sl = file_len(c->series), tl = c->traj ? file_len(c->traj) : -1;
+    if (sl < 0 || (c->traj && tl < 0)) return SD_ERR_IO;
+    bbuf b = {NULL, 0, 0, 0};
+    state_pack(c, &b, sl, tl);
+    if (b.err) {
+        free(b.p);
+        return SD_ERR_NOMEM;
+    }
+    sd_status st = sd_checkpoint_write(path, c->w, b.p, b.n);
+    free(b.p);
+    return st;
+}
+
+/* ---------------------------------------------------------------- the run ---- */
+
+static void close_outputs(run_ctx *c)
+{
+    if (c->series) fclose(c->series);
+    if (c->traj) fclose(c->traj);
+    if (c->pvd_on) sd_vtk_series_free(&c->pvd);
+    c->series = c->traj = NULL;
+    c->pvd_on = 0;
+}
+
 int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *res)
 {
     run_ctx c;
@@ -413,70 +821,122 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
     c.s = s;
     c.o = o;
     c.wall0 = sd_now();
-    sd_status st = sd_world_create(&s->world, &c.w);
-    if (st) {
-        fprintf(o->err, "%s: %s\n", s->path, sd_status_message(st));
-        return 2;
-    }
-    st = sd_build_scene(c.w, s, &c.info, o->err);
-    if (!st) st = sd_world_check(c.w);
-    if (st) {
-        if (st == SD_ERR_UNSTABLE) fprintf(o->err, "%s: solver.dt: %s\n", s->path, sd_status_message(st));
-        else fprintf(o->err, "%s: cannot build the scene: %s\n", s->path, sd_status_message(st));
-        sd_world_destroy(c.w);
-        return 2;
+    sd_status st;
+    restored rs;
+    memset(&rs, 0, sizeof rs);
+    if (o->restart) {
+        if (!s->flume_on) {
+            fprintf(o->err, "%s: a restart needs a flume scenario (flume.on)\n", s->path);
+            return 2;
+        }
+        char msg[1600];
+        void *blob = NULL;
+        size_t blen = 0;
+        st = sd_checkpoint_read(o->restart, &c.w, &blob, &blen, msg, sizeof msg);
+        if (st) {
+            fprintf(o->err, "%s\n", msg[0] ? msg : sd_status_message(st));
+            return 2;
+        }
+        int bad = state_unpack(&c, blob, blen, &rs, msg, sizeof msg);
+        free(blob);
+        if (bad) {
+            fprintf(o->err, "%s: %s\n", o->restart, msg);
+            sd_world_destroy(c.w);
+            return 2;
+        }
+        /* the thread count is the caller's (the bits do not depend on it) */
+        c.w->def.threads = s->world.threads;
+#ifdef _OPENMP
+        if (s->world.threads > 0) omp_set_num_threads(s->world.threads);
+#endif
+        c.restarted_from = o->restart;
+        c.flow_wall = rs.wall_before;
+    } else {
+        st = sd_world_create(&s->world, &c.w);
+        if (st) {
+            fprintf(o->err, "%s: %s\n", s->path, sd_status_message(st));
+            return 2;
+        }
+        /* without the dam pipes: they go in at the start of the capture phase (capture_start) */
+        st = sd_build_scene_ex(c.w, s, &c.info, o->err, 0);
+        if (!st) st = sd_world_check(c.w);
+        if (st) {
+            if (st == SD_ERR_UNSTABLE) fprintf(o->err, "%s: solver.dt: %s\n", s->path, sd_status_message(st));
+            else fprintf(o->err, "%s: cannot build the scene: %s\n", s->path, sd_status_message(st));
+            sd_world_destroy(c.w);
+            return 2;
+        }
     }
     /* only now, with valid input, does the output directory appear */
     snprintf(c.dir, sizeof c.dir, "%s", o->outdir);
     if (sd_mkdir_p(c.dir)) {
         fprintf(o->err, "%s: cannot create output directory: %s\n", c.dir, strerror(errno));
+        restored_free(&rs);
         sd_world_destroy(c.w);
         return 2;
     }
+    if (c.restarted_from) {
+        char msg[1600];
+        if (restore_outputs(&c, &rs, msg, sizeof msg)) {
+            fprintf(o->err, "%s: cannot continue the outputs of %s: %s\n", c.dir, o->restart, msg);
+            restored_free(&rs);
+            sd_world_destroy(c.w);
+            return 1;
+        }
+    }
     char path[1200];
+    const char *mode = c.restarted_from ? "a" : "w";
     snprintf(path, sizeof path, "%s/series.csv", c.dir);
-    c.series = fopen(path, "w");
-    if (c.series)
+    c.series = fopen(path, mode);
+    if (c.series && !c.restarted_from)
         fprintf(c.series, "t,phase,front_x,volume_upstream_m3,kinetic_energy_J,contacts,dam_force_N,p_v,h_d,elements,passed\n");
     if (s->n_traj > 0) {
         snprintf(path, sizeof path, "%s/trajectories.csv", c.dir);
-        c.traj = fopen(path, "w");
-        if (c.traj) fprintf(c.traj, "t,id,x,y,z,vx,vy,vz,wx,wy,wz,ax,ay,az,fx,fy,fz\n");
+        c.traj = fopen(path, mode);
+        if (c.traj && !c.restarted_from) fprintf(c.traj, "t,id,x,y,z,vx,vy,vz,wx,wy,wz,ax,ay,az,fx,fy,fz\n");
     }
+    int pvd_bad = 0;
     if (s->vtk_on) {
         snprintf(path, sizeof path, "%s/series.pvd", c.dir);
         c.pvd_on = sd_vtk_series_init(&c.pvd, path) == 0;
+        for (int k = 0; c.pvd_on && k < rs.npvd; k++)
+            if (sd_vtk_series_add(&c.pvd, rs.pvd_time[k], rs.pvd_part[k], rs.pvd_file[k])) pvd_bad = 1;
     }
-    if (!c.series || (s->n_traj > 0 && !c.traj) || (s->vtk_on && !c.pvd_on) || write_walls(&c)) {
+    restored_free(&rs);
+    if (!c.series || (s->n_traj > 0 && !c.traj) || (s->vtk_on && !c.pvd_on) || pvd_bad ||
+        (!c.restarted_from && write_walls(&c))) {
         fprintf(o->err, "%s: cannot write output files: %s\n", c.dir, strerror(errno));
-        if (c.series) fclose(c.series);
-        if (c.traj) fclose(c.traj);
-        if (c.pvd_on) sd_vtk_series_free(&c.pvd);
+        close_outputs(&c);
         sd_world_destroy(c.w);
         return 1;
     }
     const sd_bodies *b = &c.w->b;
-    for (int i = 0; i < b->n; i++) {
-        if (b->fixed[i]) continue;
-        if (b->shape[i] == SD_SHAPE_CYLINDER) c.vol_total_logs += body_volume(b, i);
-        else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES) c.vol_total_class[b->tag[i]] += body_volume(b, i);
-    }
-    c.phase = s->flume_on ? PH_PACK : PH_RUN;
-    c.h_d = s->water_h;
     const double dt = s->world.dt;
+    if (!c.restarted_from) {
+        for (int i = 0; i < b->n; i++) {
+            if (b->fixed[i]) continue;
+            if (b->shape[i] == SD_SHAPE_CYLINDER) c.vol_total_logs += body_volume(b, i);
+            else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES) c.vol_total_class[b->tag[i]] += body_volume(b, i);
+        }
+        c.phase = s->flume_on ? PH_PACK : PH_RUN;
+        c.h_d = s->water_h;
+        c.phase_t0 = 0.0;
+    }
+    c.phase_w0 = sd_now();
     long log_every = (long)llround(s->log_interval / dt);
     if (log_every < 1) log_every = 1;
     long traj_every = (long)llround(s->traj_interval / dt);
     if (traj_every < 1) traj_every = 1;
     long snap_every = s->snapshot_interval > 0 ? (long)llround(s->snapshot_interval / dt) : 0;
     long progress_every = 2000;
-    double phase_t0 = 0.0, phase_w0 = c.wall0;
     double t_end_est = s->flume_on ? s->packing_time + 4.0 + s->capture_limit : s->duration;
     int code = 0;
     const char *msg = "finished";
-    snapshot(&c, "initial");
-    write_series_row(&c);
-    write_traj(&c);
+    if (!c.restarted_from) {
+        snapshot(&c, "initial");
+        write_series_row(&c);
+        write_traj(&c);
+    }
     for (;;) {
         if (o->stop && *o->stop) {
             code = 130;
@@ -486,6 +946,34 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         }
         if (c.phase == PH_RUN && c.w->time >= s->duration - 0.5 * dt) break;
         if (c.phase == PH_DONE) break;
+        if (c.flow_ended && !c.dam_built) {
+            /* the branch point: a flow-end checkpoint holds the state of exactly this moment, and
+             * a restart from it comes in here, so both go through capture_start alike */
+            if (o->checkpoint_flow_end && !c.restarted_from) {
+                st = checkpoint_flow_end(&c, o->checkpoint_flow_end);
+                if (st) {
+                    fprintf(o->err, "%s: cannot write the flow-end checkpoint: %s (%s)\n", o->checkpoint_flow_end,
+                            sd_status_message(st), strerror(errno));
+                    code = 1;
+                    msg = "checkpoint failed";
+                    break;
+                }
+                if (o->log && !o->progress_tty)
+                    fprintf(o->log, "flow-end checkpoint %s written at t = %.4f s\n", o->checkpoint_flow_end, c.w->time);
+            }
+            if (o->stop_at_flow_end) {
+                res->stopped_at_flow_end = 1;
+                msg = "stopped at the flow end";
+                break;
+            }
+            st = capture_start(&c);
+            if (st) {
+                fprintf(o->err, "%s: cannot add the dam pipes: %s\n", s->path, sd_status_message(st));
+                code = 1;
+                msg = sd_status_message(st);
+                break;
+            }
+        }
         apply_fluid(&c);
         st = sd_world_step(c.w);
         if (st) {
@@ -496,10 +984,11 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         }
         long step = c.w->step;
         if (c.info.n_pipes) accumulate_pipes(&c);
+        int next = c.phase;
         if (s->flume_on && step % 100 == 0) {
             int before = c.n_passed;
             remove_passed(&c);
-            double tph = c.w->time - phase_t0;
+            double tph = c.w->time - c.phase_t0;
             /* crossing the dam: an element whose centre passed the trap plane */
             double xt = x_trap(&c);
             for (int i = 0; i < b->n; i++)
@@ -508,13 +997,8 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
                     break;
                 }
             if (c.n_passed != before) c.last_cross_time = c.w->time;
-            int next = c.phase;
             if (c.phase == PH_PACK) {
                 if (tph >= s->packing_time - 0.5 * dt) next = PH_FLOW;
-            } else if (c.phase == PH_FLOW) {
-                double fx = front_x(&c);
-                if (!c.flow_len_done && s->x_dam - 1.0 > s->x_gate && fx >= s->x_dam - 1.0) measure_flow_length(&c);
-                if (fx >= s->x_dam || tph >= s->flow_limit) next = PH_CAPTURE;
             } else if (c.phase == PH_CAPTURE) {
                 update_h_d(&c);
                 double ke = upstream_ke(&c);
@@ -522,24 +1006,33 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
                 int quiet = c.w->time - c.last_cross_time >= s->quiet_time && ke < s->ke_fraction * c.ke_peak;
                 if (tph >= s->capture_limit || (tph > s->quiet_time && quiet)) next = PH_DONE;
             }
-            if (next != c.phase) {
-                c.phase_end[c.phase] = c.w->time;
-                c.phase_wall[c.phase] = sd_now() - phase_w0;
-                phase_w0 = sd_now();
-                if (o->log && !o->progress_tty)
-                    fprintf(o->log, "phase %s ended at t = %.4f s (max speed %.4f m/s)\n", phase_names[c.phase], c.w->time,
-                            max_speed(&c));
-                if (c.phase == PH_PACK) {
-                    sd_world_set_group_active(c.w, SD_GROUP_GATE, 0);
-                    snapshot(&c, "packed");
-                }
-                if (next == PH_CAPTURE) {
-                    snapshot(&c, "arrival");
-                    plot(&c, "arrival", "side_arrival.png", s->x_dam - 1.2, s->x_end);
-                    c.last_cross_time = c.w->time;
-                    update_h_d(&c);
-                }
-                phase_t0 = c.w->time;
+        }
+        if (c.phase == PH_FLOW && !c.flow_ended) {
+            /* checked at every step, so that the front has moved less than one step's travel
+             * (~v dt) past the dam face when the pipes appear (docs/physics.md) */
+            double fx = front_x(&c), tph = c.w->time - c.phase_t0;
+            if (step % 100 == 0 && !c.flow_len_done && s->x_dam - 1.0 > s->x_gate && fx >= s->x_dam - 1.0)
+                measure_flow_length(&c);
+            if (fx >= s->x_dam || tph >= s->flow_limit) next = PH_CAPTURE;
+        }
+        if (next != c.phase) {
+            c.phase_end[c.phase] = c.w->time;
+            c.phase_wall[c.phase] = sd_now() - c.phase_w0;
+            c.phase_w0 = sd_now();
+            if (o->log && !o->progress_tty)
+                fprintf(o->log, "phase %s ended at t = %.4f s (max speed %.4f m/s)\n", phase_names[c.phase], c.w->time,
+                        max_speed(&c));
+            if (c.phase == PH_PACK) {
+                sd_world_set_group_active(c.w, SD_GROUP_GATE, 0);
+                snapshot(&c, "packed");
+                c.phase_t0 = c.w->time;
+                c.phase = next;
+            } else if (next == PH_CAPTURE) {
+                /* the capture (pipes, capture fluid) starts at the top of the next iteration */
+                c.flow_ended = 1;
+                c.flow_wall = sd_now() - c.wall0; /* the build included */
+            } else {
+                c.phase_t0 = c.w->time;
                 c.phase = next;
             }
         }
@@ -553,18 +1046,29 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         if (step % progress_every == 0) progress(&c, t_end_est);
     }
     if (o->log && o->progress_tty) fputc('\n', o->log);
-    if (c.phase != PH_DONE && c.phase != PH_RUN) {
-        c.phase_end[c.phase] = c.w->time;
-        c.phase_wall[c.phase] = sd_now() - phase_w0;
-    }
-    write_series_row(&c);
-    snapshot(&c, "final");
-    if (s->flume_on && code == 0) plot(&c, "final", "side_final.png", s->x_dam - 1.0, s->x_end);
-    fclose(c.series);
-    if (c.traj) fclose(c.traj);
-    if (c.pvd_on) {
-        sd_vtk_series_flush(&c.pvd);
-        sd_vtk_series_free(&c.pvd);
+    if (res->stopped_at_flow_end) {
+        /* a shared flow: its outputs end at the checkpoint, which the branches continue */
+        close_outputs(&c);
+    } else {
+        if (c.phase != PH_DONE && c.phase != PH_RUN && !c.flow_ended) {
+            c.phase_end[c.phase] = c.w->time;
+            c.phase_wall[c.phase] = sd_now() - c.phase_w0;
+        } else if (c.phase == PH_CAPTURE) {
+            c.phase_end[c.phase] = c.w->time;
+            c.phase_wall[c.phase] = sd_now() - c.phase_w0;
+        }
+        write_series_row(&c);
+        snapshot(&c, "final");
+        if (s->flume_on && code == 0) plot(&c, "final", "side_final.png", s->x_dam - 1.0, s->x_end);
+        fclose(c.series);
+        c.series = NULL;
+        if (c.traj) fclose(c.traj);
+        c.traj = NULL;
+        if (c.pvd_on) {
+            sd_vtk_series_flush(&c.pvd);
+            sd_vtk_series_free(&c.pvd);
+            c.pvd_on = 0;
+        }
     }
     if (write_summary(&c, res, code, msg)) {
         fprintf(o->err, "%s: cannot write summary.json: %s\n", c.dir, strerror(errno));
@@ -574,7 +1078,36 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
     for (int k = 0; k < c.info.n_pipes; k++) res->peak_dam_force = fmax(res->peak_dam_force, c.pipe_peak[k]);
     res->steps = c.w->step;
     res->wall_time = sd_now() - c.wall0;
+    res->flow_wall = c.flow_wall;
+    res->restarted = c.restarted_from != NULL;
+    res->state_hash = sd_world_state_hash(c.w);
     for (int k = 0; k < 4; k++) res->phase_end[k] = c.phase_end[k];
     sd_world_destroy(c.w);
     return code;
+}
+
+int sd_run_check_restart(const sd_scenario *s, const char *path, char *msg, size_t msglen)
+{
+    sd_world *w = NULL;
+    void *blob = NULL;
+    size_t len = 0;
+    char m[1600];
+    sd_status st = sd_checkpoint_read(path, &w, &blob, &len, m, sizeof m);
+    if (st) {
+        snprintf(msg, msglen, "%s", m[0] ? m : sd_status_message(st));
+        return -1;
+    }
+    run_ctx c;
+    memset(&c, 0, sizeof c);
+    c.s = s;
+    restored r;
+    int bad = state_unpack(&c, blob, len, &r, m, sizeof m);
+    free(blob);
+    sd_world_destroy(w);
+    if (bad) {
+        snprintf(msg, msglen, "%s: %s", path, m);
+        return -1;
+    }
+    restored_free(&r);
+    return 0;
 }

@@ -3,6 +3,7 @@
 #define SD_RUN_H
 
 #include <signal.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "scenario.h"
@@ -13,6 +14,15 @@ typedef struct {
     volatile sig_atomic_t *stop;   /* set asynchronously to stop cleanly (Ctrl-C) */
     FILE *log;                     /* progress and messages */
     FILE *err;                     /* errors */
+    /* Branching (docs/sweep.md). A flume run builds its scene without the dam pipes and adds
+     * them when the capture phase starts, so that everything before depends on no dam-layout
+     * or capture-phase key (sd_scenario_is_capture_key). */
+    const char *checkpoint_flow_end; /* write a checkpoint (world + driver state) here when the flow ends */
+    int stop_at_flow_end;            /* 1: return (0) right after that point: the shared flow of a branch */
+    const char *restart;             /* continue from this flow-end checkpoint instead of building the
+                                      * scene; the scenario may differ from the writer's only in capture
+                                      * keys; the time series (and VTK files, from the checkpoint's
+                                      * directory) up to the checkpoint are carried into outdir */
 } sd_run_opts;
 
 typedef struct {
@@ -25,6 +35,11 @@ typedef struct {
     double phase_end[4];           /* simulated time at the end of packing, flow, capture */
     int interrupted;
     long steps;
+    uint64_t state_hash;           /* sd_world_state_hash at the end */
+    int stopped_at_flow_end;       /* stop_at_flow_end was honoured */
+    int restarted;                 /* the run continued from opts.restart */
+    double flow_wall;              /* wall time from the start to the flow end (build, packing, flow), s;
+                                    * a restarted run: the checkpoint writer's */
 } sd_run_result;
 
 /* Build and run; returns 0 on success, 1 on a failed run, 2 on bad input, 130 when stopped. */
@@ -34,5 +49,10 @@ typedef struct {
 double sd_run_capture_depth(const sd_scenario *s, const sd_world *w);
 
 int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *res);
+
+/* Can the scenario continue from this flow-end checkpoint? Reads and checks it whole (format,
+ * checksum, driver state, scenario fingerprint); 0 if so, else -1 and msg names the file and
+ * what is wrong. */
+int sd_run_check_restart(const sd_scenario *s, const char *path, char *msg, size_t msglen);
 
 #endif

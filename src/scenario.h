@@ -3,6 +3,7 @@
 #ifndef SD_SCENARIO_H
 #define SD_SCENARIO_H
 
+#include <stdint.h>
 #include <stdio.h>
 
 #include "sabodem.h"
@@ -79,5 +80,15 @@ void sd_scenario_free(sd_scenario *s);
 void sd_scenario_print_params(FILE *f, int md);
 /* Echo the effective values as JSON object members (for the run summary). */
 void sd_scenario_echo_json(const sd_scenario *s, FILE *f);
+/* 1 for the keys that act only from the capture phase on: the dam layout (dam.l_h, dam.l_v,
+ * dam.top_beam, dam.columns, dam.beams) and the capture-phase settings (phases.capture_limit,
+ * quiet_time, ke_fraction, water.probe, water.h_d_floating). Runs that differ only in these
+ * share their packing and flow, bit for bit: a sweep branches them from one flow-end
+ * checkpoint (docs/sweep.md). */
+int sd_scenario_is_capture_key(const char *key);
+/* Fingerprint of everything else (every other parameter, exactly, and the explicit elements):
+ * equal for two scenarios whose packing and flow are identical. Stored in a flow-end
+ * checkpoint; a restart with a scenario of another fingerprint is refused. */
+uint64_t sd_scenario_branch_hash(const sd_scenario *s);
 
 #endif

@@ -1,6 +1,14 @@
 /* The sweep driver. Each run is a child process (fork) running one scenario with one thread,
  * so the runs share nothing and a crash of one does not take the others down. A run is done
- * when its directory holds result.csv; resuming skips those. */
+ * when its directory holds result.csv; resuming skips those.
+ *
+ * Branching (docs/sweep.md): runs that differ only in capture-phase keys (the dam layout and
+ * the capture settings, sd_scenario_is_capture_key) have the same packing and flow, bit for
+ * bit. The sweep groups them by everything else and the seed, runs packing + flow once per
+ * group (a child that stops at the flow end and leaves DIR/branch/<key>/flow_end.ckpt), then
+ * each run of the group continues from that checkpoint with its own layout. A checkpoint,
+ * written atomically, marks its flow done; resuming reuses it, after reading it whole: a
+ * damaged or foreign one is refused (the sweep stops before running anything and names it). */
 #include "sweep.h"
 
 #include <errno.h>
@@ -113,11 +121,29 @@ static int load_sweep(const char *path, sweep_def *d, FILE *err)
     return bad ? -1 : 0;
 }
 
+enum { ST_PENDING = 0, ST_RUNNING, ST_DONE, ST_FAILED, ST_SKIPPED, ST_READY, ST_UNNEEDED };
+
 typedef struct {
-    int case_id, seed;
+    int case_id, seed, seed_idx;
     int idx[MAX_VARY];
+    char name[64];
     char dir[1200];
+    int group; /* branch group, -1: a straight run */
+    int state;
+    pid_t pid;
 } run_item;
+
+typedef struct {
+    char key[256];
+    char dir[1200];
+    char ckpt[1300];
+    int first; /* a member run (its overrides build the shared flow) */
+    int n_runs, n_todo;
+    int state; /* ST_PENDING (to compute), ST_RUNNING, ST_READY, ST_FAILED, ST_UNNEEDED */
+    int reused;
+    pid_t pid;
+    double t_start;
+} branch_item;
 
 /* Overrides for one run: the sweep's fixed sets, the case values, the seed. */
 static int run_overrides(const sweep_def *d, const run_item *r, char buf[][256], const char **ptr)
@@ -142,6 +168,14 @@ static int run_overrides(const sweep_def *d, const run_item *r, char buf[][256],
     return n;
 }
 
+static int load_run_scenario(const sweep_def *d, const run_item *r, sd_scenario *s, FILE *err)
+{
+    char buf[MAX_SETS + MAX_VARY + 4][256];
+    const char *ptr[MAX_SETS + MAX_VARY + 4];
+    int n = run_overrides(d, r, buf, ptr);
+    return sd_scenario_load(s, d->base, ptr, n, err);
+}
+
 static int file_exists(const char *p)
 {
     struct stat st;
@@ -156,25 +190,53 @@ static void on_term(int sig)
     child_stop = 1;
 }
 
-static int child_run(const sweep_def *d, const run_item *r)
+static void child_signals(void)
 {
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_term;
     sigaction(SIGTERM, &sa, NULL);
-    char buf[MAX_SETS + MAX_VARY + 4][256];
-    const char *ptr[MAX_SETS + MAX_VARY + 4];
-    int n = run_overrides(d, r, buf, ptr);
+}
+
+/* Packing and flow of one branch group, up to the flow-end checkpoint. */
+static int child_flow(const sweep_def *d, const run_item *r, const branch_item *g)
+{
+    child_signals();
+    char logp[1300];
+    snprintf(logp, sizeof logp, "%s.log", g->dir);
+    FILE *log = fopen(logp, "w");
+    if (!log) return 1;
+    sd_scenario s;
+    if (load_run_scenario(d, r, &s, log)) {
+        fclose(log);
+        return 2;
+    }
+    sd_run_opts o = {.outdir = g->dir, .stop = &child_stop, .log = log, .err = log};
+    o.checkpoint_flow_end = g->ckpt;
+    o.stop_at_flow_end = 1;
+    sd_run_result res;
+    int code = sd_run_scenario(&s, &o, &res);
+    if (code == 0 && !res.stopped_at_flow_end) code = 1;
+    sd_scenario_free(&s);
+    fclose(log);
+    return code;
+}
+
+/* One run: straight, or the capture of a branch from its group's checkpoint. */
+static int child_run(const sweep_def *d, const run_item *r, const char *restart)
+{
+    child_signals();
     sd_scenario s;
     char logp[1300];
     snprintf(logp, sizeof logp, "%s.log", r->dir);
     FILE *log = fopen(logp, "w");
     if (!log) return 1;
-    if (sd_scenario_load(&s, d->base, ptr, n, log)) {
+    if (load_run_scenario(d, r, &s, log)) {
         fclose(log);
         return 2;
     }
-    sd_run_opts o = {r->dir, 0, &child_stop, log, log};
+    sd_run_opts o = {.outdir = r->dir, .stop = &child_stop, .log = log, .err = log};
+    o.restart = restart;
     sd_run_result res;
     double t0 = sd_now();
     int code = sd_run_scenario(&s, &o, &res);
@@ -192,8 +254,8 @@ static int child_run(const sweep_def *d, const run_item *r)
             fprintf(f, ",%.6f", res.p_v);
             for (int k = 0; k < SD_MAX_CLASSES && k < s.n_classes; k++) fprintf(f, ",%.6f", res.p_v_class[k]);
             for (int k = s.n_classes; k < 4; k++) fprintf(f, ",");
-            fprintf(f, ",%.6f,%.6e,%d,%.2f,%.4f\n", res.p_v_logs, res.peak_dam_force, res.n_passed, wall,
-                    s.capture_limit);
+            fprintf(f, ",%.6f,%.6e,%d,%.2f,%.4f,%.2f,%d,%016llx\n", res.p_v_logs, res.peak_dam_force, res.n_passed, wall,
+                    s.capture_limit, res.flow_wall, res.restarted, (unsigned long long)res.state_hash);
             if (fclose(f) || rename(tmp, path)) code = 1;
         }
     }
@@ -202,8 +264,56 @@ static int child_run(const sweep_def *d, const run_item *r)
     return code;
 }
 
-int sd_sweep_run(const char *sweep_file, const char *outdir, int parallel, volatile sig_atomic_t *stop, FILE *log,
-                 FILE *err)
+/* A directory name from the group's values: key=value pairs of the non-capture keys and the
+ * seed, with anything but [A-Za-z0-9._=+-] replaced. */
+static void branch_key(const sweep_def *d, const run_item *r, int gi, char *out, size_t n)
+{
+    char k[1024] = "";
+    size_t len = 0;
+    for (int v = 0; v < d->n_vary; v++) {
+        if (sd_scenario_is_capture_key(d->vary_key[v])) continue;
+        int w = snprintf(k + len, sizeof k - len, "%s=%s_", d->vary_key[v], d->vary_val[v][r->idx[v]]);
+        if (w < 0 || (size_t)w >= sizeof k - len) {
+            len = sizeof k;
+            break;
+        }
+        len += (size_t)w;
+    }
+    if (len < sizeof k) snprintf(k + len, sizeof k - len, "seed%d", r->seed);
+    if (len >= sizeof k || strlen(k) > 160) snprintf(k, sizeof k, "b%03d_seed%d", gi, r->seed);
+    for (char *q = k; *q; q++)
+        if (!((*q >= 'a' && *q <= 'z') || (*q >= 'A' && *q <= 'Z') || (*q >= '0' && *q <= '9') || strchr("._=+-", *q)))
+            *q = '_';
+    snprintf(out, n, "%s", k);
+}
+
+static void kill_children(run_item *items, int total, branch_item *groups, int ng)
+{
+    for (int i = 0; i < total; i++)
+        if (items[i].state == ST_RUNNING && items[i].pid > 0) kill(items[i].pid, SIGTERM);
+    for (int g = 0; g < ng; g++)
+        if (groups[g].state == ST_RUNNING && groups[g].pid > 0) kill(groups[g].pid, SIGTERM);
+}
+
+/* Fields of a result.csv line (split on commas, in place); returns the count. */
+static int split_csv(char *line, char **f, int max)
+{
+    int n = 0;
+    char *p = line;
+    while (n < max) {
+        f[n++] = p;
+        char *c = strchr(p, ',');
+        if (!c) break;
+        *c = '\0';
+        p = c + 1;
+    }
+    char *nl = strchr(f[n - 1], '\n');
+    if (nl) *nl = '\0';
+    return n;
+}
+
+int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts *so, volatile sig_atomic_t *stop,
+                 FILE *log, FILE *err)
 {
     sweep_def d;
     if (load_sweep(sweep_file, &d, err)) return 2;
@@ -213,30 +323,136 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, int parallel, volat
     run_item *items = calloc((size_t)total, sizeof(*items));
     if (!items) return 1;
     /* validate every case before running anything */
-    int bad = 0;
+    int bad = 0, flume = 0;
     for (int c = 0; c < ncase; c++)
         for (int s = 0; s < d.runs; s++) {
             run_item *r = &items[c * d.runs + s];
             r->case_id = c;
+            r->seed_idx = s;
             r->seed = (int)(d.seed_base + s);
+            r->group = -1;
             int rem = c;
             for (int v = d.n_vary - 1; v >= 0; v--) {
                 r->idx[v] = rem % d.n_val[v];
                 rem /= d.n_val[v];
             }
-            snprintf(r->dir, sizeof r->dir, "%s/runs/case%03d_seed%d", outdir, c, r->seed);
+            snprintf(r->name, sizeof r->name, "case%03d_seed%d", c, r->seed);
+            snprintf(r->dir, sizeof r->dir, "%s/runs/%s", outdir, r->name);
             if (s == 0) {
-                char buf[MAX_SETS + MAX_VARY + 4][256];
-                const char *ptr[MAX_SETS + MAX_VARY + 4];
-                int n = run_overrides(&d, r, buf, ptr);
                 sd_scenario sc;
-                if (sd_scenario_load(&sc, d.base, ptr, n, err)) {
+                if (load_run_scenario(&d, r, &sc, err)) {
                     fprintf(err, "%s: case %d is invalid (see above)\n", sweep_file, c);
                     bad = 1;
-                } else sd_scenario_free(&sc);
+                } else {
+                    if (c == 0) flume = sc.flume_on;
+                    sd_scenario_free(&sc);
+                }
             }
         }
     if (bad) {
+        free(items);
+        return 2;
+    }
+    /* branch groups: the non-capture case values and the seed */
+    int layouts = 1;
+    char branch_keys[512] = "";
+    for (int v = 0; v < d.n_vary; v++)
+        if (sd_scenario_is_capture_key(d.vary_key[v])) {
+            layouts *= d.n_val[v];
+            size_t l = strlen(branch_keys);
+            snprintf(branch_keys + l, sizeof branch_keys - l, "%s%s", l ? ", " : "", d.vary_key[v]);
+        }
+    int branching = flume && layouts > 1 && !so->no_branch;
+    int ng = branching ? total / layouts : 0;
+    branch_item *groups = calloc((size_t)ng + 1, sizeof(*groups));
+    if (!groups) {
+        free(items);
+        return 1;
+    }
+    if (branching) {
+        for (int i = 0; i < total; i++) {
+            run_item *r = &items[i];
+            int gi = 0;
+            for (int v = 0; v < d.n_vary; v++)
+                if (!sd_scenario_is_capture_key(d.vary_key[v])) gi = gi * d.n_val[v] + r->idx[v];
+            gi = gi * d.runs + r->seed_idx;
+            r->group = gi;
+            branch_item *g = &groups[gi];
+            if (g->n_runs++ == 0) {
+                g->first = i;
+                branch_key(&d, r, gi, g->key, sizeof g->key);
+                snprintf(g->dir, sizeof g->dir, "%s/branch/%s", outdir, g->key);
+                snprintf(g->ckpt, sizeof g->ckpt, "%s/flow_end.ckpt", g->dir);
+            }
+        }
+    }
+    int skipped = 0;
+    for (int i = 0; i < total; i++) {
+        char p[1300];
+        snprintf(p, sizeof p, "%s/result.csv", items[i].dir);
+        if (file_exists(p)) {
+            items[i].state = ST_SKIPPED;
+            skipped++;
+        } else if (items[i].group >= 0) groups[items[i].group].n_todo++;
+    }
+    int reused = 0, to_compute = 0;
+    for (int g = 0; g < ng; g++) {
+        if (groups[g].n_todo == 0) groups[g].state = ST_UNNEEDED;
+        else if (file_exists(groups[g].ckpt)) {
+            groups[g].state = ST_READY;
+            groups[g].reused = 1;
+            reused++;
+        } else {
+            groups[g].state = ST_PENDING;
+            to_compute++;
+        }
+    }
+    if (so->dry_run) {
+        fprintf(log, "sweep %s (dry run, outputs would go to %s): %d cases x %d seeds = %d runs, %d already done\n",
+                sweep_file, outdir, ncase, d.runs, total, skipped);
+        if (branching)
+            fprintf(log, "branching on %s: %d shared flows (packing + flow, once each), %d layouts each; %d to compute, %d checkpoints to reuse\n",
+                    branch_keys, ng, layouts, to_compute, reused);
+        else
+            fprintf(log, "no branching (%s): every run packs and flows on its own\n",
+                    so->no_branch ? "--no-branch" : !flume ? "not a flume scenario" : "no capture-phase key varies");
+        for (int g = 0; g < ng; g++) {
+            fprintf(log, "branch %s: %s ->", groups[g].key,
+                    groups[g].state == ST_UNNEEDED ? "not needed" : groups[g].reused ? "reuse checkpoint" : "pack + flow");
+            for (int i = 0; i < total; i++)
+                if (items[i].group == g) fprintf(log, " %s", items[i].name);
+            fputc('\n', log);
+        }
+        for (int i = 0; i < total; i++) {
+            const run_item *r = &items[i];
+            fprintf(log, "run %s:", r->name);
+            for (int v = 0; v < d.n_vary; v++) fprintf(log, " %s=%s", d.vary_key[v], d.vary_val[v][r->idx[v]]);
+            fprintf(log, " solver.seed=%d", r->seed);
+            if (r->group >= 0) fprintf(log, " (branch %s)", groups[r->group].key);
+            fprintf(log, "%s\n", r->state == ST_SKIPPED ? " [done]" : "");
+        }
+        free(groups);
+        free(items);
+        return 0;
+    }
+    /* a checkpoint to reuse must be whole and made for this group: refuse before running */
+    for (int g = 0; g < ng; g++) {
+        if (!groups[g].reused) continue;
+        sd_scenario sc;
+        char msg[2048];
+        if (load_run_scenario(&d, &items[groups[g].first], &sc, err)) {
+            bad = 1;
+            continue;
+        }
+        if (sd_run_check_restart(&sc, groups[g].ckpt, msg, sizeof msg)) {
+            fprintf(err, "sweep: refusing the flow checkpoint %s\n  %s\n  delete it to compute that flow again\n",
+                    groups[g].ckpt, msg);
+            bad = 1;
+        }
+        sd_scenario_free(&sc);
+    }
+    if (bad) {
+        free(groups);
         free(items);
         return 2;
     }
@@ -244,44 +460,70 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, int parallel, volat
     snprintf(runs_dir, sizeof runs_dir, "%s/runs", outdir);
     if (sd_mkdir_p(runs_dir)) {
         fprintf(err, "%s: cannot create: %s\n", outdir, strerror(errno));
+        free(groups);
         free(items);
         return 1;
     }
+    if (branching) {
+        snprintf(runs_dir, sizeof runs_dir, "%s/branch", outdir);
+        if (sd_mkdir_p(runs_dir)) {
+            fprintf(err, "%s: cannot create: %s\n", runs_dir, strerror(errno));
+            free(groups);
+            free(items);
+            return 1;
+        }
+    }
+    int parallel = so->parallel;
     if (parallel <= 0) parallel = d.parallel;
     if (parallel <= 0) parallel = (int)sysconf(_SC_NPROCESSORS_ONLN);
     if (parallel < 1) parallel = 1;
-    int done = 0, failed = 0, skipped = 0, next = 0, running = 0;
-    pid_t *pids = calloc((size_t)total, sizeof(pid_t));
+    int done = 0, failed = 0, running = 0, flows_run = 0, runs_run = 0, flows_failed = 0;
     double t0 = sd_now();
-    for (int i = 0; i < total; i++) {
-        char p[1300];
-        snprintf(p, sizeof p, "%s/result.csv", items[i].dir);
-        if (file_exists(p)) {
-            pids[i] = -1;
-            skipped++;
-        }
-    }
     fprintf(log, "sweep %s: %d cases x %d runs = %d runs, %d already done, %d in parallel\n", sweep_file, ncase, d.runs,
             total, skipped, parallel);
+    if (branching)
+        fprintf(log, "sweep: branching on %s: %d groups of %d layouts share their packing and flow (%d to compute, %d checkpoints reused)\n",
+                branch_keys, ng, layouts, to_compute, reused);
     int interrupted = 0;
     while (1) {
-        while (!interrupted && running < parallel && next < total) {
-            if (pids[next] == -1) {
-                next++;
-                continue;
-            }
+        while (!interrupted && running < parallel) {
+            /* shared flows first: each unlocks several runs */
+            int gi = -1, ri = -1;
+            for (int g = 0; g < ng && gi < 0; g++)
+                if (groups[g].state == ST_PENDING) gi = g;
+            if (gi < 0)
+                for (int i = 0; i < total && ri < 0; i++)
+                    if (items[i].state == ST_PENDING && (items[i].group < 0 || groups[items[i].group].state == ST_READY))
+                        ri = i;
+            if (gi < 0 && ri < 0) break;
             fflush(NULL);
             pid_t pid = fork();
             if (pid == 0) {
                 signal(SIGINT, SIG_IGN); /* the parent stops the children */
-                _exit(child_run(&d, &items[next]));
+                if (gi >= 0) _exit(child_flow(&d, &items[groups[gi].first], &groups[gi]));
+                _exit(child_run(&d, &items[ri], items[ri].group >= 0 ? groups[items[ri].group].ckpt : NULL));
             }
             if (pid < 0) {
                 fprintf(err, "sweep: fork failed: %s\n", strerror(errno));
                 break;
             }
-            pids[next++] = pid;
             running++;
+            if (gi >= 0) {
+                groups[gi].state = ST_RUNNING;
+                groups[gi].pid = pid;
+                groups[gi].t_start = sd_now();
+                flows_run++;
+                fprintf(log, "sweep: flow %s started (packing + flow for %d runs)\n", groups[gi].key, groups[gi].n_todo);
+            } else {
+                items[ri].state = ST_RUNNING;
+                items[ri].pid = pid;
+                runs_run++;
+                if (items[ri].group >= 0)
+                    fprintf(log, "sweep: run %s started (capture from branch %s)\n", items[ri].name,
+                            groups[items[ri].group].key);
+                else fprintf(log, "sweep: run %s started\n", items[ri].name);
+            }
+            fflush(log);
         }
         if (running == 0) break;
         int status;
@@ -290,38 +532,69 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, int parallel, volat
             if (errno == EINTR) {
                 if (stop && *stop && !interrupted) {
                     interrupted = 1;
-                    for (int i = 0; i < total; i++)
-                        if (pids[i] > 0) kill(pids[i], SIGTERM);
+                    kill_children(items, total, groups, ng);
                 }
                 continue;
             }
             break;
         }
-        running--;
-        for (int i = 0; i < total; i++)
-            if (pids[i] == pid) {
-                pids[i] = 0;
-                int ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-                if (ok) done++;
-                else if (!interrupted) {
-                    failed++;
-                    fprintf(err, "sweep: run %s failed (see %s.log)\n", items[i].dir, items[i].dir);
+        int ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+        int found = 0;
+        for (int g = 0; g < ng && !found; g++)
+            if (groups[g].state == ST_RUNNING && groups[g].pid == pid) {
+                found = 1;
+                running--;
+                groups[g].pid = 0;
+                if (ok && file_exists(groups[g].ckpt)) {
+                    groups[g].state = ST_READY;
+                    fprintf(log, "sweep: flow %s done in %.1f s\n", groups[g].key, sd_now() - groups[g].t_start);
+                } else {
+                    groups[g].state = ST_FAILED;
+                    if (!interrupted) {
+                        flows_failed++;
+                        fprintf(err, "sweep: flow %s failed (see %s.log); its runs are not run\n", groups[g].key,
+                                groups[g].dir);
+                        for (int i = 0; i < total; i++)
+                            if (items[i].group == g && items[i].state == ST_PENDING) {
+                                items[i].state = ST_FAILED;
+                                failed++;
+                            }
+                    }
                 }
-                break;
             }
+        for (int i = 0; i < total && !found; i++)
+            if (items[i].state == ST_RUNNING && items[i].pid == pid) {
+                found = 1;
+                running--;
+                items[i].pid = 0;
+                if (ok) {
+                    items[i].state = ST_DONE;
+                    done++;
+                } else {
+                    items[i].state = ST_FAILED;
+                    if (!interrupted) {
+                        failed++;
+                        fprintf(err, "sweep: run %s failed (see %s.log)\n", items[i].dir, items[i].dir);
+                    }
+                }
+            }
+        if (!found) continue;
         double el = sd_now() - t0;
         int remaining = total - skipped - done - failed;
         fprintf(log, "sweep: %d/%d done (%d skipped, %d failed), %d running, elapsed %.0f s, ETA %.0f s\n",
                 done + skipped, total, skipped, failed, running, el,
-                done > 0 ? el / done * remaining / (running > 0 ? 1.0 : 1.0) : 0.0);
+                done > 0 ? el / done * remaining : 0.0);
         fflush(log);
         if (stop && *stop && !interrupted) {
             interrupted = 1;
-            for (int i = 0; i < total; i++)
-                if (pids[i] > 0) kill(pids[i], SIGTERM);
+            kill_children(items, total, groups, ng);
         }
     }
-    /* results.csv from every finished run, in run order */
+    /* results.csv from every finished run, in run order; and what branching saved */
+    double cost_straight = 0.0, saved = 0.0;
+    int n_branched = 0;
+    double *gflow = calloc((size_t)ng + 1, sizeof(double));
+    int *gdone = calloc((size_t)ng + 1, sizeof(int));
     char path[1300], tmp[1400];
     snprintf(path, sizeof path, "%s/results.csv", outdir);
     snprintf(tmp, sizeof tmp, "%s.tmp", path);
@@ -329,24 +602,55 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, int parallel, volat
     if (f) {
         fprintf(f, "case,seed");
         for (int v = 0; v < d.n_vary; v++) fprintf(f, ",%s", d.vary_key[v]);
-        fprintf(f, ",p_v,p_v_class0,p_v_class1,p_v_class2,p_v_class3,p_v_logs,peak_dam_force_N,passed,wall_s,capture_limit_s\n");
+        fprintf(f, ",p_v,p_v_class0,p_v_class1,p_v_class2,p_v_class3,p_v_logs,peak_dam_force_N,passed,wall_s,capture_limit_s,"
+                   "flow_wall_s,branched,state_hash\n");
         for (int i = 0; i < total; i++) {
-            char rp[1300], line[2048];
+            char rp[1300], line[2048], copy[2048];
             snprintf(rp, sizeof rp, "%s/result.csv", items[i].dir);
             FILE *r = fopen(rp, "r");
             if (!r) continue;
-            if (fgets(line, sizeof line, r)) fputs(line, f);
+            if (fgets(line, sizeof line, r)) {
+                fputs(line, f);
+                memcpy(copy, line, sizeof copy);
+                char *fl[64];
+                int nf = split_csv(copy, fl, 64);
+                int want = 2 + d.n_vary + 13;
+                if (nf == want && gflow && gdone) {
+                    double wall = atof(fl[nf - 5]), fw = atof(fl[nf - 3]);
+                    int br = atoi(fl[nf - 2]);
+                    cost_straight += wall + (br ? fw : 0.0);
+                    if (br && items[i].group >= 0) {
+                        n_branched++;
+                        gflow[items[i].group] = fw;
+                        gdone[items[i].group]++;
+                    }
+                }
+            }
             fclose(r);
         }
         fclose(f);
         rename(tmp, path);
     }
+    int shared = 0;
+    for (int g = 0; g < ng && gflow && gdone; g++)
+        if (gdone[g] > 0) {
+            saved += (gdone[g] - 1) * gflow[g];
+            shared++;
+        }
+    free(gflow);
+    free(gdone);
     char cmd[4096];
     snprintf(cmd, sizeof cmd, "/usr/bin/python3 \"%s/scripts/plot_sweep.py\" \"%s\" > \"%s/plot.log\" 2>&1", SD_SOURCE_DIR,
              outdir, outdir);
     if (!interrupted && system(cmd) != 0) fprintf(log, "note: figures not drawn (see %s/plot.log)\n", outdir);
-    free(pids);
+    fprintf(log, "sweep: this invocation started %d flow(s) and %d run(s) in %.1f s; %d run(s) were already done, %d flow checkpoint(s) reused\n",
+            flows_run, runs_run, sd_now() - t0, skipped, reused);
+    if (branching && cost_straight > 0)
+        fprintf(log, "sweep: branching saved %.1f s of %.1f s of run time (%.0f %%): %d runs continued from %d shared flows"
+                     " (process seconds, summed over the finished runs; a straight run packs and flows itself)\n",
+                saved, cost_straight, cost_straight > 0 ? 100.0 * saved / cost_straight : 0.0, n_branched, shared);
+    free(groups);
     free(items);
     if (interrupted) return 130;
-    return failed ? 1 : 0;
+    return failed || flows_failed ? 1 : 0;
 }

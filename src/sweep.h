@@ -6,8 +6,15 @@
 #include <signal.h>
 #include <stdio.h>
 
-/* Returns 0 when every run finished, 1 when some failed, 2 on bad input, 130 when stopped. */
-int sd_sweep_run(const char *sweep_file, const char *outdir, int parallel, volatile sig_atomic_t *stop, FILE *log,
-                 FILE *err);
+typedef struct {
+    int parallel;  /* processes at once (0: the sweep file's, else the number of cores) */
+    int dry_run;   /* list the runs and branches (and what is done) without running anything */
+    int no_branch; /* every run packs and flows on its own, even when capture keys vary */
+} sd_sweep_opts;
+
+/* Returns 0 when every run finished, 1 when some failed, 2 on bad input (including a damaged
+ * or foreign flow checkpoint to reuse), 130 when stopped. */
+int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts *opts, volatile sig_atomic_t *stop,
+                 FILE *log, FILE *err);
 
 #endif

@@ -52,6 +52,19 @@ expect set-unknown 2 "--set:1:1: unknown key 'contact.kn'" check "$tmp/good.yaml
 expect bad-option 2 "unknown or incomplete option" run "$tmp/good.yaml" --frobnicate
 expect params 0 "solver.dt" params
 
+# branching flags: bad values and files are refused, naming them
+expect checkpoint-at-bad 2 "--checkpoint-at: unknown point 'capture'" run "$src_dir/examples/flume_small.yaml" --checkpoint-at capture
+expect checkpoint-at-noflume 2 "good.yaml: --checkpoint-at needs a flume scenario" run "$tmp/good.yaml" --checkpoint-at flow_end -o "$tmp/ck-out"
+expect restart-missing 2 "nothere.ckpt: cannot open" run "$src_dir/examples/flume_small.yaml" --restart "$tmp/nothere.ckpt" -o "$tmp/rs-out"
+printf 'not a checkpoint' > "$tmp/junk.ckpt"
+expect restart-junk 2 "junk.ckpt: not a sabodem checkpoint" run "$src_dir/examples/flume_small.yaml" --restart "$tmp/junk.ckpt" -o "$tmp/rs-out"
+[ ! -e "$tmp/rs-out" ] && pass=$((pass + 1)) || { echo "FAIL bad restart left an output directory"; fail=$((fail + 1)); }
+expect restart-check 2 "unknown or incomplete option '--restart'" check "$src_dir/examples/flume_small.yaml" --restart "$tmp/junk.ckpt"
+# the paper's Table 2 matrix: 60 runs from 15 shared flows, listed without running
+expect table2-dry-run 0 "branching on dam.l_v: 15 shared flows" sweep "$src_dir/examples/shibuya2009-table2.yaml" --dry-run -o "$tmp/t2"
+[ "$(grep -c '^run case' "$tmp/out")" -eq 60 ] && [ ! -e "$tmp/t2" ] && pass=$((pass + 1)) || { echo "FAIL table2 dry run"; fail=$((fail + 1)); }
+expect sweep-parallel-bad 2 "--parallel: expected a positive integer" sweep "$src_dir/examples/shibuya2009-table2.yaml" --parallel 0
+
 # Ctrl-C: exit 130, summary and VTK series closed and valid
 "$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/int" --set output.png=false >"$tmp/int.log" 2>&1 &
 pid=$!
