@@ -254,8 +254,8 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
  * pairs' contributions in ascending pair index, whatever the thread count, so 1 and N threads
  * give the same bits.
  * One thread: one pass over the pairs, adding as it goes.
- * T threads: the bodies are split into T equal index ranges (the store is sorted by cell, so
- * a range is a region of space) and thread t owns range t. Pass 1 computes, once each, the
+ * T threads: the bodies are split into T index ranges holding about nbb/T pairs each (the
+ * store is sorted by cell, so a range is a region of space) and thread t owns range t. Pass 1 computes, once each, the
  * pairs whose two bodies have different owners ("cross" pairs, a thin layer at the range
  * boundaries) into the pair's own slot, and finds for every owner the span of pair indices
  * touching its bodies. Pass 2: each thread walks its span in ascending order, computing the
@@ -302,13 +302,16 @@ static long bb_serial_pass(sd_world *w, const sd_law *law)
 
 #define SD_MAX_OWNERS 64
 
-/* owner of body i when n bodies are split into T ranges [n t / T, n (t+1) / T) */
-static inline int owner_of(int i, int n, int T)
+/* owner of body i: the t with B[t] <= i < B[t + 1], where B[t] = n t / T */
+static inline int owner_of(int i, const int *B, int T)
 {
-    int t = (int)(((long)i * T) / n);
-    if (t + 1 < T && i >= (int)(((long)n * (t + 1)) / T)) t++;
-    if (t > 0 && i < (int)(((long)n * t) / T)) t--;
-    return t;
+    int lo = 0, hi = T - 1;
+    while (lo < hi) {
+        int mid = (lo + hi + 1) >> 1;
+        if (i >= B[mid]) lo = mid;
+        else hi = mid - 1;
+    }
+    return lo;
 }
 
 #ifdef _OPENMP
@@ -317,7 +320,16 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T)
     sd_bodies *b = &w->b;
     const int n = b->n, nbb = w->bb.n;
     /* span[src][t]: lowest and highest pair index touching owner t, seen by chunk src */
-    int lo[SD_MAX_OWNERS][SD_MAX_OWNERS], hi[SD_MAX_OWNERS][SD_MAX_OWNERS];
+    int lo[SD_MAX_OWNERS][SD_MAX_OWNERS], hi[SD_MAX_OWNERS][SD_MAX_OWNERS], B[SD_MAX_OWNERS + 1];
+    /* balance by pairs, not bodies: the pairs are generated in order of their lower body
+     * index, so range t starts at the lower body of pair nbb t / T */
+    B[0] = 0;
+    B[T] = n;
+    for (int t = 1; t < T; t++) {
+        const sd_pair *p = &w->bb.p[(long)nbb * t / T];
+        B[t] = p->a < p->b ? p->a : p->b;
+        if (B[t] < B[t - 1]) B[t] = B[t - 1];
+    }
     long count = 0;
 #pragma omp parallel num_threads(T) reduction(+ : count)
     {
@@ -330,7 +342,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T)
             const int k0 = (int)(((long)nbb * src) / T), k1 = (int)(((long)nbb * (src + 1)) / T);
             for (int k = k0; k < k1; k++) {
                 const sd_pair *p = &w->bb.p[k];
-                const int ta = owner_of(p->a, n, T), tb = owner_of(p->b, n, T);
+                const int ta = owner_of(p->a, B, T), tb = owner_of(p->b, B, T);
                 if (k < lo[src][ta]) lo[src][ta] = k;
                 hi[src][ta] = k;
                 if (ta == tb) continue;
@@ -343,7 +355,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T)
         }
 #pragma omp barrier
         for (int t = tid; t < T; t += nthr) {
-            const int i0 = (int)(((long)n * t) / T), i1 = (int)(((long)n * (t + 1)) / T);
+            const int i0 = B[t], i1 = B[t + 1];
             for (int i = i0; i < i1; i++)
                 b->force[i] = b->torque[i] = v3(0, 0, 0);
             int k0 = nbb, k1 = -1;
