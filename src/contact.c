@@ -255,12 +255,12 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
  * give the same bits.
  * One thread: one pass over the pairs, adding as it goes.
  * T threads: the bodies are split into T index ranges holding about nbb/T pairs each (the
- * store is sorted by cell, so a range is a region of space) and thread t owns range t. Pass 1 computes, once each, the
- * pairs whose two bodies have different owners ("cross" pairs, a thin layer at the range
- * boundaries) into the pair's own slot, and finds for every owner the span of pair indices
- * touching its bodies. Pass 2: each thread walks its span in ascending order, computing the
- * pairs it owns both sides of and adding them, and adding the stored cross pairs to its side.
- * Every pair is computed exactly once, and its history slot written by one thread only. */
+ * store is sorted by cell, so a range is a region of space) and thread t owns range t. At
+ * each candidate rebuild the pairs whose two bodies have different owners ("cross" pairs, a
+ * thin layer at the range boundaries) are listed, with the span of pair indices touching each
+ * range. Pass 1 computes the cross pairs, once each, into their own slots. Pass 2: each thread walks its span in
+ * ascending order, computing the pairs it owns both sides of and adding them, and adding the stored cross pairs to its
+ * side. Every pair is computed exactly once, and its history slot written by one thread only. */
 static int pair_force(const sd_world *w, const sd_law *law, int k, sd_pair_out *o)
 {
     const sd_pair *p = &w->bb.p[k];
@@ -300,79 +300,100 @@ static long bb_serial_pass(sd_world *w, const sd_law *law)
     return count;
 }
 
-#define SD_MAX_OWNERS 64
-
-/* owner of body i: the t with B[t] <= i < B[t + 1], where B[t] = n t / T */
+/* owner of body i: the t with B[t] <= i < B[t + 1] */
 static inline int owner_of(int i, const int *B, int T)
 {
     int lo = 0, hi = T - 1;
     while (lo < hi) {
         int mid = (lo + hi + 1) >> 1;
-        if (i >= B[mid]) lo = mid;
-        else hi = mid - 1;
+        if (i >= B[mid])
+            lo = mid;
+        else
+            hi = mid - 1;
     }
     return lo;
 }
 
+/* The body ranges, spans and cross pairs for T owners, from the current pair list (serial,
+ * O(pairs), once per candidate rebuild). */
 #ifdef _OPENMP
+static sd_status owned_update(sd_world *w, int T)
+{
+    const int n = w->b.n, nbb = w->bb.n;
+    sd_owned *o = w->owned;
+    if (o && o->stamp == w->timers.rebuilds && o->T == T && o->n == n && o->nbb == nbb && o->pairs == w->bb.p)
+        return SD_OK;
+    if (!o) {
+        o = calloc(1, sizeof *o);
+        if (!o) return SD_ERR_NOMEM;
+        w->owned = o;
+    }
+    /* balance by pairs, not bodies: the pairs are generated in order of their lower body
+     * index, so range t starts at the lower body of pair nbb t / T */
+    o->B[0] = 0;
+    o->B[T] = n;
+    for (int t = 1; t < T; t++) {
+        const sd_pair *p = &w->bb.p[(long)nbb * t / T];
+        o->B[t] = p->a < p->b ? p->a : p->b;
+        if (o->B[t] < o->B[t - 1]) o->B[t] = o->B[t - 1];
+    }
+    for (int t = 0; t < T; t++) {
+        o->lo[t] = nbb;
+        o->hi[t] = -1;
+    }
+    o->ncross = 0;
+    for (int k = 0; k < nbb; k++) {
+        const sd_pair *p = &w->bb.p[k];
+        const int ta = owner_of(p->a, o->B, T), tb = owner_of(p->b, o->B, T);
+        if (k < o->lo[ta]) o->lo[ta] = k;
+        o->hi[ta] = k;
+        if (ta == tb) continue;
+        if (k < o->lo[tb]) o->lo[tb] = k;
+        o->hi[tb] = k;
+        if (sd_grow((void **)&o->cross, &o->cap, o->ncross + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+        o->cross[o->ncross++] = k;
+    }
+    o->stamp = w->timers.rebuilds;
+    o->T = T;
+    o->n = n;
+    o->nbb = nbb;
+    o->pairs = w->bb.p;
+    return SD_OK;
+}
+
 static long bb_owned_pass(sd_world *w, const sd_law *law, int T)
 {
     sd_bodies *b = &w->b;
-    const int n = b->n, nbb = w->bb.n;
-    /* span[src][t]: lowest and highest pair index touching owner t, seen by chunk src */
-    int lo[SD_MAX_OWNERS][SD_MAX_OWNERS], hi[SD_MAX_OWNERS][SD_MAX_OWNERS], B[SD_MAX_OWNERS + 1];
-    /* balance by pairs, not bodies: the pairs are generated in order of their lower body
-     * index, so range t starts at the lower body of pair nbb t / T */
-    B[0] = 0;
-    B[T] = n;
-    for (int t = 1; t < T; t++) {
-        const sd_pair *p = &w->bb.p[(long)nbb * t / T];
-        B[t] = p->a < p->b ? p->a : p->b;
-        if (B[t] < B[t - 1]) B[t] = B[t - 1];
-    }
+    const sd_owned *o = w->owned;
+    const int nc = o->ncross;
     long count = 0;
 #pragma omp parallel num_threads(T) reduction(+ : count)
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
-        for (int src = tid; src < T; src += nthr) {
-            for (int t = 0; t < T; t++) {
-                lo[src][t] = nbb;
-                hi[src][t] = -1;
-            }
-            const int k0 = (int)(((long)nbb * src) / T), k1 = (int)(((long)nbb * (src + 1)) / T);
-            for (int k = k0; k < k1; k++) {
-                const sd_pair *p = &w->bb.p[k];
-                const int ta = owner_of(p->a, B, T), tb = owner_of(p->b, B, T);
-                if (k < lo[src][ta]) lo[src][ta] = k;
-                hi[src][ta] = k;
-                if (ta == tb) continue;
-                if (k < lo[src][tb]) lo[src][tb] = k;
-                hi[src][tb] = k;
-                int used = pair_force(w, law, k, &w->bb.out[k]);
-                w->bb.active[k] = (uint8_t)(used > 0);
-                count += used;
-            }
+        /* pass 1: the cross pairs, into their own slots */
+        const int c0 = (int)((long)nc * tid / nthr), c1 = (int)((long)nc * (tid + 1) / nthr);
+        for (int c = c0; c < c1; c++) {
+            const int k = o->cross[c];
+            int used = pair_force(w, law, k, &w->bb.out[k]);
+            w->bb.active[k] = (uint8_t)(used > 0);
+            count += used;
         }
 #pragma omp barrier
+        /* pass 2: each owner its span, in pair order */
         for (int t = tid; t < T; t += nthr) {
-            const int i0 = B[t], i1 = B[t + 1];
+            const int i0 = o->B[t], i1 = o->B[t + 1];
             for (int i = i0; i < i1; i++)
                 b->force[i] = b->torque[i] = v3(0, 0, 0);
-            int k0 = nbb, k1 = -1;
-            for (int src = 0; src < T; src++) {
-                if (lo[src][t] < k0) k0 = lo[src][t];
-                if (hi[src][t] > k1) k1 = hi[src][t];
-            }
-            for (int k = k0; k <= k1; k++) {
+            for (int k = o->lo[t]; k <= o->hi[t]; k++) {
                 const sd_pair *p = &w->bb.p[k];
                 const int own_a = p->a >= i0 && p->a < i1, own_b = p->b >= i0 && p->b < i1;
                 if (own_a && own_b) {
-                    sd_pair_out o;
-                    int used = pair_force(w, law, k, &o);
+                    sd_pair_out out;
+                    int used = pair_force(w, law, k, &out);
                     if (!used) continue;
                     count += used;
-                    add_pair(b, p->a, 0, &o);
-                    add_pair(b, p->b, 1, &o);
+                    add_pair(b, p->a, 0, &out);
+                    add_pair(b, p->b, 1, &out);
                 } else if ((own_a || own_b) && w->bb.active[k]) {
                     add_pair(b, own_a ? p->a : p->b, own_b, &w->bb.out[k]);
                 }
@@ -402,9 +423,11 @@ sd_status sd_contact_compute(sd_world *w)
     long count = 0;
     const int T = bb_owners(w);
 #ifdef _OPENMP
-    if (T > 1)
+    if (T > 1) {
+        sd_status st = owned_update(w, T);
+        if (st) return st;
         count = bb_owned_pass(w, &law, T);
-    else
+    } else
 #endif
         count = bb_serial_pass(w, &law);
     const int nb = b->n;

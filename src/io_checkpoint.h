@@ -12,7 +12,8 @@
  * state (phase, accumulators, rng). Recomputed on reading, deterministically: the body–body
  * CSR and bt_start from the pair lists, the weld ids of the walls (a pure function of the
  * vertices), scratch arrays. Not saved: the per-pair out[] and active[] (rewritten by the next
- * force pass before the gather reads them), the body grid and cell ranges (rebuilt from scratch
+ * force pass before the gather reads them), the parallel pass's body ranges and cross-pair
+ * list (sd_owned: derived from the pair list on first use), the body grid and cell ranges (rebuilt from scratch
  * at every candidate rebuild), the history shear of empty slots (never read; written as 0).
  * io_checkpoint.c asserts the sizes of the structures it serialises, so that a new field in
  * sd_world, sd_world_def, sd_walls, sd_pairlist... fails the build until it is handled here.

@@ -78,6 +78,8 @@ void sd_world_destroy(sd_world *w)
     free(w->bt_man);
     free(w->csr.start);
     free(w->csr.idx);
+    if (w->owned) free(w->owned->cross);
+    free(w->owned);
     free(w->csr.bt_start);
     free(w->gid_map);
     free(w->old_hist);

@@ -5,9 +5,9 @@
 #include <stdint.h>
 #include <stdlib.h>
 
-#include "sabodem.h"
 #include "core/vmath.h"
 #include "geom/geom.h"
+#include "sabodem.h"
 
 /* Moving and fixed bodies (spheres and cylinders): one store, one array per field.
  * Every per-body array is listed in the field table of bodies.c, which drives growth,
@@ -15,27 +15,27 @@
 typedef struct {
     int n, cap;
     int32_t *gid;
-    uint8_t *shape;     /* SD_SHAPE_* */
+    uint8_t *shape; /* SD_SHAPE_* */
     uint8_t *fixed;
     int32_t *tag;
     sd_vec3 *pos;
     sd_vec3 *vel;
-    sd_vec3 *omega;     /* world frame; derived from angmom for cylinders */
-    sd_vec3 *angmom;    /* world-frame angular momentum (cylinders) */
-    sd_quat *quat;      /* attitude; body z axis = cylinder axis */
-    sd_vec3 *axis;      /* derived: quat applied to e_z */
-    sd_vec3 *force;     /* contact force of the last step */
+    sd_vec3 *omega;  /* world frame; derived from angmom for cylinders */
+    sd_vec3 *angmom; /* world-frame angular momentum (cylinders) */
+    sd_quat *quat;   /* attitude; body z axis = cylinder axis */
+    sd_vec3 *axis;   /* derived: quat applied to e_z */
+    sd_vec3 *force;  /* contact force of the last step */
     sd_vec3 *torque;
     sd_vec3 *ext_force; /* external (fluid) force, persistent until changed */
     sd_vec3 *pos_ref;   /* position at the last candidate rebuild */
     sd_vec3 *axis_ref;
     double *radius;
-    double *hl;         /* half length (0 for spheres) */
+    double *hl; /* half length (0 for spheres) */
     double *mass;
     double *inv_mass;
-    double *inv_i_ax;   /* inverse axial moment of inertia (spheres: 1/I) */
-    double *inv_i_tr;   /* inverse transverse moment (spheres: 1/I) */
-    double *bound_r;    /* bounding-sphere radius */
+    double *inv_i_ax; /* inverse axial moment of inertia (spheres: 1/I) */
+    double *inv_i_tr; /* inverse transverse moment (spheres: 1/I) */
+    double *bound_r;  /* bounding-sphere radius */
 } sd_bodies;
 
 typedef struct {
@@ -43,13 +43,13 @@ typedef struct {
     sd_tri *tri;
     int32_t *group;
     uint8_t *active;
-    int32_t (*edge_id)[3];  /* welded global ids: shared edges and vertices get one id */
+    int32_t (*edge_id)[3]; /* welded global ids: shared edges and vertices get one id */
     int32_t (*vert_id)[3];
     int32_t (*edge_vert)[2]; /* per edge id: its two vertex ids (sized n_edges) */
     uint8_t *edge_flat;      /* per edge id: shared by two coplanar triangles (a seam) */
     int n_edges, n_verts;
-    sd_vec3 *force;          /* contact force on each triangle in the last step */
-    int dirty;               /* welding and grid need rebuilding */
+    sd_vec3 *force; /* contact force on each triangle in the last step */
+    int dirty;      /* welding and grid need rebuilding */
 } sd_walls;
 
 /* A candidate pair. Body–body: a, b are body indices ordered by (shape, gid).
@@ -59,7 +59,7 @@ typedef struct {
     int32_t a, b;
     int32_t off;
     int16_t cap;
-    int16_t kind; /* SD_PAIR_* */
+    int16_t kind;      /* SD_PAIR_* */
     double sqrt_m_eff; /* sqrt of the effective mass (SPEC §3), set at rebuild */
 } sd_pair;
 
@@ -71,9 +71,9 @@ typedef struct {
 } sd_hist;
 
 typedef struct {
-    sd_vec3 f_a;  /* force on A */
-    sd_vec3 t_a;  /* torque on A about its centre */
-    sd_vec3 t_b;  /* torque on B about its centre */
+    sd_vec3 f_a; /* force on A */
+    sd_vec3 t_a; /* torque on A about its centre */
+    sd_vec3 t_b; /* torque on B about its centre */
 } sd_pair_out;
 
 typedef struct {
@@ -88,8 +88,8 @@ typedef struct {
 
 /* Per-body list of the body–body pairs it takes part in (CSR), for the race-free gather. */
 typedef struct {
-    int32_t *start; /* n+1 */
-    int32_t *idx;   /* 2k: pair k as A, 2k+1: pair k as B */
+    int32_t *start;    /* n+1 */
+    int32_t *idx;      /* 2k: pair k as A, 2k+1: pair k as B */
     int32_t *bt_start; /* n+1: body-triangle pairs of body i are bt_start[i]..bt_start[i+1] */
     int cap_start, cap_idx, cap_bt_start;
 } sd_csr;
@@ -103,17 +103,31 @@ typedef struct {
     int cap_cells, cap_items;
 } sd_grid;
 
+/* Body ranges and cross pairs of the parallel body-body pass (contact.c), derived from the
+ * pair list: rebuilt with it, never saved. */
+#define SD_MAX_OWNERS 64
+typedef struct {
+    long stamp; /* timers.rebuilds of the pair list it was made from */
+    int T, n, nbb;
+    const void *pairs;
+    int B[SD_MAX_OWNERS + 1];                 /* thread t owns bodies B[t] .. B[t+1]-1 */
+    int lo[SD_MAX_OWNERS], hi[SD_MAX_OWNERS]; /* span of pair indices touching range t */
+    int32_t *cross;                           /* pairs whose bodies have different owners */
+    int ncross, cap;
+} sd_owned;
+
 struct sd_world {
     sd_world_def def;
     sd_bodies b;
     sd_walls w;
-    sd_pairlist bb;  /* body–body */
-    sd_pairlist bt;  /* body–triangle */
+    sd_pairlist bb;      /* body–body */
+    sd_pairlist bt;      /* body–triangle */
     sd_manifold *bt_man; /* narrow-phase result per body–triangle pair (for mesh dedup) */
     int bt_man_cap;
     sd_csr csr;
-    sd_grid grid;    /* bodies */
-    sd_grid tgrid;   /* triangles */
+    sd_owned *owned;  /* NULL until a parallel pass needs it */
+    sd_grid grid;     /* bodies */
+    sd_grid tgrid;    /* triangles */
     int32_t *gid_map; /* gid -> index, -1 removed */
     int gid_cap, next_gid;
     double time;
@@ -128,7 +142,7 @@ struct sd_world {
     sd_hist *old_hist;
     uint64_t *old_keys;
     int n_old, old_cap, old_hist_cap;
-    int keys_collected; /* old keys already taken (a body was removed since) */
+    int keys_collected;  /* old keys already taken (a body was removed since) */
     int32_t (*range)[6]; /* per-body cell range in the body grid */
     int range_cap;
     int32_t (*trange)[6]; /* per-triangle cell range in the triangle grid */
@@ -192,7 +206,8 @@ static inline int sd_grow(void **p, int *cap, int need, size_t elem)
 {
     if (need <= *cap) return 0;
     int nc = *cap > 0 ? *cap : 64;
-    while (nc < need) nc *= 2;
+    while (nc < need)
+        nc *= 2;
     void *q = realloc(*p, (size_t)nc * elem);
     if (!q) return -1;
     *p = q;

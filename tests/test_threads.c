@@ -36,8 +36,68 @@ static uint64_t run(int threads, long *contacts)
     return h;
 }
 
+/* A bed of 3150 spheres (10 and 5 mm, jittered lattice) collapsing in a box: over ten
+ * thousand candidate pairs, so the parallel body-body pass splits the bodies into owned
+ * ranges with cross pairs between them. */
+static uint64_t run_bed(int threads, long *contacts, int *pairs, int *cross)
+{
+#ifdef _OPENMP
+    omp_set_num_threads(threads);
+#else
+    (void)threads;
+#endif
+    sd_world_def d = sd_world_def_default();
+    d.gravity = v3(0, 0, -9.81);
+    d.parallel_min = 0;
+    sd_world *w;
+    if (sd_world_create(&d, &w)) return 0;
+    const double pitch = 0.0100, L = 15 * pitch + 0.002;
+    uint64_t st = 7;
+    for (int k = 0; k < 14; k++)
+        for (int j = 0; j < 15; j++)
+            for (int i = 0; i < 15; i++) {
+                st = st * 6364136223846793005ULL + 1442695040888963407ULL;
+                sd_sphere_def s = sd_sphere_def_default();
+                s.radius = (st >> 60) < 4 ? 0.0025 : 0.005;
+                s.pos = v3((i + 0.5) * pitch + 1e-4 * (double)((st >> 40) & 7), (j + 0.5) * pitch + 1e-3,
+                           (k + 0.5) * pitch);
+                sd_world_add_sphere(w, &s);
+            }
+    sd_vec3 c[8] = {v3(0, 0, 0),   v3(L, 0, 0),   v3(L, L, 0),   v3(0, L, 0),
+                    v3(0, 0, 0.3), v3(L, 0, 0.3), v3(L, L, 0.3), v3(0, L, 0.3)};
+    const int q[5][4] = {{0, 1, 2, 3}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    for (int f = 0; f < 5; f++) {
+        sd_world_add_triangle(w, c[q[f][0]], c[q[f][1]], c[q[f][2]], 0);
+        sd_world_add_triangle(w, c[q[f][0]], c[q[f][2]], c[q[f][3]], 0);
+    }
+    CHECK(sd_world_run(w, 1500) == SD_OK);
+    *contacts = sd_world_contact_count(w);
+    *pairs = w->bb.n;
+    *cross = w->owned ? w->owned->ncross : 0;
+    uint64_t h = sd_world_state_hash(w);
+    sd_world_destroy(w);
+    return h;
+}
+
 int main(void)
 {
+    {
+        long c[3] = {0, 0, 0};
+        int np = 0, nc[3] = {0, 0, 0};
+        uint64_t h[3];
+        for (int t = 0; t < 3; t++)
+            h[t] = run_bed(t + 1, &c[t], &np, &nc[t]);
+        printf("dense bed of 3150 spheres, %d candidate pairs: hash %016llx (1 thread), %016llx (2), %016llx (3); "
+               "%ld contacts; %d and %d cross pairs on 2 and 3 threads\n",
+               np, (unsigned long long)h[0], (unsigned long long)h[1], (unsigned long long)h[2], c[0], nc[1], nc[2]);
+        CHECK(np > 10000);
+        CHECK(c[0] > 300);
+#ifdef _OPENMP
+        CHECK(nc[0] == 0 && nc[1] > 100 && nc[2] > nc[1]); /* the owned ranges really were split */
+#endif
+        CHECK(h[0] == h[1] && h[0] == h[2]);
+        CHECK(c[0] == c[1] && c[0] == c[2]);
+    }
     long c1 = 0, c2 = 0;
     uint64_t h1 = run(1, &c1);
     uint64_t h2 = run(2, &c2);
