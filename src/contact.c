@@ -1,6 +1,7 @@
 /* Per-step contact evaluation: narrow phase through a shape-pair dispatch, history matched by
- * feature, force per pair into the pair's own slot (race-free), then a per-body gather in a
- * fixed order so that 1 and N threads give the same bits. */
+ * feature; body-body forces summed into each body in pair order (owned body ranges per thread,
+ * see below), body-triangle forces per pair then gathered per body in pair order, so that 1
+ * and N threads give the same bits. */
 #include <string.h>
 
 #include "contact_law.h"

@@ -19,7 +19,7 @@
  * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
-_Static_assert(sizeof(struct sd_world) == 872, "struct sd_world changed: update io_checkpoint.c");
+_Static_assert(sizeof(struct sd_world) == 848, "struct sd_world changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_world_def) == 104, "sd_world_def changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_walls) == 88, "sd_walls changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_pairlist) == 56, "sd_pairlist changed: update io_checkpoint.c");
@@ -665,22 +665,9 @@ static sd_status read_tgrid(const rd_ctx *r, cursor *c, sd_world *w)
 static sd_status derive(sd_world *w)
 {
     int n = w->b.n;
-    if (sd_grow((void **)&w->csr.start, &w->csr.cap_start, n + 2, sizeof(int32_t)) ||
-        sd_grow((void **)&w->csr.idx, &w->csr.cap_idx, 2 * w->bb.n + 1, sizeof(int32_t)) ||
-        sd_grow((void **)&w->csr.bt_start, &w->csr.cap_bt_start, n + 1, sizeof(int32_t)) ||
+    if (sd_grow((void **)&w->csr.bt_start, &w->csr.cap_bt_start, n + 1, sizeof(int32_t)) ||
         sd_grow((void **)&w->bt_man, &w->bt_man_cap, w->bt.n + 1, sizeof(sd_manifold)))
         return SD_ERR_NOMEM;
-    memset(w->csr.start, 0, (size_t)(n + 2) * sizeof(int32_t));
-    for (int k = 0; k < w->bb.n; k++) {
-        w->csr.start[w->bb.p[k].a + 2]++;
-        w->csr.start[w->bb.p[k].b + 2]++;
-    }
-    for (int i = 0; i < n; i++)
-        w->csr.start[i + 2] += w->csr.start[i + 1];
-    for (int k = 0; k < w->bb.n; k++) {
-        w->csr.idx[w->csr.start[w->bb.p[k].a + 1]++] = 2 * k;
-        w->csr.idx[w->csr.start[w->bb.p[k].b + 1]++] = 2 * k + 1;
-    }
     /* body–triangle pairs are grouped by body in body order */
     int k = 0;
     for (int i = 0; i <= n; i++) {

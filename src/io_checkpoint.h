@@ -9,8 +9,8 @@
  * order is the summation order); the history carried between a store change (add, remove,
  * group switch) and the next rebuild; time, step, last_rebuild_time, need_rebuild,
  * rebuild_every_step, the contact count and the timers; and an opaque blob of the driver's own
- * state (phase, accumulators, rng). Recomputed on reading, deterministically: the body–body
- * CSR and bt_start from the pair lists, the weld ids of the walls (a pure function of the
+ * state (phase, accumulators, rng). Recomputed on reading, deterministically: bt_start from
+ * the pair lists, the weld ids of the walls (a pure function of the
  * vertices), scratch arrays. Not saved: the per-pair out[] and active[] (rewritten by the next
  * force pass before the gather reads them), the parallel pass's body ranges and cross-pair
  * list (sd_owned: derived from the pair list on first use), the body grid and cell ranges (rebuilt from scratch

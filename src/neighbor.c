@@ -95,10 +95,12 @@ static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const u
         const int32_t *r = range[i];
         for (int z = r[2]; z <= r[5]; z++)
             for (int y = r[1]; y <= r[4]; y++)
-                for (int x = r[0]; x <= r[3]; x++) g->cell_start[(z * g->ny + y) * g->nx + x + 1]++;
+                for (int x = r[0]; x <= r[3]; x++)
+                    g->cell_start[(z * g->ny + y) * g->nx + x + 1]++;
         total += (long)(r[3] - r[0] + 1) * (r[4] - r[1] + 1) * (r[5] - r[2] + 1);
     }
-    for (int c = 0; c < ncell; c++) g->cell_start[c + 1] += g->cell_start[c];
+    for (int c = 0; c < ncell; c++)
+        g->cell_start[c + 1] += g->cell_start[c];
     if (sd_grow((void **)&g->items, &g->cap_items, (int)total + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     /* fill using cell_start as a cursor, then shift back */
     for (int i = 0; i < n; i++) {
@@ -106,9 +108,11 @@ static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const u
         const int32_t *r = range[i];
         for (int z = r[2]; z <= r[5]; z++)
             for (int y = r[1]; y <= r[4]; y++)
-                for (int x = r[0]; x <= r[3]; x++) g->items[g->cell_start[(z * g->ny + y) * g->nx + x]++] = i;
+                for (int x = r[0]; x <= r[3]; x++)
+                    g->items[g->cell_start[(z * g->ny + y) * g->nx + x]++] = i;
     }
-    for (int c = ncell; c > 0; c--) g->cell_start[c] = g->cell_start[c - 1];
+    for (int c = ncell; c > 0; c--)
+        g->cell_start[c] = g->cell_start[c - 1];
     g->cell_start[0] = 0;
     return SD_OK;
 }
@@ -174,7 +178,8 @@ sd_status sd_neighbor_collect_history(sd_world *w)
     int count = 0;
     const sd_pairlist *lists[2] = {&w->bb, &w->bt};
     for (int l = 0; l < 2; l++)
-        for (int k = 0; k < lists[l]->nh; k++) count += lists[l]->hist[k].feature >= 0;
+        for (int k = 0; k < lists[l]->nh; k++)
+            count += lists[l]->hist[k].feature >= 0;
     keyed_hist *kh = malloc((size_t)(count > 0 ? count : 1) * sizeof(*kh));
     if (!kh) return SD_ERR_NOMEM;
     int m = 0;
@@ -233,14 +238,17 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l)
     memset(l->active, 0, (size_t)l->n + 1);
     for (int k = 0; k < l->n; k++) {
         const sd_pair *p = &l->p[k];
-        for (int s = 0; s < p->cap; s++) l->hist[p->off + s].feature = -1;
+        for (int s = 0; s < p->cap; s++)
+            l->hist[p->off + s].feature = -1;
         if (w->n_old == 0) continue;
         uint64_t key = key_of(w, p);
         int lo = 0, hi = w->n_old; /* first index with old_keys >= key */
         while (lo < hi) {
             int mid = (lo + hi) / 2;
-            if (w->old_keys[mid] < key) lo = mid + 1;
-            else hi = mid;
+            if (w->old_keys[mid] < key)
+                lo = mid + 1;
+            else
+                hi = mid;
         }
         for (int s = 0; lo < w->n_old && w->old_keys[lo] == key && s < p->cap; lo++, s++)
             l->hist[p->off + s] = w->old_hist[lo];
@@ -254,12 +262,16 @@ static void set_effective_masses(sd_world *w)
     for (int k = 0; k < w->bb.n; k++) {
         sd_pair *p = &w->bb.p[k];
         double ma = b->mass[p->a], mb = b->mass[p->b], m;
-        if (b->fixed[p->b]) m = ma;
-        else if (b->fixed[p->a]) m = mb;
-        else m = ma * mb / (ma + mb);
+        if (b->fixed[p->b])
+            m = ma;
+        else if (b->fixed[p->a])
+            m = mb;
+        else
+            m = ma * mb / (ma + mb);
         p->sqrt_m_eff = sqrt(m);
     }
-    for (int k = 0; k < w->bt.n; k++) w->bt.p[k].sqrt_m_eff = sqrt(b->mass[w->bt.p[k].a]);
+    for (int k = 0; k < w->bt.n; k++)
+        w->bt.p[k].sqrt_m_eff = sqrt(b->mass[w->bt.p[k].a]);
 }
 
 static int boxes_overlap(const int32_t *a, const int32_t *b)
@@ -292,7 +304,8 @@ static sd_status rebuild_triangle_grid(sd_world *w, double cell)
     }
     uint8_t *skip = malloc((size_t)(wl->n + 1));
     if (!skip) return SD_ERR_NOMEM;
-    for (int t = 0; t < wl->n; t++) skip[t] = !wl->active[t];
+    for (int t = 0; t < wl->n; t++)
+        skip[t] = !wl->active[t];
     st = grid_fill(&w->tgrid, wl->n, (const int32_t(*)[6])w->trange, skip);
     free(skip);
     if (st) return st;
@@ -326,11 +339,14 @@ static sd_status sort_bodies_by_cell(sd_world *w)
         count[cell[i] + 1]++;
     }
     if (sorted) goto done;
-    for (int c = 0; c < ncell; c++) count[c + 1] += count[c];
-    for (int i = 0; i < n; i++) perm[count[cell[i]]++] = i;
+    for (int c = 0; c < ncell; c++)
+        count[c + 1] += count[c];
+    for (int i = 0; i < n; i++)
+        perm[count[cell[i]]++] = i;
     st = sd_bodies_permute(b, perm);
     if (st) goto done;
-    for (int i = 0; i < n; i++) w->gid_map[b->gid[i]] = i;
+    for (int i = 0; i < n; i++)
+        w->gid_map[b->gid[i]] = i;
 done:
     free(cell);
     free(count);
@@ -354,7 +370,8 @@ sd_status sd_neighbor_rebuild(sd_world *w)
 
     /* cell size: the largest sphere diameter plus the margin; cylinders span several cells */
     double dmax = 0.0;
-    for (int i = 0; i < b->n; i++) dmax = fmax(dmax, 2.0 * b->radius[i]);
+    for (int i = 0; i < b->n; i++)
+        dmax = fmax(dmax, 2.0 * b->radius[i]);
     if (dmax <= 0.0) dmax = 0.01;
     double cell = dmax + w->def.margin;
 
@@ -472,20 +489,6 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     if ((st = restore_history(w, &w->bt))) return st;
     w->n_old = 0;
 
-    /* CSR of body–body pairs per body, in pair order, for the race-free gather */
-    if (sd_grow((void **)&w->csr.start, &w->csr.cap_start, b->n + 2, sizeof(int32_t)) ||
-        sd_grow((void **)&w->csr.idx, &w->csr.cap_idx, 2 * w->bb.n + 1, sizeof(int32_t)))
-        return SD_ERR_NOMEM;
-    memset(w->csr.start, 0, (size_t)(b->n + 2) * sizeof(int32_t));
-    for (int k = 0; k < w->bb.n; k++) {
-        w->csr.start[w->bb.p[k].a + 2]++;
-        w->csr.start[w->bb.p[k].b + 2]++;
-    }
-    for (int i = 0; i < b->n; i++) w->csr.start[i + 2] += w->csr.start[i + 1];
-    for (int k = 0; k < w->bb.n; k++) {
-        w->csr.idx[w->csr.start[w->bb.p[k].a + 1]++] = 2 * k;
-        w->csr.idx[w->csr.start[w->bb.p[k].b + 1]++] = 2 * k + 1;
-    }
     if (sd_grow((void **)&w->bt_man, &w->bt_man_cap, w->bt.n + 1, sizeof(sd_manifold))) return SD_ERR_NOMEM;
 
     for (int i = 0; i < b->n; i++) {

@@ -76,8 +76,6 @@ void sd_world_destroy(sd_world *w)
     sd_grid_free(&w->grid);
     sd_grid_free(&w->tgrid);
     free(w->bt_man);
-    free(w->csr.start);
-    free(w->csr.idx);
     if (w->owned) free(w->owned->cross);
     free(w->owned);
     free(w->csr.bt_start);
@@ -89,8 +87,8 @@ void sd_world_destroy(sd_world *w)
     free(w);
 }
 
-static int add_body(sd_world *w, int shape, sd_vec3 pos, sd_vec3 vel, sd_vec3 omega, sd_vec3 axis, double r,
-                    double hl, double density, int fixed, int tag)
+static int add_body(sd_world *w, int shape, sd_vec3 pos, sd_vec3 vel, sd_vec3 omega, sd_vec3 axis, double r, double hl,
+                    double density, int fixed, int tag)
 {
     if (!(r > 0.0) || !(density > 0.0) || !(hl >= 0.0) || !finite3(pos) || !finite3(vel) || !finite3(omega) ||
         !finite3(axis) || !isfinite(r) || !isfinite(hl) || !isfinite(density))
@@ -345,8 +343,10 @@ double sd_world_kinetic_energy(const sd_world *w)
     for (int i = 0; i < b->n; i++) {
         if (b->fixed[i]) continue;
         e += 0.5 * b->mass[i] * v3_norm2(b->vel[i]);
-        if (b->shape[i] == SD_SHAPE_SPHERE) e += 0.5 * v3_norm2(b->omega[i]) / b->inv_i_ax[i];
-        else e += 0.5 * v3_dot(b->angmom[i], b->omega[i]);
+        if (b->shape[i] == SD_SHAPE_SPHERE)
+            e += 0.5 * v3_norm2(b->omega[i]) / b->inv_i_ax[i];
+        else
+            e += 0.5 * v3_dot(b->angmom[i], b->omega[i]);
     }
     return e;
 }
@@ -367,7 +367,8 @@ double sd_world_potential_energy(const sd_world *w)
 static double manifold_energy(const sd_world *w, const sd_pair *p, const sd_hist *hist, const sd_manifold *m)
 {
     double e = 0.0;
-    for (int k2 = 0; k2 < m->n; k2++) e += 0.5 * w->def.contact.k_n * m->overlap[k2] * m->overlap[k2];
+    for (int k2 = 0; k2 < m->n; k2++)
+        e += 0.5 * w->def.contact.k_n * m->overlap[k2] * m->overlap[k2];
     if (w->def.contact.k_s > 0.0)
         for (int s = 0; s < p->cap; s++)
             if (hist[p->off + s].feature >= 0) e += 0.5 * v3_norm2(hist[p->off + s].shear) / w->def.contact.k_s;
@@ -381,7 +382,8 @@ double sd_world_spring_energy(const sd_world *w)
     for (int k = 0; k < w->bb.n; k++) {
         const sd_pair *p = &w->bb.p[k];
         sd_manifold m;
-        if (p->kind == SD_PAIR_SS) sd_geom_sphere_sphere(b->pos[p->a], b->radius[p->a], b->pos[p->b], b->radius[p->b], &m);
+        if (p->kind == SD_PAIR_SS)
+            sd_geom_sphere_sphere(b->pos[p->a], b->radius[p->a], b->pos[p->b], b->radius[p->b], &m);
         else if (p->kind == SD_PAIR_SC) {
             sd_cyl c = sd_body_cyl(b, p->b);
             sd_geom_sphere_cyl(b->pos[p->a], b->radius[p->a], &c, &m);
@@ -402,7 +404,8 @@ double sd_world_spring_energy(const sd_world *w)
             sd_manifold *m = &man[k];
             m->n = 0;
             if (!w->w.active[p->b]) continue;
-            if (p->kind == SD_PAIR_ST) sd_geom_sphere_tri(b->pos[p->a], b->radius[p->a], &w->w.tri[p->b], m);
+            if (p->kind == SD_PAIR_ST)
+                sd_geom_sphere_tri(b->pos[p->a], b->radius[p->a], &w->w.tri[p->b], m);
             else {
                 sd_cyl c = sd_body_cyl(b, p->a);
                 sd_geom_cyl_tri(&c, &w->w.tri[p->b], m);
@@ -422,13 +425,13 @@ uint64_t sd_world_state_hash(const sd_world *w)
 {
     uint64_t h = 1469598103934665603ULL;
     const sd_bodies *b = &w->b;
-#define SD_HASH_BYTES(ptr, len)                                      \
-    do {                                                             \
-        const unsigned char *q_ = (const unsigned char *)(ptr);      \
-        for (size_t k_ = 0; k_ < (len); k_++) {                      \
-            h ^= q_[k_];                                             \
-            h *= 1099511628211ULL;                                   \
-        }                                                            \
+#define SD_HASH_BYTES(ptr, len)                                                                                        \
+    do {                                                                                                               \
+        const unsigned char *q_ = (const unsigned char *)(ptr);                                                        \
+        for (size_t k_ = 0; k_ < (len); k_++) {                                                                        \
+            h ^= q_[k_];                                                                                               \
+            h *= 1099511628211ULL;                                                                                     \
+        }                                                                                                              \
     } while (0)
     for (int g = 0; g < w->next_gid; g++) {
         int i = w->gid_map[g];

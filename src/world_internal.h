@@ -86,12 +86,10 @@ typedef struct {
     sd_hist *hist;
 } sd_pairlist;
 
-/* Per-body list of the body–body pairs it takes part in (CSR), for the race-free gather. */
+/* Per-body ranges of the body–triangle pairs (grouped by body), for the per-body passes. */
 typedef struct {
-    int32_t *start;    /* n+1 */
-    int32_t *idx;      /* 2k: pair k as A, 2k+1: pair k as B */
     int32_t *bt_start; /* n+1: body-triangle pairs of body i are bt_start[i]..bt_start[i+1] */
-    int cap_start, cap_idx, cap_bt_start;
+    int cap_bt_start;
 } sd_csr;
 
 typedef struct {
