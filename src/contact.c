@@ -101,24 +101,27 @@ static int sphere_sphere_fast(const sd_world *w, const sd_law *law, const sd_pai
     double ra = b->radius[ia], rb = b->radius[ib], rs = ra + rb;
     double d2 = v3_norm2(d);
     if (d2 >= rs * rs) {
-        h->feature = -1;
+        if (h->feature != -1) h->feature = -1; /* no store on the common path */
         return 0;
     }
     double dist = sqrt(d2);
     sd_vec3 n = dist > 1e-300 ? v3_scale(d, 1.0 / dist) : v3(0.0, 0.0, 1.0);
     double ov = rs - dist;
-    /* contact point midway between the surfaces: lever arms along the normal */
-    sd_vec3 lever_a = v3_scale(n, -(ra - 0.5 * ov)), lever_b = v3_scale(n, rb - 0.5 * ov);
-    sd_vec3 va = v3_add(b->vel[ia], v3_cross(b->omega[ia], lever_a));
-    sd_vec3 vb = v3_add(b->vel[ib], v3_cross(b->omega[ib], lever_b));
+    /* contact point midway between the surfaces: lever arms -la n (A) and lb n (B), so the
+     * relative velocity there is v_a - v_b - (la w_a + lb w_b) x n and the torques are
+     * -la (n x f) on A and -lb (n x f) on B: one cross product each way */
+    const double la = ra - 0.5 * ov, lb = rb - 0.5 * ov;
+    sd_vec3 wsum = v3_madd(v3_scale(b->omega[ia], la), b->omega[ib], lb);
+    sd_vec3 vrel = v3_sub(v3_sub(b->vel[ia], b->vel[ib]), v3_cross(wsum, n));
     sd_vec3 shear = h->feature == 0 ? h->shear : v3(0, 0, 0);
     sd_vec3 f;
-    sd_contact_law(law, p->sqrt_m_eff, n, ov, v3_sub(va, vb), w->def.dt, &shear, &f);
+    sd_contact_law(law, p->sqrt_m_eff, n, ov, vrel, w->def.dt, &shear, &f);
     h->feature = 0;
     h->shear = shear;
     out->f_a = f;
-    out->t_a = v3_cross(lever_a, f);
-    out->t_b = v3_neg(v3_cross(lever_b, f));
+    sd_vec3 nf = v3_cross(n, f);
+    out->t_a = v3_scale(nf, -la);
+    out->t_b = v3_scale(nf, -lb);
     return 1;
 }
 
