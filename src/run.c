@@ -46,6 +46,8 @@ typedef struct {
     sd_vtk_series pvd;
     int pvd_on;
     double wall0;
+    long rate_step0;   /* world step and wall clock when this process started stepping */
+    double rate_wall0; /* (a restart continues from the checkpoint's step) */
     double phase_t0, phase_w0; /* simulated and wall time at the start of the current phase */
     int flow_ended;            /* the flow phase has ended; the capture starts at the next step */
     int dam_built;             /* the pipes are in the world (sd_build_dam at the capture start) */
@@ -338,8 +340,8 @@ static void plot(run_ctx *c, const char *name, const char *png, double xmin, dou
 
 static void progress(run_ctx *c, double t_end_est)
 {
-    double wall = sd_now() - c->wall0;
-    double sps = wall > 0 ? (double)c->w->step / wall : 0.0;
+    double wall = sd_now() - c->rate_wall0;
+    double sps = wall > 0 ? (double)(c->w->step - c->rate_step0) / wall : 0.0;
     double eta = sps > 0 && t_end_est > c->w->time ? (t_end_est - c->w->time) / c->w->def.dt / sps : 0.0;
     if (!c->o->log) return;
     if (c->o->progress_tty)
@@ -937,6 +939,8 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         write_series_row(&c);
         write_traj(&c);
     }
+    c.rate_step0 = c.w->step;
+    c.rate_wall0 = sd_now();
     for (;;) {
         if (o->stop && *o->stop) {
             code = 130;
