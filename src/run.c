@@ -36,6 +36,7 @@ typedef struct {
     double last_cross_time;
     double ke_peak;
     double pipe_peak[2 * SD_MAX_PIPES], pipe_impulse[2 * SD_MAX_PIPES];
+    double pipe_peak_t[2 * SD_MAX_PIPES]; /* when the peak happened (pipes exist from the capture start) */
     sd_vec3 pipe_impulse_vec[2 * SD_MAX_PIPES];
     double dam_force_now;
     double phase_end[4];
@@ -407,10 +408,10 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
                     c->flow_len_time, c->flow_len, c->flow_q05, c->flow_q95, c->flow_front);
         fprintf(f, "  \"pipes\": [\n");
         for (int k = 0; k < c->info.n_pipes; k++)
-            fprintf(f, "    {\"gid\": %d, \"kind\": \"%s\", \"%s\": %.4f, \"peak_force_N\": %.6e, \"impulse_Ns\": %.6e, \"impulse_x_Ns\": %.6e}%s\n",
+            fprintf(f, "    {\"gid\": %d, \"kind\": \"%s\", \"%s\": %.4f, \"peak_force_N\": %.6e, \"peak_time_s\": %.5f, \"impulse_Ns\": %.6e, \"impulse_x_Ns\": %.6e}%s\n",
                     c->info.pipe_gid[k], c->info.pipe_is_column[k] ? "column" : "beam",
                     c->info.pipe_is_column[k] ? "y_m" : "z_axis_m", c->info.pipe_coord[k], c->pipe_peak[k],
-                    c->pipe_impulse[k], c->pipe_impulse_vec[k].x, k + 1 < c->info.n_pipes ? "," : "");
+                    c->pipe_peak_t[k], c->pipe_impulse[k], c->pipe_impulse_vec[k].x, k + 1 < c->info.n_pipes ? "," : "");
         fprintf(f, "  ],\n");
     }
     sd_scenario_echo_json(s, f);
@@ -428,7 +429,10 @@ static void accumulate_pipes(run_ctx *c)
         if (sd_world_body(c->w, c->info.pipe_gid[k], &st)) continue;
         double f = v3_norm(st.force);
         tot += f;
-        if (f > c->pipe_peak[k]) c->pipe_peak[k] = f;
+        if (f > c->pipe_peak[k]) {
+            c->pipe_peak[k] = f;
+            c->pipe_peak_t[k] = c->w->time;
+        }
         c->pipe_impulse[k] += f * c->w->def.dt;
         c->pipe_impulse_vec[k] = v3_madd(c->pipe_impulse_vec[k], st.force, c->w->def.dt);
     }
