@@ -261,8 +261,8 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
  * T threads: the bodies are split into T index ranges holding about nbb/T pairs each (the
  * store is sorted by cell, so a range is a region of space) and thread t owns range t. At
  * each candidate rebuild the pairs whose two bodies have different owners ("cross" pairs, a
- * thin layer at the range boundaries) are listed, with the span of pair indices touching each
- * range. Pass 1 computes the cross pairs, once each, into their own slots. Pass 2: each thread walks its span in
+ * thin layer at the range boundaries) are listed, and each owner gets the list of pair indices touching its
+ * range. Pass 1 computes the cross pairs, once each, into their own slots. Pass 2: each thread walks its list in
  * ascending order, computing the pairs it owns both sides of and adding them, and adding the stored cross pairs to its
  * side. Every pair is computed exactly once, and its history slot written by one thread only. */
 static int pair_force(const sd_world *w, const sd_law *law, int k, sd_pair_out *o)
@@ -341,21 +341,39 @@ static sd_status owned_update(sd_world *w, int T)
         o->B[t] = p->a < p->b ? p->a : p->b;
         if (o->B[t] < o->B[t - 1]) o->B[t] = o->B[t - 1];
     }
-    for (int t = 0; t < T; t++) {
-        o->lo[t] = nbb;
-        o->hi[t] = -1;
+    /* count, then fill: owner t's list holds its own pairs and the cross pairs touching it,
+     * in ascending pair order */
+    int cnt[SD_MAX_OWNERS] = {0};
+    int ncross = 0;
+    for (int k = 0; k < nbb; k++) {
+        const sd_pair *p = &w->bb.p[k];
+        const int ta = owner_of(p->a, o->B, T), tb = owner_of(p->b, o->B, T);
+        cnt[ta]++;
+        if (ta != tb) {
+            cnt[tb]++;
+            ncross++;
+        }
     }
+    o->start[0] = 0;
+    for (int t = 0; t < T; t++)
+        o->start[t + 1] = o->start[t] + cnt[t];
+    if (sd_grow((void **)&o->cross, &o->cap, ncross > 0 ? ncross : 1, sizeof(int32_t)) ||
+        sd_grow((void **)&o->list, &o->list_cap, o->start[T] > 0 ? o->start[T] : 1, sizeof(int32_t)))
+        return SD_ERR_NOMEM;
+    int fill[SD_MAX_OWNERS];
+    for (int t = 0; t < T; t++)
+        fill[t] = o->start[t];
     o->ncross = 0;
     for (int k = 0; k < nbb; k++) {
         const sd_pair *p = &w->bb.p[k];
         const int ta = owner_of(p->a, o->B, T), tb = owner_of(p->b, o->B, T);
-        if (k < o->lo[ta]) o->lo[ta] = k;
-        o->hi[ta] = k;
-        if (ta == tb) continue;
-        if (k < o->lo[tb]) o->lo[tb] = k;
-        o->hi[tb] = k;
-        if (sd_grow((void **)&o->cross, &o->cap, o->ncross + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+        if (ta == tb) {
+            o->list[fill[ta]++] = k;
+            continue;
+        }
         o->cross[o->ncross++] = k;
+        o->list[fill[ta]++] = ~k;
+        o->list[fill[tb]++] = ~k;
     }
     o->stamp = w->timers.rebuilds;
     o->T = T;
@@ -388,18 +406,19 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T)
             const int i0 = o->B[t], i1 = o->B[t + 1];
             for (int i = i0; i < i1; i++)
                 b->force[i] = b->torque[i] = v3(0, 0, 0);
-            for (int k = o->lo[t]; k <= o->hi[t]; k++) {
-                const sd_pair *p = &w->bb.p[k];
-                const int own_a = p->a >= i0 && p->a < i1, own_b = p->b >= i0 && p->b < i1;
-                if (own_a && own_b) {
+            for (int j = o->start[t]; j < o->start[t + 1]; j++) {
+                const int k = o->list[j];
+                if (k >= 0) {
                     sd_pair_out out;
                     int used = pair_force(w, law, k, &out);
                     if (!used) continue;
                     count += used;
-                    add_pair(b, p->a, 0, &out);
-                    add_pair(b, p->b, 1, &out);
-                } else if ((own_a || own_b) && w->bb.active[k]) {
-                    add_pair(b, own_a ? p->a : p->b, own_b, &w->bb.out[k]);
+                    add_pair(b, w->bb.p[k].a, 0, &out);
+                    add_pair(b, w->bb.p[k].b, 1, &out);
+                } else if (w->bb.active[~k]) {
+                    const sd_pair *p = &w->bb.p[~k];
+                    const int own_a = p->a >= i0 && p->a < i1;
+                    add_pair(b, own_a ? p->a : p->b, !own_a, &w->bb.out[~k]);
                 }
             }
         }

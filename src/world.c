@@ -76,7 +76,10 @@ void sd_world_destroy(sd_world *w)
     sd_grid_free(&w->grid);
     sd_grid_free(&w->tgrid);
     free(w->bt_man);
-    if (w->owned) free(w->owned->cross);
+    if (w->owned) {
+        free(w->owned->cross);
+        free(w->owned->list);
+    }
     free(w->owned);
     free(w->csr.bt_start);
     free(w->gid_map);

@@ -109,9 +109,13 @@ typedef struct {
     int T, n, nbb;
     const void *pairs;
     int B[SD_MAX_OWNERS + 1];                 /* thread t owns bodies B[t] .. B[t+1]-1 */
-    int lo[SD_MAX_OWNERS], hi[SD_MAX_OWNERS]; /* span of pair indices touching range t */
     int32_t *cross;                           /* pairs whose bodies have different owners */
     int ncross, cap;
+    /* owner t's pairs, ascending: list[start[t] .. start[t+1]-1]; k for a pair it owns both
+     * sides of, ~k (negative) for a cross pair touching it */
+    int32_t *list;
+    int start[SD_MAX_OWNERS + 1];
+    int list_cap;
 } sd_owned;
 
 struct sd_world {
