@@ -34,6 +34,9 @@ from check_vtk import Fail, read_vtp  # noqa: E402
 SPHERE_COLORS = ["#7f7f7f", "#1f77b4", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2"]
 
 
+PIPE_TAG = 300
+
+
 def load(path, need):
     """Return (centres Nx3, dict of point-data arrays as numpy, reshaped to N x ncomp)."""
     try:
@@ -149,19 +152,24 @@ def main(argv=None):
             ztop = max(ztop, p[2] + r)
         counts["spheres"] = int(m.sum())
 
-    for key, path, sink in (("logs", args.logs, patches_l), ("pipes", args.pipes, patches_p)):
+    for key, path in (("logs", args.logs), ("pipes", args.pipes)):
         if not path:
             continue
         pts, arr = load(path, ["axis", "length", "radius"])
         ext = 0.5 * arr["length"] + arr["radius"]
+        # cylinders tagged 300 (sabodem's SD_TAG_PIPE) are fixed dam pipes, whichever file
+        is_pipe = arr.get("tag", np.zeros(len(ext))) == PIPE_TAG
+        if key == "pipes":
+            is_pipe[:] = True
         m = in_window(pts, ext, args)
-        for p, a, length, r in zip(pts[m], arr["axis"][m], arr["length"][m], arr["radius"][m]):
+        for p, a, length, r, pipe in zip(pts[m], arr["axis"][m], arr["length"][m], arr["radius"][m], is_pipe[m]):
             poly = cylinder_outline(p, a, length, r)
             if len(poly) >= 3:
-                sink.append(Polygon(poly, closed=True))
-                if key == "logs":
+                (patches_p if pipe else patches_l).append(Polygon(poly, closed=True))
+                if not pipe:
                     ztop = max(ztop, poly[:, 1].max())
-        counts[key] = int(m.sum())
+        counts["pipes"] += int((m & is_pipe).sum())
+        counts["logs"] += int((m & ~is_pipe).sum())
 
     for x, r, zt in args.column:
         patches_p.append(Polygon([(x - r, 0.0), (x + r, 0.0), (x + r, zt), (x - r, zt)], closed=True))
