@@ -86,6 +86,10 @@ static int cc_disk_into(const sd_cyl *P, double e, const sd_cyl *Q, double tol, 
         if (!(ov > 0.0) || ov > 2.0 * Q->hl) continue;
         double rho = v3_norm(v3_madd(d, Q->a, -v3_dot(d, Q->a)));
         if (rho > Q->r + tol) continue;
+        /* the end face must be Q's nearest surface to x (as the side must be for E): a disk
+         * that pokes out past Q's end near the side would otherwise get the depth through the
+         * whole face, up to 2 hl (test_geom_continuity) */
+        if (ov > Q->r - rho + tol) continue;
         if (cc_sat_overlap(P, Q, nf) > ov + tol) continue;
         if (!found || ov < out->ov) {
             out->n = nf;
