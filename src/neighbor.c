@@ -7,6 +7,10 @@
 
 #include "world_internal.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 static const int hist_cap_of_kind[SD_PAIR_KINDS] = {1, 1, SD_MANIFOLD_MAX, 1, SD_MANIFOLD_MAX};
 
 void sd_grid_free(sd_grid *g)
@@ -360,6 +364,61 @@ int sd_neighbor_needs_rebuild(const sd_world *w)
            w->time - w->last_rebuild_time >= w->def.t_reset - 0.5 * w->def.dt;
 }
 
+typedef struct {
+    int32_t a, b;
+    int kind;
+} cand;
+typedef struct {
+    cand *c;
+    int n, cap;
+} cand_buf;
+
+/* The body–body candidates (j > i) of body i, in the order of the serial scan. Returns
+ * nonzero when out of memory. */
+static int bb_scan(const sd_world *w, int i, double hm, cand_buf *out)
+{
+    const sd_bodies *b = &w->b;
+    const sd_grid *g = &w->grid;
+    const int32_t *ri = w->range[i];
+    for (int z = ri[2]; z <= ri[5]; z++)
+        for (int y = ri[1]; y <= ri[4]; y++)
+            for (int x = ri[0]; x <= ri[3]; x++) {
+                int c = (z * g->ny + y) * g->nx + x;
+                for (int k = g->cell_start[c]; k < g->cell_start[c + 1]; k++) {
+                    int j = g->items[k];
+                    if (j <= i) continue;
+                    if (b->fixed[i] && b->fixed[j]) continue;
+                    const int32_t *rj = w->range[j];
+                    /* take the pair only in the lowest cell the two ranges share */
+                    if (x != (ri[0] > rj[0] ? ri[0] : rj[0]) || y != (ri[1] > rj[1] ? ri[1] : rj[1]) ||
+                        z != (ri[2] > rj[2] ? ri[2] : rj[2]))
+                        continue;
+                    double reach = b->bound_r[i] + b->bound_r[j] + w->def.margin;
+                    if (v3_norm2(v3_sub(b->pos[i], b->pos[j])) > reach * reach) continue;
+                    sd_vec3 li, hi_, lj, hj;
+                    body_box(b, i, hm, &li, &hi_);
+                    body_box(b, j, hm, &lj, &hj);
+                    if (li.x > hj.x || lj.x > hi_.x || li.y > hj.y || lj.y > hi_.y || li.z > hj.z || lj.z > hi_.z)
+                        continue;
+                    if (b->shape[i] != SD_SHAPE_SPHERE || b->shape[j] != SD_SHAPE_SPHERE) {
+                        /* capsule test: a cylinder lies within radius r of its axis segment */
+                        if (seg_gap(b, i, j) > b->radius[i] + b->radius[j] + w->def.margin) continue;
+                    }
+                    int a = i, bb = j;
+                    if (b->shape[a] > b->shape[bb] || (b->shape[a] == b->shape[bb] && b->gid[a] > b->gid[bb])) {
+                        a = j;
+                        bb = i;
+                    }
+                    int kind = b->shape[a] == SD_SHAPE_SPHERE
+                                   ? (b->shape[bb] == SD_SHAPE_SPHERE ? SD_PAIR_SS : SD_PAIR_SC)
+                                   : SD_PAIR_CC;
+                    if (sd_grow((void **)&out->c, &out->cap, out->n + 1, sizeof(cand))) return 1;
+                    out->c[out->n++] = (cand){a, bb, kind};
+                }
+            }
+    return 0;
+}
+
 sd_status sd_neighbor_rebuild(sd_world *w)
 {
     sd_bodies *b = &w->b;
@@ -401,47 +460,38 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL);
     if (st) return st;
 
-    /* body–body candidates, generated in body order */
-    sd_grid *g = &w->grid;
+    /* body–body candidates, generated in body order: T threads scan contiguous body ranges
+     * into their own buffers, concatenated in range order (the list of one thread) */
     w->bb.n = 0;
     w->bb.nh = 0;
-    for (int i = 0; i < b->n; i++) {
-        const int32_t *ri = w->range[i];
-        for (int z = ri[2]; z <= ri[5]; z++)
-            for (int y = ri[1]; y <= ri[4]; y++)
-                for (int x = ri[0]; x <= ri[3]; x++) {
-                    int c = (z * g->ny + y) * g->nx + x;
-                    for (int k = g->cell_start[c]; k < g->cell_start[c + 1]; k++) {
-                        int j = g->items[k];
-                        if (j <= i) continue;
-                        if (b->fixed[i] && b->fixed[j]) continue;
-                        const int32_t *rj = w->range[j];
-                        /* take the pair only in the lowest cell the two ranges share */
-                        if (x != (ri[0] > rj[0] ? ri[0] : rj[0]) || y != (ri[1] > rj[1] ? ri[1] : rj[1]) ||
-                            z != (ri[2] > rj[2] ? ri[2] : rj[2]))
-                            continue;
-                        double reach = b->bound_r[i] + b->bound_r[j] + w->def.margin;
-                        if (v3_norm2(v3_sub(b->pos[i], b->pos[j])) > reach * reach) continue;
-                        sd_vec3 li, hi_, lj, hj;
-                        body_box(b, i, hm, &li, &hi_);
-                        body_box(b, j, hm, &lj, &hj);
-                        if (li.x > hj.x || lj.x > hi_.x || li.y > hj.y || lj.y > hi_.y || li.z > hj.z || lj.z > hi_.z)
-                            continue;
-                        if (b->shape[i] != SD_SHAPE_SPHERE || b->shape[j] != SD_SHAPE_SPHERE) {
-                            /* capsule test: a cylinder lies within radius r of its axis segment */
-                            if (seg_gap(b, i, j) > b->radius[i] + b->radius[j] + w->def.margin) continue;
-                        }
-                        int a = i, bb = j;
-                        if (b->shape[a] > b->shape[bb] || (b->shape[a] == b->shape[bb] && b->gid[a] > b->gid[bb])) {
-                            a = j;
-                            bb = i;
-                        }
-                        int kind = b->shape[a] == SD_SHAPE_SPHERE
-                                       ? (b->shape[bb] == SD_SHAPE_SPHERE ? SD_PAIR_SS : SD_PAIR_SC)
-                                       : SD_PAIR_CC;
-                        if ((st = push_pair(&w->bb, a, bb, kind))) return st;
-                    }
-                }
+    {
+        int T = 1;
+#ifdef _OPENMP
+        T = omp_get_max_threads();
+        if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
+        if (b->n <= w->def.parallel_min) T = 1;
+#endif
+        cand_buf buf[SD_MAX_OWNERS];
+        memset(buf, 0, sizeof buf);
+        int nomem = 0;
+#pragma omp parallel num_threads(T) reduction(| : nomem) if (T > 1)
+        {
+            int tid = 0, nthr = 1;
+#ifdef _OPENMP
+            tid = omp_get_thread_num();
+            nthr = omp_get_num_threads();
+#endif
+            const int i0 = (int)((long)b->n * tid / nthr), i1 = (int)((long)b->n * (tid + 1) / nthr);
+            for (int i = i0; i < i1 && !nomem; i++)
+                nomem |= bb_scan(w, i, hm, &buf[tid]);
+        }
+        for (int t = 0; t < T && !nomem; t++)
+            for (int k = 0; k < buf[t].n && !st; k++)
+                st = push_pair(&w->bb, buf[t].c[k].a, buf[t].c[k].b, buf[t].c[k].kind);
+        for (int t = 0; t < T; t++)
+            free(buf[t].c);
+        if (nomem) return SD_ERR_NOMEM;
+        if (st) return st;
     }
 
     /* body–triangle candidates, grouped by body (the mesh dedup in contact.c relies on it) */
