@@ -338,6 +338,8 @@ static sd_status sort_bodies_by_cell(sd_world *w)
         sd_vec3 c = b->pos[i];
         int r[6];
         cell_range(g, c, c, r);
+        /* x slowest: a contiguous index range is a slab across the flume (the thread ranges of
+         * contact.c), whatever order the grid's own cells use */
         cell[i] = (r[0] * g->ny + r[1]) * g->nz + r[2];
         if (i && cell[i] < cell[i - 1]) sorted = 0;
         count[cell[i] + 1]++;

@@ -69,6 +69,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "core/rng.h"
 #include "geom/geom.h"
 
 #define K_N 1e4
@@ -89,16 +90,9 @@ static const double PIPE_R = 0.009, PIPE_HL = 0.15; /* pipe phi 18 mm across the
 #define KNOWN_FALLBACK_JUMP 5e-3
 #define KNOWN_COUNT_JUMP 7e-3
 
-static uint64_t rng_state = 0x6a09e667f3bcc909ULL;
-static double urand(void)
-{
-    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    z ^= z >> 31;
-    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
-}
-static double urange(double lo, double hi) { return lo + (hi - lo) * urand(); }
+static sd_rng rng = {0x6a09e667f3bcc909ULL}; /* the engine's splitmix64 (core/rng.h) */
+static double urand(void) { return sd_rng_uniform(&rng); }
+static double urange(double lo, double hi) { return sd_rng_range(&rng, lo, hi); }
 static double rsign(void) { return urand() < 0.5 ? -1.0 : 1.0; }
 static sd_vec3 rand_unit(void)
 {
@@ -783,7 +777,7 @@ int main(int argc, char **argv)
 {
     int scale = argc > 1 ? atoi(argv[1]) : 1;
     if (scale < 1) scale = 1;
-    if (argc > 2) rng_state = strtoull(argv[2], NULL, 0);
+    if (argc > 2) rng.s = strtoull(argv[2], NULL, 0);
 
     static stats log_pipe, log_log, yaw, sph;
     init_stats(&log_pipe, "log (A, phi 10 x 100 mm) against a fixed pipe (B, phi 18 x 300 mm)");

@@ -15,20 +15,14 @@
 #include <string.h>
 
 #include "check.h"
+#include "core/rng.h"
 #include "geom/geom.h"
 
 #define SD_PI 3.14159265358979323846
 
-static uint64_t rng_state = 0x243f6a8885a308d3ULL;
-static double urand(void)
-{
-    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    z ^= z >> 31;
-    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
-}
-static double urange(double lo, double hi) { return lo + (hi - lo) * urand(); }
+static sd_rng rng = {0x243f6a8885a308d3ULL}; /* the engine's splitmix64 (core/rng.h) */
+static double urand(void) { return sd_rng_uniform(&rng); }
+static double urange(double lo, double hi) { return sd_rng_range(&rng, lo, hi); }
 static sd_vec3 rand_unit(void)
 {
     for (;;) {
