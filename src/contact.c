@@ -2,6 +2,7 @@
  * feature; body-body forces summed into each body in pair order (owned body ranges per thread,
  * see below), body-triangle forces per pair then gathered per body in pair order, so that 1
  * and N threads give the same bits. */
+#include <stdlib.h>
 #include <string.h>
 
 #include "contact_law.h"
@@ -91,38 +92,103 @@ static int apply_manifold(const sd_world *w, const sd_law *law, const sd_manifol
     return used;
 }
 
-/* Sphere–sphere, the most common pair, without the manifold round trip: the same kernel
- * (case 1) and the same law, with an early exit for the many candidates not in contact. */
-static int sphere_sphere_fast(const sd_world *w, const sd_law *law, const sd_pair *p, sd_hist *h, sd_pair_out *out)
+/* Sphere–sphere, the most common pair, in batches (ss_chunk below): a filter pass keeps the
+ * touching pairs, a branch-free pass over arrays applies case 1 of the kernel and the law of
+ * contact_law.h to all of them at once (the compiler vectorizes it), and the results go back in
+ * pair order. The arithmetic is that of sd_contact_law, operation for operation (both sides of
+ * every branch are computed and one is kept), so it gives the same bits as the scalar law. */
+#define SS_CHUNK 128 /* at most 256: the owned pass packs an index in 8 bits */
+
+typedef struct {
+    double dx[SS_CHUNK], dy[SS_CHUNK], dz[SS_CHUNK], ra[SS_CHUNK], rb[SS_CHUNK], sqm[SS_CHUNK];
+    double vx[SS_CHUNK], vy[SS_CHUNK], vz[SS_CHUNK];    /* v_a - v_b */
+    double wax[SS_CHUNK], way[SS_CHUNK], waz[SS_CHUNK]; /* omega_a */
+    double wbx[SS_CHUNK], wby[SS_CHUNK], wbz[SS_CHUNK]; /* omega_b */
+    double sx[SS_CHUNK], sy[SS_CHUNK], sz[SS_CHUNK];    /* shear spring in, then out */
+    double fx[SS_CHUNK], fy[SS_CHUNK], fz[SS_CHUNK];    /* force on A */
+    double nfx[SS_CHUNK], nfy[SS_CHUNK], nfz[SS_CHUNK]; /* n x f */
+    double la[SS_CHUNK], lb[SS_CHUNK];                  /* lever arms */
+    double redo[SS_CHUNK];                              /* nonzero: redo with the scalar law */
+} ss_batch;
+
+/* Built twice on x86-64 (AVX2 and baseline), picked at load time by the CPU. The lanes are
+ * independent and nothing is contracted (-ffp-contract=off), so both give the same bits. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(SD_NO_CLONES)
+#define SD_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define SD_SIMD_CLONES
+#endif
+
+SD_SIMD_CLONES
+static void ss_batch_law(const sd_law *law, double dt, ss_batch *restrict q, int m)
 {
-    const sd_bodies *b = &w->b;
-    const int ia = p->a, ib = p->b;
-    sd_vec3 d = v3_sub(b->pos[ia], b->pos[ib]);
-    double ra = b->radius[ia], rb = b->radius[ib], rs = ra + rb;
-    double d2 = v3_norm2(d);
-    if (d2 >= rs * rs) {
-        if (h->feature != -1) h->feature = -1; /* no store on the common path */
-        return 0;
+    const double k_n = law->k_n, c_n = law->c_n_factor, c_s = law->c_s_factor, tan_phi = law->tan_phi,
+                 coh = law->cohesion, mks_dt = -law->k_s * dt;
+    for (int j = 0; j < m; j++) {
+        const double dx = q->dx[j], dy = q->dy[j], dz = q->dz[j];
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        const double dist = sqrt(d2);
+        const double inv = 1.0 / dist;
+        const int far = dist > 1e-300;
+        const double nx = far ? dx * inv : 0.0, ny = far ? dy * inv : 0.0, nz = far ? dz * inv : 1.0;
+        const double ov = (q->ra[j] + q->rb[j]) - dist;
+        const double la = q->ra[j] - 0.5 * ov, lb = q->rb[j] - 0.5 * ov;
+        const double wx = q->wax[j] * la + lb * q->wbx[j], wy = q->way[j] * la + lb * q->wby[j],
+                     wz = q->waz[j] * la + lb * q->wbz[j];
+        const double vx = q->vx[j] - (wy * nz - wz * ny), vy = q->vy[j] - (wz * nx - wx * nz),
+                     vz = q->vz[j] - (wx * ny - wy * nx);
+        /* sd_contact_law */
+        const double sqm = q->sqm[j];
+        const double vn = vx * nx + vy * ny + vz * nz;
+        double pn = k_n * ov - c_n * sqm * vn;
+        pn = pn < 0.0 ? 0.0 : pn;
+        const double tx = vx + -vn * nx, ty = vy + -vn * ny, tz = vz + -vn * nz;
+        const double s0x = q->sx[j], s0y = q->sy[j], s0z = q->sz[j];
+        const double s2 = s0x * s0x + s0y * s0y + s0z * s0z;
+        const double sn = s0x * nx + s0y * ny + s0z * nz;
+        const double px = s0x + -sn * nx, py = s0y + -sn * ny, pz = s0z + -sn * nz;
+        const double r2 = s2 - sn * sn;
+        const double x = sn * sn / r2;
+        const double poly = 1.0 + 0.5 * x - 0.375 * x * x;
+        const int has = s2 > 0.0;
+        /* a tilt of the spring past the small-angle rule (rare: a normal turning fast) is
+         * redone by the scalar law after the loop */
+        q->redo[j] = sn * sn < 1e-4 * s2 ? 0.0 : (has ? 1.0 : 0.0);
+        double ux = has ? px * poly : s0x, uy = has ? py * poly : s0y, uz = has ? pz * poly : s0z;
+        ux = ux + mks_dt * tx;
+        uy = uy + mks_dt * ty;
+        uz = uz + mks_dt * tz;
+        const double limit = coh + pn * tan_phi, lim2 = limit * limit;
+        const double smag2 = ux * ux + uy * uy + uz * uz;
+        const int slide = smag2 > lim2;
+        const double mcs = -c_s * sqm;
+        double gx = ux + mcs * tx, gy = uy + mcs * ty, gz = uz + mcs * tz;
+        const double fmag2 = gx * gx + gy * gy + gz * gz;
+        const int over = fmag2 > lim2;
+        /* one square root and one division for whichever of the two limits applies */
+        const double cut = limit / sqrt(slide ? smag2 : fmag2);
+        gx = over ? gx * cut : gx;
+        gy = over ? gy * cut : gy;
+        gz = over ? gz * cut : gz;
+        ux = slide ? ux * cut : ux;
+        uy = slide ? uy * cut : uy;
+        uz = slide ? uz * cut : uz;
+        gx = slide ? ux : gx;
+        gy = slide ? uy : gy;
+        gz = slide ? uz : gz;
+        q->sx[j] = ux;
+        q->sy[j] = uy;
+        q->sz[j] = uz;
+        const double fx = gx + pn * nx, fy = gy + pn * ny, fz = gz + pn * nz;
+        q->fx[j] = fx;
+        q->fy[j] = fy;
+        q->fz[j] = fz;
+        q->nfx[j] = ny * fz - nz * fy;
+        q->nfy[j] = nz * fx - nx * fz;
+        q->nfz[j] = nx * fy - ny * fx;
+        q->la[j] = la;
+        q->lb[j] = lb;
     }
-    double dist = sqrt(d2);
-    sd_vec3 n = dist > 1e-300 ? v3_scale(d, 1.0 / dist) : v3(0.0, 0.0, 1.0);
-    double ov = rs - dist;
-    /* contact point midway between the surfaces: lever arms -la n (A) and lb n (B), so the
-     * relative velocity there is v_a - v_b - (la w_a + lb w_b) x n and the torques are
-     * -la (n x f) on A and -lb (n x f) on B: one cross product each way */
-    const double la = ra - 0.5 * ov, lb = rb - 0.5 * ov;
-    sd_vec3 wsum = v3_madd(v3_scale(b->omega[ia], la), b->omega[ib], lb);
-    sd_vec3 vrel = v3_sub(v3_sub(b->vel[ia], b->vel[ib]), v3_cross(wsum, n));
-    sd_vec3 shear = h->feature == 0 ? h->shear : v3(0, 0, 0);
-    sd_vec3 f;
-    sd_contact_law(law, p->sqrt_m_eff, n, ov, vrel, w->def.dt, &shear, &f);
-    h->feature = 0;
-    h->shear = shear;
-    out->f_a = f;
-    sd_vec3 nf = v3_cross(n, f);
-    out->t_a = v3_scale(nf, -la);
-    out->t_b = v3_scale(nf, -lb);
-    return 1;
 }
 
 /* Cylinder features from 3 up are the ends of a clipped support line (src/geom/cyl_tri.c). */
@@ -265,15 +331,119 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
  * range. Pass 1 computes the cross pairs, once each, into their own slots. Pass 2: each thread walks its list in
  * ascending order, computing the pairs it owns both sides of and adding them, and adding the stored cross pairs to its
  * side. Every pair is computed exactly once, and its history slot written by one thread only. */
-static int pair_force(const sd_world *w, const sd_law *law, int k, sd_pair_out *o)
+/* One touching sphere–sphere pair by the scalar law (contact_law.h): the lanes that the batch
+ * flags for a redo. Case 1 of the kernel: the contact point midway between the surfaces, lever
+ * arms -la n (A) and lb n (B), so the relative velocity there is v_a - v_b - (la w_a + lb w_b) x n
+ * and the torques are -la (n x f) on A and -lb (n x f) on B. */
+static __attribute__((noinline)) void ss_scalar(const sd_world *w, const sd_law *law, const sd_pair *p, sd_hist *h,
+                                               sd_pair_out *out)
 {
-    const sd_pair *p = &w->bb.p[k];
-    sd_hist *h = &w->bb.hist[p->off];
-    if (p->kind == SD_PAIR_SS) return sphere_sphere_fast(w, law, p, h, o);
+    const sd_bodies *b = &w->b;
+    const int ia = p->a, ib = p->b;
+    sd_vec3 d = v3_sub(b->pos[ia], b->pos[ib]);
+    double ra = b->radius[ia], rb = b->radius[ib], rs = ra + rb;
+    double dist = sqrt(v3_norm2(d));
+    sd_vec3 n = dist > 1e-300 ? v3_scale(d, 1.0 / dist) : v3(0.0, 0.0, 1.0);
+    double ov = rs - dist;
+    const double la = ra - 0.5 * ov, lb = rb - 0.5 * ov;
+    sd_vec3 wsum = v3_madd(v3_scale(b->omega[ia], la), b->omega[ib], lb);
+    sd_vec3 vrel = v3_sub(v3_sub(b->vel[ia], b->vel[ib]), v3_cross(wsum, n));
+    sd_vec3 shear = h->feature == 0 ? h->shear : v3(0, 0, 0);
+    sd_vec3 f;
+    sd_contact_law(law, p->sqrt_m_eff, n, ov, vrel, w->def.dt, &shear, &f);
+    h->feature = 0;
+    h->shear = shear;
+    out->f_a = f;
+    sd_vec3 nf = v3_cross(n, f);
+    out->t_a = v3_scale(nf, -la);
+    out->t_b = v3_scale(nf, -lb);
+}
+
+static __attribute__((noinline)) int pair_force_general(const sd_world *w, const sd_law *law, const sd_pair *p,
+                                                        sd_hist *h, sd_pair_out *o)
+{
     sd_manifold m;
     narrow_bb(&w->b, p, &m);
     return apply_manifold(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, o);
 }
+
+/* The pairs ks[0 .. n) (n <= SS_CHUNK): forces into out[i], contact points into used[i]. Each
+ * pair's result depends on that pair alone, so any split into chunks gives the same bits. */
+static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int n, sd_pair_out *out, int *used,
+                     ss_batch *q)
+{
+    const sd_pair *restrict pairs = w->bb.p;
+    sd_hist *restrict hist = w->bb.hist;
+    const sd_vec3 *restrict pos = w->b.pos, *restrict vel = w->b.vel, *restrict omega = w->b.omega;
+    const double *restrict rad = w->b.radius;
+    int sel[SS_CHUNK], gen[SS_CHUNK];
+    int m = 0, ng = 0;
+    /* 1. which pairs touch: no branch on the answer (it is close to a coin toss in a dense bed) */
+    for (int i = 0; i < n; i++) {
+        const sd_pair *p = &pairs[ks[i]];
+        if (p->kind != SD_PAIR_SS) {
+            gen[ng++] = i;
+            continue;
+        }
+        const int ia = p->a, ib = p->b;
+        const sd_vec3 d = v3_sub(pos[ia], pos[ib]);
+        const double rs = rad[ia] + rad[ib];
+        const int t = !(v3_norm2(d) >= rs * rs);
+        used[i] = t;
+        sel[m] = i;
+        m += t;
+        sd_hist *h = &hist[p->off];
+        if ((!t) & (h->feature != -1)) h->feature = -1; /* a contact that has just ended */
+    }
+    /* 2. the other shapes, through the manifold */
+    for (int g = 0; g < ng; g++) {
+        const int i = gen[g];
+        const sd_pair *p = &pairs[ks[i]];
+        used[i] = pair_force_general(w, law, p, &hist[p->off], &out[i]);
+    }
+    /* 3. the touching spheres into the batch */
+    for (int j = 0; j < m; j++) {
+        const sd_pair *p = &pairs[ks[sel[j]]];
+        const int ia = p->a, ib = p->b;
+        const sd_hist *h = &hist[p->off];
+        const sd_vec3 pa = pos[ia], pb = pos[ib], va = vel[ia], vb = vel[ib], wa = omega[ia], wb = omega[ib];
+        const double keep = h->feature == 0 ? 1.0 : 0.0;
+        q->dx[j] = pa.x - pb.x, q->dy[j] = pa.y - pb.y, q->dz[j] = pa.z - pb.z;
+        q->ra[j] = rad[ia], q->rb[j] = rad[ib], q->sqm[j] = p->sqrt_m_eff;
+        q->vx[j] = va.x - vb.x, q->vy[j] = va.y - vb.y, q->vz[j] = va.z - vb.z;
+        q->wax[j] = wa.x, q->way[j] = wa.y, q->waz[j] = wa.z;
+        q->wbx[j] = wb.x, q->wby[j] = wb.y, q->wbz[j] = wb.z;
+        /* a new contact starts from zero (the stored spring is finite: keep * s is exact) */
+        q->sx[j] = keep ? h->shear.x : 0.0, q->sy[j] = keep ? h->shear.y : 0.0, q->sz[j] = keep ? h->shear.z : 0.0;
+    }
+    /* 4. the law, vectorized */
+    ss_batch_law(law, w->def.dt, q, m);
+    /* 5. results and springs back */
+    for (int j = 0; j < m; j++) {
+        const int i = sel[j];
+        const sd_pair *p = &pairs[ks[i]];
+        sd_hist *h = &hist[p->off];
+        if (q->redo[j] != 0.0) {
+            ss_scalar(w, law, p, h, &out[i]);
+            continue;
+        }
+        h->feature = 0;
+        h->shear = v3(q->sx[j], q->sy[j], q->sz[j]);
+        const double mla = -q->la[j], mlb = -q->lb[j];
+        out[i].f_a = v3(q->fx[j], q->fy[j], q->fz[j]);
+        out[i].t_a = v3(q->nfx[j] * mla, q->nfy[j] * mla, q->nfz[j] * mla);
+        out[i].t_b = v3(q->nfx[j] * mlb, q->nfy[j] * mlb, q->nfz[j] * mlb);
+    }
+}
+
+/* per-thread scratch of the body-body pass */
+typedef struct {
+    ss_batch q;
+    sd_pair_out out[SS_CHUNK];
+    int used[SS_CHUNK];
+    int32_t ks[SS_CHUNK];
+    int act[SS_CHUNK];
+} bb_scratch;
 
 static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
 {
@@ -286,20 +456,30 @@ static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
     }
 }
 
-static long bb_serial_pass(sd_world *w, const sd_law *law)
+static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
 {
     sd_bodies *b = &w->b;
     long count = 0;
     for (int i = 0; i < b->n; i++)
         b->force[i] = b->torque[i] = v3(0, 0, 0);
     const int nbb = w->bb.n;
-    for (int k = 0; k < nbb; k++) {
-        sd_pair_out o;
-        int used = pair_force(w, law, k, &o);
-        if (!used) continue;
-        count += used;
-        add_pair(b, w->bb.p[k].a, 0, &o);
-        add_pair(b, w->bb.p[k].b, 1, &o);
+    for (int k0 = 0; k0 < nbb; k0 += SS_CHUNK) {
+        const int n = nbb - k0 < SS_CHUNK ? nbb - k0 : SS_CHUNK;
+        for (int i = 0; i < n; i++)
+            x->ks[i] = k0 + i;
+        bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q);
+        /* the pairs in contact, listed without a branch on each */
+        int na = 0;
+        for (int i = 0; i < n; i++) {
+            x->act[na] = i;
+            na += x->used[i] > 0;
+            count += x->used[i];
+        }
+        for (int j = 0; j < na; j++) {
+            const int i = x->act[j];
+            add_pair(b, w->bb.p[k0 + i].a, 0, &x->out[i]);
+            add_pair(b, w->bb.p[k0 + i].b, 1, &x->out[i]);
+        }
     }
     return count;
 }
@@ -383,7 +563,7 @@ static sd_status owned_update(sd_world *w, int T)
     return SD_OK;
 }
 
-static long bb_owned_pass(sd_world *w, const sd_law *law, int T)
+static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scratch)
 {
     sd_bodies *b = &w->b;
     const sd_owned *o = w->owned;
@@ -392,13 +572,18 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T)
 #pragma omp parallel num_threads(T) reduction(+ : count)
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
+        bb_scratch *x = &scratch[tid];
         /* pass 1: the cross pairs, into their own slots */
         const int c0 = (int)((long)nc * tid / nthr), c1 = (int)((long)nc * (tid + 1) / nthr);
-        for (int c = c0; c < c1; c++) {
-            const int k = o->cross[c];
-            int used = pair_force(w, law, k, &w->bb.out[k]);
-            w->bb.active[k] = (uint8_t)(used > 0);
-            count += used;
+        for (int c = c0; c < c1; c += SS_CHUNK) {
+            const int n = c1 - c < SS_CHUNK ? c1 - c : SS_CHUNK;
+            bb_chunk(w, law, &o->cross[c], n, x->out, x->used, &x->q);
+            for (int i = 0; i < n; i++) {
+                const int k = o->cross[c + i];
+                w->bb.out[k] = x->out[i];
+                w->bb.active[k] = (uint8_t)(x->used[i] > 0);
+                count += x->used[i];
+            }
         }
 #pragma omp barrier
         /* pass 2: each owner its span, in pair order */
@@ -406,19 +591,34 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T)
             const int i0 = o->B[t], i1 = o->B[t + 1];
             for (int i = i0; i < i1; i++)
                 b->force[i] = b->torque[i] = v3(0, 0, 0);
-            for (int j = o->start[t]; j < o->start[t + 1]; j++) {
-                const int k = o->list[j];
-                if (k >= 0) {
-                    sd_pair_out out;
-                    int used = pair_force(w, law, k, &out);
-                    if (!used) continue;
-                    count += used;
-                    add_pair(b, w->bb.p[k].a, 0, &out);
-                    add_pair(b, w->bb.p[k].b, 1, &out);
-                } else if (w->bb.active[~k]) {
-                    const sd_pair *p = &w->bb.p[~k];
-                    const int own_a = p->a >= i0 && p->a < i1;
-                    add_pair(b, own_a ? p->a : p->b, !own_a, &w->bb.out[~k]);
+            for (int j0 = o->start[t]; j0 < o->start[t + 1]; j0 += SS_CHUNK) {
+                const int j1 = o->start[t + 1] - j0 < SS_CHUNK ? o->start[t + 1] : j0 + SS_CHUNK;
+                int n = 0;
+                for (int j = j0; j < j1; j++)
+                    if (o->list[j] >= 0) x->ks[n++] = o->list[j];
+                bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q);
+                /* the entries in contact, in list order: act = (entry j) << 8 | (own result i) */
+                int na = 0, i = 0;
+                for (int j = j0; j < j1; j++) {
+                    const int k = o->list[j];
+                    const int own = k >= 0;
+                    const int u = own ? x->used[i] : 0;
+                    count += u;
+                    x->act[na] = (j - j0) << 8 | i;
+                    na += own ? u > 0 : w->bb.active[~k];
+                    i += own;
+                }
+                for (int a = 0; a < na; a++) {
+                    const int k = o->list[j0 + (x->act[a] >> 8)];
+                    if (k >= 0) {
+                        const sd_pair_out *out = &x->out[x->act[a] & 255];
+                        add_pair(b, w->bb.p[k].a, 0, out);
+                        add_pair(b, w->bb.p[k].b, 1, out);
+                    } else {
+                        const sd_pair *p = &w->bb.p[~k];
+                        const int own_a = p->a >= i0 && p->a < i1;
+                        add_pair(b, own_a ? p->a : p->b, !own_a, &w->bb.out[~k]);
+                    }
                 }
             }
         }
@@ -445,14 +645,21 @@ sd_status sd_contact_compute(sd_world *w)
     sd_law law = sd_law_make(&w->def.contact);
     long count = 0;
     const int T = bb_owners(w);
+    if (w->bb_scratch_n < T) {
+        free(w->bb_scratch);
+        w->bb_scratch_n = 0;
+        w->bb_scratch = malloc((size_t)T * sizeof(bb_scratch));
+        if (!w->bb_scratch) return SD_ERR_NOMEM;
+        w->bb_scratch_n = T;
+    }
 #ifdef _OPENMP
     if (T > 1) {
         sd_status st = owned_update(w, T);
         if (st) return st;
-        count = bb_owned_pass(w, &law, T);
+        count = bb_owned_pass(w, &law, T, w->bb_scratch);
     } else
 #endif
-        count = bb_serial_pass(w, &law);
+        count = bb_serial_pass(w, &law, w->bb_scratch);
     const int nb = b->n;
 #pragma omp parallel for schedule(static) reduction(+ : count) if (nb > w->def.parallel_min)
     for (int i = 0; i < nb; i++) {

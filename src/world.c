@@ -81,6 +81,7 @@ void sd_world_destroy(sd_world *w)
         free(w->owned->list);
     }
     free(w->owned);
+    free(w->bb_scratch);
     free(w->csr.bt_start);
     free(w->gid_map);
     free(w->old_hist);

@@ -128,6 +128,8 @@ struct sd_world {
     int bt_man_cap;
     sd_csr csr;
     sd_owned *owned;  /* NULL until a parallel pass needs it */
+    void *bb_scratch; /* per-thread scratch of the body-body pass (contact.c) */
+    int bb_scratch_n;
     sd_grid grid;     /* bodies */
     sd_grid tgrid;    /* triangles */
     int32_t *gid_map; /* gid -> index, -1 removed */
