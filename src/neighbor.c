@@ -162,11 +162,24 @@ typedef struct {
     sd_hist h;
 } keyed_hist;
 
-static int cmp_keyed(const void *pa, const void *pb)
+/* Stable LSD radix sort by key, 8 bits a pass; passes where every key has the same digit are
+ * skipped. tmp holds n entries. */
+static void radix_sort_keyed(keyed_hist *a, keyed_hist *tmp, int n)
 {
-    const keyed_hist *a = pa, *b = pb;
-    if (a->key != b->key) return a->key < b->key ? -1 : 1;
-    return a->h.feature - b->h.feature;
+    for (int shift = 0; shift < 64; shift += 8) {
+        int count[257] = {0};
+        for (int i = 0; i < n; i++)
+            count[((a[i].key >> shift) & 255) + 1]++;
+        int trivial = 0;
+        for (int d = 1; d <= 256; d++)
+            if (count[d] == n) trivial = 1;
+        if (trivial) continue;
+        for (int d = 0; d < 256; d++)
+            count[d + 1] += count[d];
+        for (int i = 0; i < n; i++)
+            tmp[count[(a[i].key >> shift) & 255]++] = a[i];
+        memcpy(a, tmp, (size_t)n * sizeof(*a));
+    }
 }
 
 static uint64_t key_of(const sd_world *w, const sd_pair *p)
@@ -184,7 +197,7 @@ sd_status sd_neighbor_collect_history(sd_world *w)
     for (int l = 0; l < 2; l++)
         for (int k = 0; k < lists[l]->nh; k++)
             count += lists[l]->hist[k].feature >= 0;
-    keyed_hist *kh = malloc((size_t)(count > 0 ? count : 1) * sizeof(*kh));
+    keyed_hist *kh = malloc((size_t)(2 * count + 1) * sizeof(*kh));
     if (!kh) return SD_ERR_NOMEM;
     int m = 0;
     for (int l = 0; l < 2; l++) {
@@ -192,16 +205,23 @@ sd_status sd_neighbor_collect_history(sd_world *w)
         for (int k = 0; k < pl->n; k++) {
             const sd_pair *p = &pl->p[k];
             uint64_t key = key_of(w, p);
+            const int m0 = m;
             for (int s = 0; s < p->cap; s++) {
                 const sd_hist *h = &pl->hist[p->off + s];
                 if (h->feature < 0) continue;
-                kh[m].key = key;
-                kh[m].h = *h;
-                m++;
+                /* one pair's slots in feature order (insertion: a handful at most) */
+                int j = m++;
+                while (j > m0 && kh[j - 1].h.feature > h->feature) {
+                    kh[j] = kh[j - 1];
+                    j--;
+                }
+                kh[j].key = key;
+                kh[j].h = *h;
             }
         }
     }
-    qsort(kh, (size_t)m, sizeof(*kh), cmp_keyed);
+    /* keys are unique per pair, so a stable sort by key orders by (key, feature) */
+    radix_sort_keyed(kh, kh + count, m);
     if (sd_grow((void **)&w->old_keys, &w->old_cap, m + 1, sizeof(uint64_t)) ||
         sd_grow((void **)&w->old_hist, &w->old_hist_cap, m + 1, sizeof(sd_hist))) {
         free(kh);
@@ -233,8 +253,25 @@ static sd_status push_pair(sd_pairlist *l, int32_t a, int32_t b, int kind)
     return SD_OK;
 }
 
-/* Put carried history into the new lists' slots. */
-static sd_status restore_history(sd_world *w, sd_pairlist *l)
+/* Where each gid's carried history starts: first[g] is the first old entry whose key has
+ * gid_a >= g (the keys are sorted, gid_a in their high half), for g = 0 .. next_gid. */
+static int32_t *old_first_index(const sd_world *w)
+{
+    const int G = w->next_gid;
+    int32_t *first = malloc((size_t)(G + 2) * sizeof(int32_t));
+    if (!first) return NULL;
+    int k = 0;
+    for (int g = 0; g <= G + 1; g++) {
+        while (k < w->n_old && (int64_t)(w->old_keys[k] >> 32) < g)
+            k++;
+        first[g] = k;
+    }
+    return first;
+}
+
+/* Put carried history into the new lists' slots: the entries of the pair's key are a run
+ * inside its gid's few entries. */
+static sd_status restore_history(sd_world *w, sd_pairlist *l, const int32_t *first)
 {
     if (sd_grow((void **)&l->hist, &l->hcap, l->nh + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
     if (sd_grow((void **)&l->out, &l->out_cap, l->n + 1, sizeof(sd_pair_out))) return SD_ERR_NOMEM;
@@ -245,16 +282,13 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l)
         for (int s = 0; s < p->cap; s++)
             l->hist[p->off + s].feature = -1;
         if (w->n_old == 0) continue;
-        uint64_t key = key_of(w, p);
-        int lo = 0, hi = w->n_old; /* first index with old_keys >= key */
-        while (lo < hi) {
-            int mid = (lo + hi) / 2;
-            if (w->old_keys[mid] < key)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
-        for (int s = 0; lo < w->n_old && w->old_keys[lo] == key && s < p->cap; lo++, s++)
+        const uint64_t key = key_of(w, p);
+        const int g = (int)(key >> 32);
+        int lo = first[g];
+        const int hi = first[g + 1];
+        while (lo < hi && w->old_keys[lo] < key)
+            lo++;
+        for (int s = 0; lo < hi && w->old_keys[lo] == key && s < p->cap; lo++, s++)
             l->hist[p->off + s] = w->old_hist[lo];
     }
     return SD_OK;
@@ -382,21 +416,32 @@ static int bb_scan(const sd_world *w, int i, double hm, cand_buf *out)
     const sd_bodies *b = &w->b;
     const sd_grid *g = &w->grid;
     const int32_t *ri = w->range[i];
+    const int fixed_i = b->fixed[i];
+    const double bri = b->bound_r[i], margin = w->def.margin;
+    const sd_vec3 pi = b->pos[i];
     for (int z = ri[2]; z <= ri[5]; z++)
         for (int y = ri[1]; y <= ri[4]; y++)
             for (int x = ri[0]; x <= ri[3]; x++) {
                 int c = (z * g->ny + y) * g->nx + x;
-                for (int k = g->cell_start[c]; k < g->cell_start[c + 1]; k++) {
+                /* a cell lists its bodies in ascending order: start past i */
+                int k = g->cell_start[c], kend = g->cell_start[c + 1];
+                for (int hi = kend; k < hi;) {
+                    int mid = (k + hi) >> 1;
+                    if (g->items[mid] <= i)
+                        k = mid + 1;
+                    else
+                        hi = mid;
+                }
+                for (; k < kend; k++) {
                     int j = g->items[k];
-                    if (j <= i) continue;
-                    if (b->fixed[i] && b->fixed[j]) continue;
+                    if (fixed_i && b->fixed[j]) continue;
+                    double reach = bri + b->bound_r[j] + margin;
+                    if (v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach) continue;
                     const int32_t *rj = w->range[j];
                     /* take the pair only in the lowest cell the two ranges share */
                     if (x != (ri[0] > rj[0] ? ri[0] : rj[0]) || y != (ri[1] > rj[1] ? ri[1] : rj[1]) ||
                         z != (ri[2] > rj[2] ? ri[2] : rj[2]))
                         continue;
-                    double reach = b->bound_r[i] + b->bound_r[j] + w->def.margin;
-                    if (v3_norm2(v3_sub(b->pos[i], b->pos[j])) > reach * reach) continue;
                     sd_vec3 li, hi_, lj, hj;
                     body_box(b, i, hm, &li, &hi_);
                     body_box(b, j, hm, &lj, &hj);
@@ -537,8 +582,12 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     w->csr.bt_start[b->n] = w->bt.n;
 
     set_effective_masses(w);
-    if ((st = restore_history(w, &w->bb))) return st;
-    if ((st = restore_history(w, &w->bt))) return st;
+    int32_t *first = old_first_index(w);
+    if (!first) return SD_ERR_NOMEM;
+    st = restore_history(w, &w->bb, first);
+    if (!st) st = restore_history(w, &w->bt, first);
+    free(first);
+    if (st) return st;
     w->n_old = 0;
 
     if (sd_grow((void **)&w->bt_man, &w->bt_man_cap, w->bt.n + 1, sizeof(sd_manifold))) return SD_ERR_NOMEM;
