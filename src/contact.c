@@ -456,6 +456,44 @@ static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
     }
 }
 
+/* Body–triangle pairs of the bodies i0 .. i1-1: narrow phase, mesh dedup, law, into each
+ * pair's slot (gathered per body in pair order by sd_contact_gather). */
+static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
+{
+    const sd_bodies *b = &w->b;
+    long count = 0;
+    for (int i = i0; i < i1; i++) {
+        int from = w->csr.bt_start[i], to = w->csr.bt_start[i + 1];
+        if (from == to) continue;
+        int multi = 0;
+        for (int k = from; k < to; k++)
+            multi += narrow_bt(b, &w->w, &w->bt.p[k], &w->bt_man[k]) > 0;
+        if (multi > 1) sd_contact_mesh_dedup(&w->w, w->bt.p, w->bt_man, from, to);
+        for (int k = from; k < to; k++) {
+            const sd_pair *p = &w->bt.p[k];
+            int used = apply_manifold(w, law, &w->bt_man[k], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
+                                      &w->bt.out[k]);
+            w->bt.active[k] = (uint8_t)(used > 0);
+            count += used;
+        }
+    }
+    return count;
+}
+
+/* the first body whose body-triangle pairs start at or after pair k (bt_start ascends) */
+static int bt_split(const sd_world *w, long k)
+{
+    int lo = 0, hi = w->b.n;
+    while (lo < hi) {
+        int mid = (lo + hi) >> 1;
+        if (w->csr.bt_start[mid] < k)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
 static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
 {
     sd_bodies *b = &w->b;
@@ -622,6 +660,9 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 }
             }
         }
+        /* then the body-triangle pairs, split by pair count, in the same parallel region */
+        const long nbt = w->bt.n;
+        count += bt_range(w, law, bt_split(w, nbt * tid / nthr), bt_split(w, nbt * (tid + 1) / nthr));
     }
     return count;
 }
@@ -641,7 +682,6 @@ static int bb_owners(const sd_world *w)
 
 sd_status sd_contact_compute(sd_world *w)
 {
-    const sd_bodies *b = &w->b;
     sd_law law = sd_law_make(&w->def.contact);
     long count = 0;
     const int T = bb_owners(w);
@@ -659,23 +699,9 @@ sd_status sd_contact_compute(sd_world *w)
         count = bb_owned_pass(w, &law, T, w->bb_scratch);
     } else
 #endif
+    {
         count = bb_serial_pass(w, &law, w->bb_scratch);
-    const int nb = b->n;
-#pragma omp parallel for schedule(static) reduction(+ : count) if (nb > w->def.parallel_min)
-    for (int i = 0; i < nb; i++) {
-        int from = w->csr.bt_start[i], to = w->csr.bt_start[i + 1];
-        if (from == to) continue;
-        int multi = 0;
-        for (int k = from; k < to; k++)
-            multi += narrow_bt(b, &w->w, &w->bt.p[k], &w->bt_man[k]) > 0;
-        if (multi > 1) sd_contact_mesh_dedup(&w->w, w->bt.p, w->bt_man, from, to);
-        for (int k = from; k < to; k++) {
-            const sd_pair *p = &w->bt.p[k];
-            int used = apply_manifold(w, &law, &w->bt_man[k], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
-                                      &w->bt.out[k]);
-            w->bt.active[k] = (uint8_t)(used > 0);
-            count += used;
-        }
+        count += bt_range(w, &law, 0, w->b.n);
     }
     w->contacts = count;
     return SD_OK;
