@@ -707,31 +707,10 @@ sd_status sd_contact_compute(sd_world *w)
     return SD_OK;
 }
 
+/* Loads on the walls, in pair order (serial: few pairs, fixed order). The bodies' own totals
+ * are gathered by sd_integrate, body by body, just before each body moves (sd_gather_body). */
 void sd_contact_gather(sd_world *w)
 {
-    sd_bodies *b = &w->b;
-    const int n = b->n;
-#pragma omp parallel for schedule(static) if (n > w->def.parallel_min)
-    for (int i = 0; i < n; i++) {
-        sd_vec3 f = v3(0, 0, 0), t = v3(0, 0, 0);
-        if (b->fixed[i] && b->shape[i] == SD_SHAPE_SPHERE) {
-            /* bed roughness: nobody reads its load; dam pipes (fixed cylinders) are summed */
-            b->force[i] = f;
-            b->torque[i] = t;
-            continue;
-        }
-        /* the body-body part is already in force/torque, summed in pair order */
-        f = b->force[i];
-        t = b->torque[i];
-        for (int k = w->csr.bt_start[i]; k < w->csr.bt_start[i + 1]; k++) {
-            if (!w->bt.active[k]) continue;
-            f = v3_add(f, w->bt.out[k].f_a);
-            t = v3_add(t, w->bt.out[k].t_a);
-        }
-        b->force[i] = f;
-        b->torque[i] = t;
-    }
-    /* loads on the walls, in pair order (serial: few pairs, fixed order) */
     for (int t = 0; t < w->w.n; t++)
         w->w.force[t] = v3(0, 0, 0);
     for (int k = 0; k < w->bt.n; k++) {

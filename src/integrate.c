@@ -16,6 +16,7 @@ void sd_integrate(sd_world *w)
     const int n = b->n;
 #pragma omp parallel for schedule(static) reduction(| : moved) if (n > w->def.parallel_min)
     for (int i = 0; i < n; i++) {
+        sd_gather_body(w, i);
         if (b->fixed[i]) continue;
         sd_vec3 f = v3_add(b->force[i], b->ext_force[i]);
         sd_vec3 acc = v3_madd(g, f, b->inv_mass[i]);
