@@ -36,6 +36,17 @@ static double cc_sat_overlap(const sd_cyl *P, const sd_cyl *Q, sd_vec3 n)
 static int cc_disk_into(const sd_cyl *P, double e, const sd_cyl *Q, double tol, sd_cc_cand *out)
 {
     sd_vec3 ce = sd_cyl_end(P, e);
+    /* exact rejection: every point the tests below can accept lies in the disk (within P->r of
+     * its centre) and within Q->r + tol of Q's axis segment, so a centre farther than
+     * P->r + Q->r + 2 tol from that segment has no contact (the common case: two logs side by
+     * side, their ends clear of each other) */
+    {
+        sd_vec3 dq = v3_sub(ce, Q->c);
+        double t = v3_dot(dq, Q->a);
+        t = t > Q->hl ? Q->hl : (t < -Q->hl ? -Q->hl : t);
+        double reach = P->r + Q->r + 2.0 * tol;
+        if (v3_norm2(v3_madd(dq, Q->a, -t)) > reach * reach) return 0;
+    }
     int found = 0;
     /* E: disk against Q's side */
     {
