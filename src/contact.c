@@ -367,6 +367,29 @@ static __attribute__((noinline)) int pair_force_general(const sd_world *w, const
     return apply_manifold(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, o);
 }
 
+/* The first, exact rejection tests of sd_geom_sphere_cyl and sd_geom_cyl_cyl, with their
+ * arithmetic, so that the pairs of a log that are not touching (most of them) skip the
+ * manifold round trip: sphere beyond an end plane or outside the side by r or more; bounding
+ * spheres of two logs apart. */
+static inline int log_pair_apart(const sd_bodies *b, const sd_pair *p)
+{
+    const int ia = p->a, ib = p->b;
+    if (p->kind == SD_PAIR_SC) {
+        const double r = b->radius[ia];
+        const sd_vec3 d = v3_sub(b->pos[ia], b->pos[ib]), ax = b->axis[ib];
+        const double t = v3_dot(d, ax);
+        if (fabs(t) - b->hl[ib] >= r) return 1;
+        const double rho2 = v3_norm2(v3_madd(d, ax, -t)), rr = b->radius[ib] + r;
+        return rho2 >= rr * rr;
+    }
+    if (p->kind == SD_PAIR_CC) {
+        const double ra = sqrt(b->radius[ia] * b->radius[ia] + b->hl[ia] * b->hl[ia]),
+                     rb = sqrt(b->radius[ib] * b->radius[ib] + b->hl[ib] * b->hl[ib]);
+        return v3_norm2(v3_sub(b->pos[ia], b->pos[ib])) >= (ra + rb) * (ra + rb);
+    }
+    return 0;
+}
+
 /* The pairs ks[0 .. n) (n <= SS_CHUNK): forces into out[i], contact points into used[i]. Each
  * pair's result depends on that pair alone, so any split into chunks gives the same bits. */
 static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int n, sd_pair_out *out, int *used,
@@ -382,6 +405,13 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
     for (int i = 0; i < n; i++) {
         const sd_pair *p = &pairs[ks[i]];
         if (p->kind != SD_PAIR_SS) {
+            if (log_pair_apart(&w->b, p)) {
+                /* what the manifold path gives for no contact: empty slots, no force */
+                used[i] = 0;
+                for (int s = 0; s < p->cap; s++)
+                    hist[p->off + s].feature = -1;
+                continue;
+            }
             gen[ng++] = i;
             continue;
         }

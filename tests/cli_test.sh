@@ -65,10 +65,13 @@ expect table2-dry-run 0 "branching on dam.l_v: 15 shared flows" sweep "$src_dir/
 [ "$(grep -c '^run case' "$tmp/out")" -eq 60 ] && [ ! -e "$tmp/t2" ] && pass=$((pass + 1)) || { echo "FAIL table2 dry run"; fail=$((fail + 1)); }
 expect sweep-parallel-bad 2 "--parallel: expected a positive integer" sweep "$src_dir/examples/shibuya2009-table2.yaml" --parallel 0
 
-# Ctrl-C: exit 130, summary and VTK series closed and valid
-"$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/int" --set output.png=false >"$tmp/int.log" 2>&1 &
+# Ctrl-C: exit 130, summary and VTK series closed and valid. The interrupt comes once the
+# flow phase has started (not after a fixed time: a faster engine would finish first), and a
+# long capture limit keeps the run from ending on its own.
+"$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/int" --set output.png=false --set phases.capture_limit=60 \
+  >"$tmp/int.log" 2>&1 &
 pid=$!
-sleep 3
+for _ in $(seq 600); do grep -q '^phase=flow' "$tmp/int.log" 2>/dev/null && break; sleep 0.1; done
 kill -INT $pid
 wait $pid
 code=$?
