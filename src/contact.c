@@ -367,25 +367,18 @@ static __attribute__((noinline)) int pair_force_general(const sd_world *w, const
     return apply_manifold(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, o);
 }
 
-/* The first, exact rejection tests of sd_geom_sphere_cyl and sd_geom_cyl_cyl, with their
- * arithmetic, so that the pairs of a log that are not touching (most of them) skip the
- * manifold round trip: sphere beyond an end plane or outside the side by r or more; bounding
- * spheres of two logs apart. */
+/* A log's pair that fails its kernel's first exact rejection (most of them): skips the
+ * manifold round trip. */
 static inline int log_pair_apart(const sd_bodies *b, const sd_pair *p)
 {
-    const int ia = p->a, ib = p->b;
     if (p->kind == SD_PAIR_SC) {
-        const double r = b->radius[ia];
-        const sd_vec3 d = v3_sub(b->pos[ia], b->pos[ib]), ax = b->axis[ib];
-        const double t = v3_dot(d, ax);
-        if (fabs(t) - b->hl[ib] >= r) return 1;
-        const double rho2 = v3_norm2(v3_madd(d, ax, -t)), rr = b->radius[ib] + r;
-        return rho2 >= rr * rr;
+        const sd_cyl c = sd_body_cyl(b, p->b);
+        double rho2;
+        return sd_sphere_cyl_apart(b->pos[p->a], b->radius[p->a], &c, &rho2);
     }
     if (p->kind == SD_PAIR_CC) {
-        const double ra = sqrt(b->radius[ia] * b->radius[ia] + b->hl[ia] * b->hl[ia]),
-                     rb = sqrt(b->radius[ib] * b->radius[ib] + b->hl[ib] * b->hl[ib]);
-        return v3_norm2(v3_sub(b->pos[ia], b->pos[ib])) >= (ra + rb) * (ra + rb);
+        const sd_cyl ca = sd_body_cyl(b, p->a), cb = sd_body_cyl(b, p->b);
+        return sd_cyl_cyl_apart(&ca, &cb);
     }
     return 0;
 }

@@ -162,8 +162,7 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
 {
     m->n = 0;
     sd_vec3 dc = v3_sub(a->c, b->c);
-    double ra = sqrt(a->r * a->r + a->hl * a->hl), rb = sqrt(b->r * b->r + b->hl * b->hl);
-    if (v3_norm2(dc) >= (ra + rb) * (ra + rb)) return 0; /* bounding spheres (eq 44) */
+    if (sd_cyl_cyl_apart(a, b)) return 0;
     double tol = 1e-9 * (a->r + a->hl + b->r + b->hl);
     {
         /* cheap exact rejections first: each cylinder lies inside the capsule around its axis

@@ -61,6 +61,26 @@ static inline void sd_tri_init(sd_tri *t, sd_vec3 a, sd_vec3 b, sd_vec3 c)
  * region it lies in (face, edge or vertex). */
 sd_vec3 sd_geom_closest_on_tri(const sd_tri *t, sd_vec3 p, int *feature);
 
+/* The first, exact rejections of sd_geom_sphere_cyl and sd_geom_cyl_cyl, inline so that the
+ * pair loop can skip a log's non-touching pairs without the manifold round trip. 1: apart. */
+static inline int sd_sphere_cyl_apart(sd_vec3 c, double r, const sd_cyl *b, double *rho2_out)
+{
+    /* beyond an end plane, or outside the side surface, by r or more */
+    sd_vec3 d = v3_sub(c, b->c);
+    double t = v3_dot(d, b->a);
+    if (fabs(t) - b->hl >= r) return 1;
+    double rho2 = v3_norm2(v3_madd(d, b->a, -t)), rr = b->r + r;
+    *rho2_out = rho2;
+    return rho2 >= rr * rr;
+}
+
+static inline int sd_cyl_cyl_apart(const sd_cyl *a, const sd_cyl *b)
+{
+    /* bounding spheres (eq 44) */
+    double ra = sqrt(a->r * a->r + a->hl * a->hl), rb = sqrt(b->r * b->r + b->hl * b->hl);
+    return v3_norm2(v3_sub(a->c, b->c)) >= (ra + rb) * (ra + rb);
+}
+
 int sd_geom_sphere_sphere(sd_vec3 ca, double ra, sd_vec3 cb, double rb, sd_manifold *m);
 /* feature = triangle feature code of the closest point. */
 int sd_geom_sphere_tri(sd_vec3 c, double r, const sd_tri *t, sd_manifold *m);

@@ -9,12 +9,8 @@
 int sd_geom_sphere_cyl(sd_vec3 c, double r, const sd_cyl *b, sd_manifold *m)
 {
     m->n = 0;
-    /* cheap exact rejections: beyond an end plane, or outside the side surface, by r or more */
-    sd_vec3 d = v3_sub(c, b->c);
-    double t = v3_dot(d, b->a);
-    if (fabs(t) - b->hl >= r) return 0;
-    double rho2 = v3_norm2(v3_madd(d, b->a, -t)), rr = b->r + r;
-    if (rho2 >= rr * rr) return 0;
+    double rho2;
+    if (sd_sphere_cyl_apart(c, r, b, &rho2)) return 0;
     sd_vec3 n;
     int f;
     /* hint for a centre exactly on the axis (only read there): any fixed perpendicular */
