@@ -470,6 +470,7 @@ typedef struct {
 
 static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
 {
+    if (sd_body_is_bed(b, i)) return; /* its load is never read: stays zero (sd_gather_body) */
     if (as_b) {
         b->force[i] = v3_sub(b->force[i], o->f_a);
         b->torque[i] = v3_add(b->torque[i], o->t_b);
@@ -522,7 +523,7 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
     sd_bodies *b = &w->b;
     long count = 0;
     for (int i = 0; i < b->n; i++)
-        b->force[i] = b->torque[i] = v3(0, 0, 0);
+        if (!sd_body_is_bed(b, i)) b->force[i] = b->torque[i] = v3(0, 0, 0);
     const int nbb = w->bb.n;
     for (int k0 = 0; k0 < nbb; k0 += SS_CHUNK) {
         const int n = nbb - k0 < SS_CHUNK ? nbb - k0 : SS_CHUNK;
@@ -651,7 +652,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
         for (int t = tid; t < T; t += nthr) {
             const int i0 = o->B[t], i1 = o->B[t + 1];
             for (int i = i0; i < i1; i++)
-                b->force[i] = b->torque[i] = v3(0, 0, 0);
+                if (!sd_body_is_bed(b, i)) b->force[i] = b->torque[i] = v3(0, 0, 0);
             for (int j0 = o->start[t]; j0 < o->start[t + 1]; j0 += SS_CHUNK) {
                 const int j1 = o->start[t + 1] - j0 < SS_CHUNK ? o->start[t + 1] : j0 + SS_CHUNK;
                 int n = 0;
