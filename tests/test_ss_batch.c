@@ -63,10 +63,15 @@ static void reference(const sd_world *w, const sd_hist *old, sd_vec3 *F, sd_vec3
         h->feature = 0;
         h->shear = s;
         const sd_vec3 nf = v3_cross(n, f);
-        F[ia] = v3_add(F[ia], f);
-        T[ia] = v3_add(T[ia], v3_scale(nf, -la));
-        F[ib] = v3_sub(F[ib], f);
-        T[ib] = v3_add(T[ib], v3_scale(nf, -lb));
+        /* the bed roughness (fixed spheres) carries no load: its force stays zero */
+        if (!b->fixed[ia]) {
+            F[ia] = v3_add(F[ia], f);
+            T[ia] = v3_add(T[ia], v3_scale(nf, -la));
+        }
+        if (!b->fixed[ib]) {
+            F[ib] = v3_sub(F[ib], f);
+            T[ib] = v3_add(T[ib], v3_scale(nf, -lb));
+        }
     }
 }
 
