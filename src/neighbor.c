@@ -409,9 +409,34 @@ typedef struct {
     int n, cap;
 } cand_buf;
 
+/* The moving bodies of each cell of the body grid, ascending like the grid's own lists: all
+ * that the scan of a fixed body needs (fixed-fixed pairs are never candidates). The bed
+ * roughness is half the paper's elements and fills its cells: its scans get short. */
+typedef struct {
+    int32_t *start, *items;
+} moving_index;
+
+static int moving_index_make(const sd_world *w, moving_index *mi)
+{
+    const sd_grid *g = &w->grid;
+    const int ncell = g->nx * g->ny * g->nz;
+    const int total = g->cell_start[ncell];
+    mi->start = malloc((size_t)(ncell + 1) * sizeof(int32_t));
+    mi->items = malloc((size_t)(total + 1) * sizeof(int32_t));
+    if (!mi->start || !mi->items) return 1;
+    int m = 0;
+    for (int c = 0; c < ncell; c++) {
+        mi->start[c] = m;
+        for (int k = g->cell_start[c]; k < g->cell_start[c + 1]; k++)
+            if (!w->b.fixed[g->items[k]]) mi->items[m++] = g->items[k];
+    }
+    mi->start[ncell] = m;
+    return 0;
+}
+
 /* The body–body candidates (j > i) of body i, in the order of the serial scan. Returns
  * nonzero when out of memory. */
-static int bb_scan(const sd_world *w, int i, double hm, cand_buf *out)
+static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, cand_buf *out)
 {
     const sd_bodies *b = &w->b;
     const sd_grid *g = &w->grid;
@@ -423,17 +448,20 @@ static int bb_scan(const sd_world *w, int i, double hm, cand_buf *out)
         for (int y = ri[1]; y <= ri[4]; y++)
             for (int x = ri[0]; x <= ri[3]; x++) {
                 int c = (z * g->ny + y) * g->nx + x;
-                /* a cell lists its bodies in ascending order: start past i */
-                int k = g->cell_start[c], kend = g->cell_start[c + 1];
+                /* a cell lists its bodies in ascending order: start past i (a fixed body
+                 * looks at the moving ones only, the same j in the same order) */
+                const int32_t *items = fixed_i ? mi->items : g->items;
+                int k = fixed_i ? mi->start[c] : g->cell_start[c];
+                const int kend = fixed_i ? mi->start[c + 1] : g->cell_start[c + 1];
                 for (int hi = kend; k < hi;) {
                     int mid = (k + hi) >> 1;
-                    if (g->items[mid] <= i)
+                    if (items[mid] <= i)
                         k = mid + 1;
                     else
                         hi = mid;
                 }
                 for (; k < kend; k++) {
-                    int j = g->items[k];
+                    int j = items[k];
                     if (fixed_i && b->fixed[j]) continue;
                     double reach = bri + b->bound_r[j] + margin;
                     if (v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach) continue;
@@ -520,6 +548,12 @@ sd_status sd_neighbor_rebuild(sd_world *w)
 #endif
         cand_buf buf[SD_MAX_OWNERS];
         memset(buf, 0, sizeof buf);
+        moving_index mi;
+        if (moving_index_make(w, &mi)) {
+            free(mi.start);
+            free(mi.items);
+            return SD_ERR_NOMEM;
+        }
         int nomem = 0;
 #pragma omp parallel num_threads(T) reduction(| : nomem) if (T > 1)
         {
@@ -530,8 +564,10 @@ sd_status sd_neighbor_rebuild(sd_world *w)
 #endif
             const int i0 = (int)((long)b->n * tid / nthr), i1 = (int)((long)b->n * (tid + 1) / nthr);
             for (int i = i0; i < i1 && !nomem; i++)
-                nomem |= bb_scan(w, i, hm, &buf[tid]);
+                nomem |= bb_scan(w, i, hm, &mi, &buf[tid]);
         }
+        free(mi.start);
+        free(mi.items);
         for (int t = 0; t < T && !nomem; t++)
             for (int k = 0; k < buf[t].n && !st; k++)
                 st = push_pair(&w->bb, buf[t].c[k].a, buf[t].c[k].b, buf[t].c[k].kind);
