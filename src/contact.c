@@ -560,17 +560,6 @@ static inline int owner_of(int i, const int *B, int T)
     return lo;
 }
 
-/* The owners of a pair's two bodies. A bed sphere takes nothing from its pairs
- * (sd_body_is_bed), so it counts as owned by its partner's owner: its pairs are never cross
- * pairs, wherever the bed lies in the store. */
-static inline void pair_owners(const sd_bodies *b, const sd_pair *p, const int *B, int T, int *ta, int *tb)
-{
-    *ta = owner_of(p->a, B, T);
-    *tb = owner_of(p->b, B, T);
-    if (sd_body_is_bed(b, p->a)) *ta = *tb;
-    if (sd_body_is_bed(b, p->b)) *tb = *ta;
-}
-
 /* The body ranges, spans and cross pairs for T owners, from the current pair list (serial,
  * O(pairs), once per candidate rebuild). */
 #ifdef _OPENMP
@@ -600,8 +589,7 @@ static sd_status owned_update(sd_world *w, int T)
     int ncross = 0;
     for (int k = 0; k < nbb; k++) {
         const sd_pair *p = &w->bb.p[k];
-        int ta, tb;
-        pair_owners(&w->b, p, o->B, T, &ta, &tb);
+        const int ta = owner_of(p->a, o->B, T), tb = owner_of(p->b, o->B, T);
         cnt[ta]++;
         if (ta != tb) {
             cnt[tb]++;
@@ -620,8 +608,7 @@ static sd_status owned_update(sd_world *w, int T)
     o->ncross = 0;
     for (int k = 0; k < nbb; k++) {
         const sd_pair *p = &w->bb.p[k];
-        int ta, tb;
-        pair_owners(&w->b, p, o->B, T, &ta, &tb);
+        const int ta = owner_of(p->a, o->B, T), tb = owner_of(p->b, o->B, T);
         if (ta == tb) {
             o->list[fill[ta]++] = k;
             continue;

@@ -360,7 +360,7 @@ static sd_status sort_bodies_by_cell(sd_world *w)
     const sd_grid *g = &w->grid;
     int n = b->n, ncell = g->nx * g->ny * g->nz;
     int32_t *cell = malloc((size_t)(n + 1) * sizeof(int32_t));
-    int32_t *count = calloc((size_t)2 * ncell + 1, sizeof(int32_t));
+    int32_t *count = calloc((size_t)ncell + 1, sizeof(int32_t));
     int32_t *perm = malloc((size_t)(n + 1) * sizeof(int32_t));
     sd_status st = SD_OK;
     if (!cell || !count || !perm) {
@@ -375,14 +375,11 @@ static sd_status sort_bodies_by_cell(sd_world *w)
         /* x slowest: a contiguous index range is a slab across the flume (the thread ranges of
          * contact.c), whatever order the grid's own cells use */
         cell[i] = (r[0] * g->ny + r[1]) * g->nz + r[2];
-        /* the fixed bodies after all the moving ones: the arrays that move every step
-         * (integration, the gather) stay dense instead of interleaved with the bed */
-        if (b->fixed[i]) cell[i] += ncell;
         if (i && cell[i] < cell[i - 1]) sorted = 0;
         count[cell[i] + 1]++;
     }
     if (sorted) goto done;
-    for (int c = 0; c < 2 * ncell; c++)
+    for (int c = 0; c < ncell; c++)
         count[c + 1] += count[c];
     for (int i = 0; i < n; i++)
         perm[count[cell[i]]++] = i;
