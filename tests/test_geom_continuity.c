@@ -71,6 +71,7 @@
 #include "check.h"
 #include "core/rng.h"
 #include "geom/geom.h"
+#include "geom_ref.h"
 
 #define K_N 1e4
 #define SD_PI 3.14159265358979323846
@@ -121,16 +122,6 @@ static sd_vec3 clampv(sd_vec3 v, double m)
     return n > m ? v3_scale(v, m / n) : v;
 }
 
-static sd_cyl mkcyl(sd_vec3 c, sd_vec3 a, double r, double hl)
-{
-    sd_cyl k;
-    k.c = c;
-    k.a = v3_normalize(a);
-    k.r = r;
-    k.hl = hl;
-    return k;
-}
-
 /* closest points of the axis segments (kernel-independent steering direction): alternating
  * clamped projections, enough for a direction */
 static void seg_closest(const sd_cyl *a, const sd_cyl *b, sd_vec3 *pa, sd_vec3 *pb)
@@ -153,18 +144,10 @@ static sd_vec3 seg_point_closest(const sd_cyl *b, sd_vec3 x)
 
 /* ------------------------------------------- reference: sampled deepest penetration ---- */
 /* Written independently of the kernels: the deepest penetration of a sampled surface point
- * of either cylinder into the other (exact signed distance), coarse grid then local
- * refinement around the best samples. Only used to report the true depth of the worst cases. */
-static double sdf_cyl(const sd_cyl *c, sd_vec3 x)
-{
-    sd_vec3 d = v3_sub(x, c->c);
-    double t = v3_dot(d, c->a);
-    double rho = sqrt(fmax(v3_norm2(d) - t * t, 0.0));
-    double dx = rho - c->r, dy = fabs(t) - c->hl;
-    double out = sqrt(fmax(dx, 0.0) * fmax(dx, 0.0) + fmax(dy, 0.0) * fmax(dy, 0.0));
-    return fmin(fmax(dx, dy), 0.0) + out;
-}
-/* part 0 side (u = axial position, v = angle), 1 / 2 end disk - / + (u = radius, v = angle) */
+ * of either cylinder into the other (exact signed distance, sdf_cyl in geom_ref.h), coarse
+ * grid then local refinement around the best samples. Only used to report the true depth of
+ * the worst cases.
+ * part 0 side (u = axial position, v = angle), 1 / 2 end disk - / + (u = radius, v = angle) */
 static sd_vec3 cyl_point(const sd_cyl *c, sd_vec3 fu, sd_vec3 fv, int part, double u, double v)
 {
     sd_vec3 rad = v3_add(v3_scale(fu, cos(v)), v3_scale(fv, sin(v)));

@@ -7,6 +7,7 @@
 #include "check.h"
 #include "core/rng.h"
 #include "geom/geom.h"
+#include "geom_ref.h"
 
 /* ---- deterministic RNG (splitmix64) and rigid motions ---- */
 static sd_rng rng = {0x5eed5eed1234ULL}; /* the engine's splitmix64 (core/rng.h) */
@@ -38,16 +39,6 @@ static sd_tri xtri(xform x, const sd_tri *t)
     sd_tri r;
     sd_tri_init(&r, xp(x, t->v[0]), xp(x, t->v[1]), xp(x, t->v[2]));
     return r;
-}
-
-static sd_cyl mkcyl(sd_vec3 c, sd_vec3 a, double r, double hl)
-{
-    sd_cyl k;
-    k.c = c;
-    k.a = v3_normalize(a);
-    k.r = r;
-    k.hl = hl;
-    return k;
 }
 
 static int manifold_finite(const sd_manifold *m)

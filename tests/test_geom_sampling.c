@@ -17,6 +17,7 @@
 #include "check.h"
 #include "core/rng.h"
 #include "geom/geom.h"
+#include "geom_ref.h"
 
 #define SD_PI 3.14159265358979323846
 
@@ -32,17 +33,7 @@ static sd_vec3 rand_unit(void)
     }
 }
 
-/* ---- exact signed distances (reference side; deliberately written independently) ---- */
-static double sdf_cyl(const sd_cyl *c, sd_vec3 x)
-{
-    sd_vec3 d = v3_sub(x, c->c);
-    double t = v3_dot(d, c->a);
-    double rho = sqrt(fmax(v3_norm2(d) - t * t, 0.0));
-    double dx = rho - c->r, dy = fabs(t) - c->hl;
-    double out = sqrt(fmax(dx, 0.0) * fmax(dx, 0.0) + fmax(dy, 0.0) * fmax(dy, 0.0));
-    return fmin(fmax(dx, dy), 0.0) + out;
-}
-
+/* exact signed distances: sdf_cyl (geom_ref.h, written independently of the kernels) */
 /* ---- parametrised surface samples of a cylinder: part 0 side (u = t, v = angle),
  * part 1/2 end disk -/+ (u = radius, v = angle) ---- */
 typedef struct {
