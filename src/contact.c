@@ -560,6 +560,39 @@ static inline int owner_of(int i, const int *B, int T)
     return lo;
 }
 
+/* New split fractions f[0..T] (f[0] = 0, f[T] = 1) that would have given the T owners the
+ * same time, had each owner's time tau[t] been spread evenly over its share f[t]..f[t+1];
+ * taken half way from the old split (measured times are noisy), then the times restart. The
+ * cost of a pair depends on where it is (a log jam at the dam, a bed at rest upstream), which
+ * a split by pair count does not see. Any split gives the same bits. */
+static void rebalance(double *f, double *tau, int T)
+{
+    double total = 0.0;
+    for (int t = 0; t < T; t++)
+        total += tau[t];
+    if (total > 0.0) {
+        double nf[SD_MAX_OWNERS + 1];
+        int t = 0;
+        double acc = 0.0;
+        for (int k = 1; k < T; k++) {
+            const double target = total * k / T;
+            while (t < T - 1 && acc + tau[t] < target) {
+                acc += tau[t];
+                t++;
+            }
+            double x = tau[t] > 0.0 ? (target - acc) / tau[t] : 0.5;
+            x = x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x);
+            nf[k] = f[t] + x * (f[t + 1] - f[t]);
+        }
+        for (int k = 1; k < T; k++) {
+            double v = 0.5 * (f[k] + nf[k]);
+            f[k] = v < f[k - 1] ? f[k - 1] : (v > 1.0 ? 1.0 : v);
+        }
+    }
+    for (int t = 0; t < T; t++)
+        tau[t] = 0.0;
+}
+
 /* The body ranges, spans and cross pairs for T owners, from the current pair list (serial,
  * O(pairs), once per candidate rebuild). */
 #ifdef _OPENMP
@@ -574,15 +607,32 @@ static sd_status owned_update(sd_world *w, int T)
         if (!o) return SD_ERR_NOMEM;
         w->owned = o;
     }
-    /* balance by pairs, not bodies: the pairs are generated in order of their lower body
-     * index, so range t starts at the lower body of pair nbb t / T */
+    if (o->T != T) { /* new: even shares */
+        for (int t = 0; t <= T; t++)
+            o->fo[t] = o->ft[t] = (double)t / T;
+        for (int t = 0; t < T; t++)
+            o->tau_o[t] = o->tau_t[t] = 0.0;
+    } else {
+        rebalance(o->fo, o->tau_o, T);
+        rebalance(o->ft, o->tau_t, T);
+    }
+    /* split by pairs, not bodies: the pairs are generated in order of their lower body
+     * index, so range t starts at the lower body of pair nbb fo[t] */
     o->B[0] = 0;
     o->B[T] = n;
     for (int t = 1; t < T; t++) {
-        const sd_pair *p = &w->bb.p[(long)nbb * t / T];
-        o->B[t] = p->a < p->b ? p->a : p->b;
+        long k = (long)(nbb * o->fo[t]);
+        if (k > nbb - 1) k = nbb - 1;
+        if (k < 0) k = 0;
+        const sd_pair *p = &w->bb.p[k];
+        o->B[t] = nbb > 0 ? (p->a < p->b ? p->a : p->b) : 0;
         if (o->B[t] < o->B[t - 1]) o->B[t] = o->B[t - 1];
     }
+    const long nbt = w->bt.n;
+    o->bt_k[0] = 0;
+    o->bt_k[T] = nbt;
+    for (int t = 1; t < T; t++)
+        o->bt_k[t] = (long)(nbt * o->ft[t]);
     /* count, then fill: owner t's list holds its own pairs and the cross pairs touching it,
      * in ascending pair order */
     int cnt[SD_MAX_OWNERS] = {0};
@@ -635,6 +685,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
         bb_scratch *x = &scratch[tid];
+        sd_owned *ow = w->owned;
         /* pass 1: the cross pairs, into their own slots */
         const int c0 = (int)((long)nc * tid / nthr), c1 = (int)((long)nc * (tid + 1) / nthr);
         for (int c = c0; c < c1; c += SS_CHUNK) {
@@ -648,6 +699,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
             }
         }
 #pragma omp barrier
+        const double t0 = omp_get_wtime();
         /* pass 2: each owner its span, in pair order */
         for (int t = tid; t < T; t += nthr) {
             const int i0 = o->B[t], i1 = o->B[t + 1];
@@ -684,9 +736,16 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 }
             }
         }
-        /* then the body-triangle pairs, split by pair count, in the same parallel region */
-        const long nbt = w->bt.n;
-        count += bt_range(w, law, bt_split(w, nbt * tid / nthr), bt_split(w, nbt * (tid + 1) / nthr));
+        const double t1 = omp_get_wtime();
+        /* then the body-triangle pairs, in the same parallel region (no barrier) */
+        if (nthr == T) {
+            count += bt_range(w, law, bt_split(w, ow->bt_k[tid]), bt_split(w, ow->bt_k[tid + 1]));
+            ow->tau_o[tid] += t1 - t0;
+            ow->tau_t[tid] += omp_get_wtime() - t1;
+        } else {
+            const long nbt = w->bt.n;
+            count += bt_range(w, law, bt_split(w, nbt * tid / nthr), bt_split(w, nbt * (tid + 1) / nthr));
+        }
     }
     return count;
 }

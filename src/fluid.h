@@ -10,8 +10,11 @@
 #ifndef SD_FLUID_H
 #define SD_FLUID_H
 
+#include <math.h>
 #include <stddef.h>
+#include <string.h>
 
+#include "core/vmath.h"
 #include "sabodem.h" /* sd_vec3, SD_SHAPE_* */
 
 typedef struct {
@@ -60,18 +63,59 @@ sd_fluid_params sd_fluid_params_default(double slope_rad);
 
 /* Flow phase, eq 50: U_i = (z/h/5 + 4/5) U for 0 <= z <= h (z < 0 read as 0).
  * Returns 1 and sets *u when the point is under the surface, 0 (and *u = 0) above it. */
-int sd_fluid_speed_flow(double U, double h, double z, double *u);
+static inline int sd_fluid_speed_flow(double U, double h, double z, double *u)
+{
+    if (z < 0.0) z = 0.0;
+    if (!(h > 0.0) || !(z <= h)) { /* above the surface (or NaN / no depth): no fluid */
+        *u = 0.0;
+        return 0;
+    }
+    /* eq 50: 0.8 U at the bed, U at the surface */
+    *u = (z / h / 5.0 + 4.0 / 5.0) * U;
+    return 1;
+}
 
 /* Capture phase, eqs 51–53: α = 1.8 h/h_D − 1, β = 1; if α <= 0.1 then α = 0.1,
  * β = 1.8 h/h_D − α. h_D below h is raised to h. */
-void sd_fluid_capture_coeffs(double h, double h_D, double *alpha, double *beta);
+static inline void sd_fluid_capture_coeffs(double h, double h_D, double *alpha, double *beta)
+{
+    if (!(h_D >= h)) h_D = h; /* never below h */
+    double r = 1.8 * h / h_D;
+    double a = r - 1.0, b = 1.0; /* eq 52 */
+    if (a <= 0.1) {               /* eq 53 */
+        a = 0.1;
+        b = r - a;
+    }
+    *alpha = a;
+    *beta = b;
+}
 
 /* Capture phase: U_i = ((β − α) z/h_D + α) U for 0 <= z <= h_D (z < 0 read as 0).
  * Returns 1 and sets *u when under the surface h_D (raised to h), 0 (and *u = 0) above it. */
-int sd_fluid_speed_capture(double U, double h, double h_D, double z, double *u);
+static inline int sd_fluid_speed_capture(double U, double h, double h_D, double z, double *u)
+{
+    if (!(h_D >= h)) h_D = h;
+    if (z < 0.0) z = 0.0;
+    if (!(h_D > 0.0) || !(z <= h_D)) {
+        *u = 0.0;
+        return 0;
+    }
+    double a, b;
+    sd_fluid_capture_coeffs(h, h_D, &a, &b);
+    *u = ((b - a) * z / h_D + a) * U; /* eq 51 */
+    return 1;
+}
 
 /* Speed of the profile of the given phase at height z; returns 1 wet, 0 dry or phase NONE. */
-int sd_fluid_speed(const sd_fluid_params *p, sd_fluid_phase phase, double h_D, double z, double *u);
+static inline int sd_fluid_speed(const sd_fluid_params *p, sd_fluid_phase phase, double h_D, double z, double *u)
+{
+    switch (phase) {
+    case SD_FLUID_FLOW: return sd_fluid_speed_flow(p->U, p->h, z, u);
+    case SD_FLUID_CAPTURE: return sd_fluid_speed_capture(p->U, p->h, h_D, z, u);
+    case SD_FLUID_NONE:
+    default: *u = 0.0; return 0;
+    }
+}
 
 /* Discharge per unit width ∫ U_i dz over the wet depth (h, or h_D raised to h), by composite
  * Simpson's rule on n intervals (n raised to an even number >= 2) of the profile functions
@@ -80,25 +124,66 @@ double sd_fluid_discharge(double U, double h, sd_fluid_phase phase, double h_D, 
 
 /* Projected areas normal to the unit direction u. Sphere: π r². Cylinder (radius r, full length
  * L, unit axis a): 2 r L sqrt(1 − (a·u)²) + π r² |a·u|. */
-double sd_fluid_area_sphere(double r);
-double sd_fluid_area_cylinder(double r, double L, sd_vec3 axis, sd_vec3 u);
+static inline double sd_fluid_area_sphere(double r) { return M_PI * r * r; }
+static inline double sd_fluid_area_cylinder(double r, double L, sd_vec3 axis, sd_vec3 u)
+{
+    double c = fabs(v3_dot(axis, u));
+    if (c > 1.0) c = 1.0;
+    return 2.0 * r * L * sqrt(1.0 - c * c) + M_PI * r * r * c;
+}
 /* Volumes: sphere 4/3 π r³, cylinder π r² L. */
-double sd_fluid_volume_sphere(double r);
-double sd_fluid_volume_cylinder(double r, double L);
+static inline double sd_fluid_volume_sphere(double r) { return 4.0 / 3.0 * M_PI * r * r * r; }
+static inline double sd_fluid_volume_cylinder(double r, double L) { return M_PI * r * r * L; }
 
 /* Height of a point above the bed, normal to it, not clamped. */
-double sd_fluid_height(const sd_fluid_params *p, sd_vec3 pos);
+static inline double sd_fluid_height(const sd_fluid_params *p, sd_vec3 pos)
+{
+    return v3_dot(pos, p->bed_normal) - p->z_bed;
+}
 
 /* Fluid force on one element (eq 47): f = ½ C_D ρ A |U_i − v| (U_i − v) + f_B, with
  * U_i = u_i flow_dir, f_B = −ρ V gravity; no torque. The whole volume counts for buoyancy
  * once the centre is wet. Returns 1 when the centre is under the surface of the phase (force
  * set), 0 when dry, phase NONE or a bad shape (out zeroed). With zero relative velocity the
  * drag is zero (and the area is evaluated for the flow direction). out may be NULL. */
-int sd_fluid_force(const sd_fluid_params *p, sd_fluid_phase phase, double h_D,
-                   const sd_fluid_element *e, sd_fluid_force_result *out);
+static inline int sd_fluid_force(const sd_fluid_params *p, sd_fluid_phase phase, double h_D,
+                   const sd_fluid_element *e, sd_fluid_force_result *out)
+{
+    sd_fluid_force_result r;
+    memset(&r, 0, sizeof r);
+    double z = sd_fluid_height(p, e->pos);
+    r.z = z < 0.0 ? 0.0 : z;
+    int shape_ok = e->shape == SD_SHAPE_SPHERE || e->shape == SD_SHAPE_CYLINDER;
+    double u;
+    if (!shape_ok || !sd_fluid_speed(p, phase, h_D, z, &u)) {
+        if (out) *out = r;
+        return 0;
+    }
+    r.u_local = u;
+    sd_vec3 rel = v3_sub(v3_scale(p->flow_dir, u), e->vel); /* U_i − v */
+    double speed = v3_norm(rel);
+    if (e->shape == SD_SHAPE_SPHERE) {
+        r.area = sd_fluid_area_sphere(e->radius);
+        r.volume = sd_fluid_volume_sphere(e->radius);
+    } else {
+        sd_vec3 dir = speed > 0.0 ? v3_scale(rel, 1.0 / speed) : p->flow_dir;
+        r.area = sd_fluid_area_cylinder(e->radius, e->length, e->axis, dir);
+        r.volume = sd_fluid_volume_cylinder(e->radius, e->length);
+    }
+    r.drag = v3_scale(rel, 0.5 * p->C_D * p->rho * r.area * speed);
+    r.buoyancy = v3_scale(p->gravity, -p->rho * r.volume);
+    r.total = v3_add(r.drag, r.buoyancy);
+    if (out) *out = r;
+    return 1;
+}
 /* Same, returning the total force only (zero when dry). */
-sd_vec3 sd_fluid_force_total(const sd_fluid_params *p, sd_fluid_phase phase, double h_D,
-                             const sd_fluid_element *e);
+static inline sd_vec3 sd_fluid_force_total(const sd_fluid_params *p, sd_fluid_phase phase, double h_D,
+                             const sd_fluid_element *e)
+{
+    sd_fluid_force_result r;
+    sd_fluid_force(p, phase, h_D, e, &r);
+    return r.total;
+}
 
 /* Capture-phase depth h_D (SPEC §5): max(h, max z_i over the n elements with
  * x_dam − probe <= x_i <= x_dam). x and z are centre coordinates (z = height above the bed);

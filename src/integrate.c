@@ -13,11 +13,14 @@ void sd_integrate(sd_world *w)
     const sd_vec3 g = w->def.gravity;
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
-    const int n = b->n;
-#pragma omp parallel for schedule(static) reduction(| : moved) if (n > w->def.parallel_min)
-    for (int i = 0; i < n; i++) {
+    /* the moving bodies only (w->mov, made current by sd_world_step): a fixed body has no
+     * triangle pairs to gather and does not move; split evenly among the threads */
+    const int nm = w->mov_n;
+    const int32_t *mov = w->mov;
+#pragma omp parallel for schedule(static) reduction(| : moved) if (nm > w->def.parallel_min)
+    for (int k = 0; k < nm; k++) {
+        const int i = mov[k];
         sd_gather_body(w, i);
-        if (b->fixed[i]) continue;
         sd_vec3 f = v3_add(b->force[i], b->ext_force[i]);
         sd_vec3 acc = v3_madd(g, f, b->inv_mass[i]);
         b->vel[i] = v3_madd(b->vel[i], acc, dt);

@@ -526,6 +526,8 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     st = grid_layout(&w->grid, lo, hi, cell, max_cells);
     if (st) return st;
     if ((st = sort_bodies_by_cell(w))) return st;
+    w->mov_stamp = -1; /* the store was reordered */
+    if ((st = sd_world_moving_update(w))) return st;
     if (sd_grow((void **)&w->range, &w->range_cap, b->n + 1, sizeof(*w->range))) return SD_ERR_NOMEM;
     for (int i = 0; i < b->n; i++) {
         sd_vec3 l, h;
@@ -562,7 +564,13 @@ sd_status sd_neighbor_rebuild(sd_world *w)
             tid = omp_get_thread_num();
             nthr = omp_get_num_threads();
 #endif
-            const int i0 = (int)((long)b->n * tid / nthr), i1 = (int)((long)b->n * (tid + 1) / nthr);
+            /* ranges holding about the same number of moving bodies (the scans of fixed ones
+             * are short) */
+            const int nm = w->mov_n;
+            const int i0 = tid == 0 ? 0 : nm ? w->mov[(long)nm * tid / nthr] : (int)((long)b->n * tid / nthr);
+            const int i1 = tid + 1 == nthr ? b->n
+                           : nm            ? w->mov[(long)nm * (tid + 1) / nthr]
+                                           : (int)((long)b->n * (tid + 1) / nthr);
             for (int i = i0; i < i1 && !nomem; i++)
                 nomem |= bb_scan(w, i, hm, &mi, &buf[tid]);
         }
@@ -635,5 +643,6 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     w->last_rebuild_time = w->time;
     w->need_rebuild = 0;
     w->timers.rebuilds++;
+    w->mov_stamp = w->timers.rebuilds; /* made after the sort above */
     return SD_OK;
 }

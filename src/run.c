@@ -109,11 +109,16 @@ static void apply_fluid(run_ctx *c)
     fp.C_D = s->water_cd;
     fp.gravity = c->w->def.gravity;
     const double xd = s->x_dam;
-    const int n = b->n;
     const int capture = c->phase == PH_CAPTURE;
     const double h_d = c->h_d;
+    /* the moving bodies, split evenly (a split of the whole store gives one thread the bed);
+     * on a failed allocation, every body */
+    const int all = sd_world_moving_update(c->w) != SD_OK;
+    const int n = all ? b->n : c->w->mov_n;
+    const int32_t *mov = c->w->mov;
 #pragma omp parallel for schedule(static) if (n > c->w->def.parallel_min)
-    for (int i = 0; i < n; i++) {
+    for (int k = 0; k < n; k++) {
+        const int i = all ? k : mov[k];
         if (b->fixed[i]) continue;
         sd_fluid_element e;
         e.shape = b->shape[i];

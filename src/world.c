@@ -59,6 +59,7 @@ sd_status sd_world_create(const sd_world_def *def, sd_world **out)
     if (!w) return SD_ERR_NOMEM;
     w->def = *def;
     w->need_rebuild = 1;
+    w->mov_stamp = -1;
 #ifdef _OPENMP
     if (def->threads > 0) omp_set_num_threads(def->threads);
 #endif
@@ -88,6 +89,7 @@ void sd_world_destroy(sd_world *w)
     free(w->old_keys);
     free(w->range);
     free(w->trange);
+    free(w->mov);
     free(w);
 }
 
@@ -250,6 +252,22 @@ static sd_status health(const sd_world *w)
     return SD_OK;
 }
 
+sd_status sd_world_moving_update(sd_world *w)
+{
+    const sd_bodies *b = &w->b;
+    if (w->mov_stamp == w->timers.rebuilds && w->mov_bn == b->n && w->mov) return SD_OK;
+    if (sd_grow((void **)&w->mov, &w->mov_cap, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    int m = 0;
+    for (int i = 0; i < b->n; i++) {
+        w->mov[m] = i;
+        m += !b->fixed[i];
+    }
+    w->mov_n = m;
+    w->mov_bn = b->n;
+    w->mov_stamp = w->timers.rebuilds;
+    return SD_OK;
+}
+
 sd_status sd_world_step(sd_world *w)
 {
     sd_status st;
@@ -266,6 +284,7 @@ sd_status sd_world_step(sd_world *w)
     double t2 = sd_now();
     sd_contact_gather(w);
     double t3 = sd_now();
+    if ((st = sd_world_moving_update(w))) return st;
     sd_integrate(w);
     double t4 = sd_now();
     w->step++;

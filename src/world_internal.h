@@ -116,6 +116,12 @@ typedef struct {
     int32_t *list;
     int start[SD_MAX_OWNERS + 1];
     int list_cap;
+    /* balance by measured time (any split gives the same bits): the splits as fractions of
+     * the body-body pairs (fo) and of the body-triangle pairs (ft), and each owner's time in
+     * each part since they were set */
+    double fo[SD_MAX_OWNERS + 1], ft[SD_MAX_OWNERS + 1];
+    double tau_o[SD_MAX_OWNERS], tau_t[SD_MAX_OWNERS];
+    long bt_k[SD_MAX_OWNERS + 1]; /* body-triangle pairs of owner t: bodies from bt_split(bt_k[t]) */
 } sd_owned;
 
 struct sd_world {
@@ -151,6 +157,12 @@ struct sd_world {
     int range_cap;
     int32_t (*trange)[6]; /* per-triangle cell range in the triangle grid */
     int trange_cap;
+    /* derived, never saved: the indices of the moving bodies, ascending, for the per-body
+     * passes (a static split over all bodies would give one thread the bed, the other the
+     * flow); valid while mov_stamp == timers.rebuilds and mov_bn == b.n */
+    int32_t *mov;
+    int mov_n, mov_cap, mov_bn;
+    long mov_stamp;
 };
 
 /* bodies.c */
@@ -226,6 +238,9 @@ static inline sd_cyl sd_body_cyl(const sd_bodies *b, int i)
 
 /* integrate.c */
 void sd_integrate(sd_world *w);
+
+/* world.c: bring w->mov up to date (O(n) when the store changed since it was made). */
+sd_status sd_world_moving_update(sd_world *w);
 
 /* helpers */
 static inline int sd_grow(void **p, int *cap, int need, size_t elem)
