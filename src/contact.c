@@ -336,7 +336,7 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
  * arms -la n (A) and lb n (B), so the relative velocity there is v_a - v_b - (la w_a + lb w_b) x n
  * and the torques are -la (n x f) on A and -lb (n x f) on B. */
 static __attribute__((noinline)) void ss_scalar(const sd_world *w, const sd_law *law, const sd_pair *p, sd_hist *h,
-                                               sd_pair_out *out)
+                                                sd_pair_out *out)
 {
     const sd_bodies *b = &w->b;
     const int ia = p->a, ib = p->b;

@@ -31,30 +31,30 @@ typedef struct {
 
 /* Phase of the velocity profile applied to an element. */
 typedef enum {
-    SD_FLUID_NONE = 0,    /* no fluid force (packing) */
-    SD_FLUID_FLOW = 1,    /* eq 50, surface at h */
-    SD_FLUID_CAPTURE = 2  /* eqs 51–53, surface at h_D (>= h) */
+    SD_FLUID_NONE = 0,   /* no fluid force (packing) */
+    SD_FLUID_FLOW = 1,   /* eq 50, surface at h */
+    SD_FLUID_CAPTURE = 2 /* eqs 51–53, surface at h_D (>= h) */
 } sd_fluid_phase;
 
 /* An element as the fluid sees it. */
 typedef struct {
-    int shape;          /* SD_SHAPE_SPHERE or SD_SHAPE_CYLINDER */
-    sd_vec3 pos;        /* centre, m */
-    sd_vec3 vel;        /* centre velocity, m/s */
-    sd_vec3 axis;       /* unit axis (cylinders only) */
-    double radius;      /* m */
-    double length;      /* full length L = 2l, m (cylinders only) */
+    int shape;     /* SD_SHAPE_SPHERE or SD_SHAPE_CYLINDER */
+    sd_vec3 pos;   /* centre, m */
+    sd_vec3 vel;   /* centre velocity, m/s */
+    sd_vec3 axis;  /* unit axis (cylinders only) */
+    double radius; /* m */
+    double length; /* full length L = 2l, m (cylinders only) */
 } sd_fluid_element;
 
 /* Result of one force evaluation (all zero when the element is dry). */
 typedef struct {
-    sd_vec3 drag;       /* ½ C_D ρ A |U_i − v| (U_i − v), N */
-    sd_vec3 buoyancy;   /* −ρ V g, N */
-    sd_vec3 total;      /* drag + buoyancy, N */
-    double u_local;     /* U_i (speed of the profile at the centre), m/s */
-    double area;        /* projected area A used for the drag, m^2 */
-    double volume;      /* element volume V, m^3 */
-    double z;           /* centre height above the bed (clamped at 0), m */
+    sd_vec3 drag;     /* ½ C_D ρ A |U_i − v| (U_i − v), N */
+    sd_vec3 buoyancy; /* −ρ V g, N */
+    sd_vec3 total;    /* drag + buoyancy, N */
+    double u_local;   /* U_i (speed of the profile at the centre), m/s */
+    double area;      /* projected area A used for the drag, m^2 */
+    double volume;    /* element volume V, m^3 */
+    double z;         /* centre height above the bed (clamped at 0), m */
 } sd_fluid_force_result;
 
 /* The paper's water (SPEC §8): U = 1.2 m/s, h = 0.03 m, ρ = 1000, C_D = 0.49, flume frame,
@@ -82,7 +82,7 @@ static inline void sd_fluid_capture_coeffs(double h, double h_D, double *alpha, 
     if (!(h_D >= h)) h_D = h; /* never below h */
     double r = 1.8 * h / h_D;
     double a = r - 1.0, b = 1.0; /* eq 52 */
-    if (a <= 0.1) {               /* eq 53 */
+    if (a <= 0.1) {              /* eq 53 */
         a = 0.1;
         b = r - a;
     }
@@ -110,10 +110,14 @@ static inline int sd_fluid_speed_capture(double U, double h, double h_D, double 
 static inline int sd_fluid_speed(const sd_fluid_params *p, sd_fluid_phase phase, double h_D, double z, double *u)
 {
     switch (phase) {
-    case SD_FLUID_FLOW: return sd_fluid_speed_flow(p->U, p->h, z, u);
-    case SD_FLUID_CAPTURE: return sd_fluid_speed_capture(p->U, p->h, h_D, z, u);
+    case SD_FLUID_FLOW:
+        return sd_fluid_speed_flow(p->U, p->h, z, u);
+    case SD_FLUID_CAPTURE:
+        return sd_fluid_speed_capture(p->U, p->h, h_D, z, u);
     case SD_FLUID_NONE:
-    default: *u = 0.0; return 0;
+    default:
+        *u = 0.0;
+        return 0;
     }
 }
 
@@ -146,8 +150,8 @@ static inline double sd_fluid_height(const sd_fluid_params *p, sd_vec3 pos)
  * once the centre is wet. Returns 1 when the centre is under the surface of the phase (force
  * set), 0 when dry, phase NONE or a bad shape (out zeroed). With zero relative velocity the
  * drag is zero (and the area is evaluated for the flow direction). out may be NULL. */
-static inline int sd_fluid_force(const sd_fluid_params *p, sd_fluid_phase phase, double h_D,
-                   const sd_fluid_element *e, sd_fluid_force_result *out)
+static inline int sd_fluid_force(const sd_fluid_params *p, sd_fluid_phase phase, double h_D, const sd_fluid_element *e,
+                                 sd_fluid_force_result *out)
 {
     sd_fluid_force_result r;
     memset(&r, 0, sizeof r);
@@ -178,7 +182,7 @@ static inline int sd_fluid_force(const sd_fluid_params *p, sd_fluid_phase phase,
 }
 /* Same, returning the total force only (zero when dry). */
 static inline sd_vec3 sd_fluid_force_total(const sd_fluid_params *p, sd_fluid_phase phase, double h_D,
-                             const sd_fluid_element *e)
+                                           const sd_fluid_element *e)
 {
     sd_fluid_force_result r;
     sd_fluid_force(p, phase, h_D, e, &r);
@@ -188,7 +192,7 @@ static inline sd_vec3 sd_fluid_force_total(const sd_fluid_params *p, sd_fluid_ph
 /* Capture-phase depth h_D (SPEC §5): max(h, max z_i over the n elements with
  * x_dam − probe <= x_i <= x_dam). x and z are centre coordinates (z = height above the bed);
  * mask (may be NULL) skips element i when mask[i] == 0; non-finite entries are skipped. */
-double sd_fluid_dam_depth(double h, size_t n, const double *x, const double *z,
-                          const unsigned char *mask, double x_dam, double probe);
+double sd_fluid_dam_depth(double h, size_t n, const double *x, const double *z, const unsigned char *mask, double x_dam,
+                          double probe);
 
 #endif

@@ -42,8 +42,8 @@ void sd_integrate(sd_world *w)
             b->axis[i] = a;
             /* ω = A I⁻¹ Aᵀ L for an axisymmetric inertia */
             b->omega[i] = v3_madd(v3_scale(L, b->inv_i_tr[i]), a, (b->inv_i_ax[i] - b->inv_i_tr[i]) * v3_dot(L, a));
-            double d = sqrt(v3_norm2(v3_sub(b->pos[i], b->pos_ref[i]))) +
-                       b->hl[i] * sqrt(v3_norm2(v3_sub(a, b->axis_ref[i])));
+            double d =
+                sqrt(v3_norm2(v3_sub(b->pos[i], b->pos_ref[i]))) + b->hl[i] * sqrt(v3_norm2(v3_sub(a, b->axis_ref[i])));
             disp = d * d;
         }
         if (disp > lim2) moved = 1;

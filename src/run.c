@@ -47,14 +47,14 @@ typedef struct {
     sd_vtk_series pvd;
     int pvd_on;
     double wall0;
-    long rate_step0;   /* world step and wall clock when this process started stepping */
-    double rate_wall0; /* (a restart continues from the checkpoint's step) */
+    long rate_step0;           /* world step and wall clock when this process started stepping */
+    double rate_wall0;         /* (a restart continues from the checkpoint's step) */
     double phase_t0, phase_w0; /* simulated and wall time at the start of the current phase */
     int flow_ended;            /* the flow phase has ended; the capture starts at the next step */
     int dam_built;             /* the pipes are in the world (sd_build_dam at the capture start) */
     const char *restarted_from;
-    double flow_wall;          /* wall time from the start to the flow end, build included (a restarted
-                                * run: that of the run that wrote the checkpoint) */
+    double flow_wall; /* wall time from the start to the flow end, build included (a restarted
+                       * run: that of the run that wrote the checkpoint) */
 } run_ctx;
 
 static double body_volume(const sd_bodies *b, int i)
@@ -71,15 +71,18 @@ static double x_trap(const run_ctx *c) { return c->s->x_dam + 0.5 * c->s->pipe_d
 static void volumes_upstream(const run_ctx *c, double *cls, double *logs, int *n_up)
 {
     const sd_bodies *b = &c->w->b;
-    for (int k = 0; k < SD_MAX_CLASSES; k++) cls[k] = 0.0;
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        cls[k] = 0.0;
     *logs = 0.0;
     *n_up = 0;
     double xt = x_trap(c);
     for (int i = 0; i < b->n; i++) {
         if (!is_debris(b, i) || b->pos[i].x >= xt) continue;
         (*n_up)++;
-        if (b->shape[i] == SD_SHAPE_CYLINDER) *logs += body_volume(b, i);
-        else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES) cls[b->tag[i]] += body_volume(b, i);
+        if (b->shape[i] == SD_SHAPE_CYLINDER)
+            *logs += body_volume(b, i);
+        else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES)
+            cls[b->tag[i]] += body_volume(b, i);
     }
 }
 
@@ -153,8 +156,10 @@ static void remove_passed(run_ctx *c)
     sd_bodies *b = &c->w->b;
     for (int i = b->n - 1; i >= 0; i--) {
         if (b->fixed[i] || b->pos[i].x <= c->s->x_end) continue;
-        if (b->shape[i] == SD_SHAPE_CYLINDER) c->vol_passed_logs += body_volume(b, i);
-        else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES) c->vol_passed_class[b->tag[i]] += body_volume(b, i);
+        if (b->shape[i] == SD_SHAPE_CYLINDER)
+            c->vol_passed_logs += body_volume(b, i);
+        else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES)
+            c->vol_passed_class[b->tag[i]] += body_volume(b, i);
         c->n_passed++;
         sd_world_remove_body(c->w, b->gid[i]);
     }
@@ -246,7 +251,8 @@ static void write_series_row(run_ctx *c)
     int n_up;
     volumes_upstream(c, cls, &logs, &n_up);
     double up = logs;
-    for (int k = 0; k < SD_MAX_CLASSES; k++) up += cls[k];
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        up += cls[k];
     double pv = c->s->flume_on ? trap_ratio(c, NULL, NULL, &n_up) : 0.0;
     fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d\n", c->w->time, phase_names[c->phase],
             c->w->b.n ? front_x(c) : 0.0, up, sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w),
@@ -259,9 +265,10 @@ static void write_traj(run_ctx *c)
     for (int k = 0; k < c->s->n_traj; k++) {
         sd_body_state st;
         if (sd_world_body(c->w, c->s->traj_ids[k], &st)) continue;
-        fprintf(c->traj, "%.9f,%d,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.9f,%.9f,%.9f,%.9e,%.9e,%.9e\n",
-                c->w->time, st.gid, st.pos.x, st.pos.y, st.pos.z, st.vel.x, st.vel.y, st.vel.z, st.omega.x,
-                st.omega.y, st.omega.z, st.axis.x, st.axis.y, st.axis.z, st.force.x, st.force.y, st.force.z);
+        fprintf(c->traj,
+                "%.9f,%d,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.9f,%.9f,%.9f,%.9e,%.9e,%.9e\n",
+                c->w->time, st.gid, st.pos.x, st.pos.y, st.pos.z, st.vel.x, st.vel.y, st.vel.z, st.omega.x, st.omega.y,
+                st.omega.z, st.axis.x, st.axis.y, st.axis.z, st.force.x, st.force.y, st.force.z);
     }
 }
 
@@ -270,7 +277,8 @@ static int snapshot(run_ctx *c, const char *name)
     if (!c->s->vtk_on) return 0;
     const sd_bodies *b = &c->w->b;
     size_t cap = (size_t)(b->n + 1);
-    sd_vec3 *pos = malloc(cap * sizeof(sd_vec3)), *vel = malloc(cap * sizeof(sd_vec3)), *ax = malloc(cap * sizeof(sd_vec3));
+    sd_vec3 *pos = malloc(cap * sizeof(sd_vec3)), *vel = malloc(cap * sizeof(sd_vec3)),
+            *ax = malloc(cap * sizeof(sd_vec3));
     double *rad = malloc(cap * sizeof(double)), *len = malloc(cap * sizeof(double));
     int *id = malloc(cap * sizeof(int)), *tag = malloc(cap * sizeof(int));
     int rc = -1;
@@ -323,7 +331,8 @@ static int write_walls(run_ctx *c)
     int rc = -1;
     if (v && g) {
         for (int t = 0; t < wl->n; t++) {
-            for (int k = 0; k < 3; k++) v[3 * t + k] = wl->tri[t].v[k];
+            for (int k = 0; k < 3; k++)
+                v[3 * t + k] = wl->tri[t].v[k];
             g[t] = wl->group[t];
         }
         rc = sd_vtk_write_triangles(f, (size_t)wl->n, v, g);
@@ -338,10 +347,12 @@ static void plot(run_ctx *c, const char *name, const char *png, double xmin, dou
     if (!c->s->png_on || !c->s->vtk_on) return;
     char cmd[4096];
     snprintf(cmd, sizeof cmd,
-             "/usr/bin/python3 \"%s/scripts/plot_side.py\" --spheres \"%s/spheres_%s.vtp\" --logs \"%s/cylinders_%s.vtp\" --xdam %g"
+             "/usr/bin/python3 \"%s/scripts/plot_side.py\" --spheres \"%s/spheres_%s.vtp\" --logs "
+             "\"%s/cylinders_%s.vtp\" --xdam %g"
              " --xmin %g --xmax %g --out \"%s/%s\" >/dev/null 2>&1",
              SD_SOURCE_DIR, c->dir, name, c->dir, name, c->s->x_dam, xmin, xmax, c->dir, png);
-    if (system(cmd) != 0 && c->o->log) fprintf(c->o->log, "note: picture %s not drawn (python3-matplotlib missing?)\n", png);
+    if (system(cmd) != 0 && c->o->log)
+        fprintf(c->o->log, "note: picture %s not drawn (python3-matplotlib missing?)\n", png);
 }
 
 static void progress(run_ctx *c, double t_end_est)
@@ -370,7 +381,8 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
     double per[SD_MAX_CLASSES] = {0}, logs_ratio = 0.0;
     int n_up = 0;
     double pv = s->flume_on ? trap_ratio(c, per, &logs_ratio, &n_up) : 0.0;
-    fprintf(f, "{\n  \"scenario\": \"%s\",\n  \"status\": \"%s\",\n  \"exit_code\": %d,\n", s->path, status_msg, status_code);
+    fprintf(f, "{\n  \"scenario\": \"%s\",\n  \"status\": \"%s\",\n  \"exit_code\": %d,\n", s->path, status_msg,
+            status_code);
     fprintf(f, "  \"simulated_time_s\": %.6f,\n  \"steps\": %ld,\n  \"wall_time_s\": %.3f,\n", c->w->time, c->w->step,
             sd_now() - c->wall0);
     fprintf(f, "  \"state_hash\": \"%016llx\",\n", (unsigned long long)sd_world_state_hash(c->w));
@@ -381,21 +393,31 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
         fprintf(f, "\",\n  \"restart_flow_wall_s\": %.3f,\n", c->flow_wall);
     }
     sd_world_timers tm = sd_world_get_timers(c->w);
-    fprintf(f, "  \"timers_s\": {\"neighbor\": %.3f, \"contact\": %.3f, \"gather\": %.3f, \"integrate\": %.3f, \"rebuilds\": %ld},\n",
+    fprintf(f,
+            "  \"timers_s\": {\"neighbor\": %.3f, \"contact\": %.3f, \"gather\": %.3f, \"integrate\": %.3f, "
+            "\"rebuilds\": %ld},\n",
             tm.neighbor, tm.contact, tm.gather, tm.integrate, tm.rebuilds);
-    fprintf(f, "  \"elements\": {\"moving_spheres\": %d, \"logs\": %d, \"roughness_spheres\": %d, \"pipes\": %d, \"triangles\": %d, \"passed\": %d, \"remaining\": %d},\n",
+    fprintf(f,
+            "  \"elements\": {\"moving_spheres\": %d, \"logs\": %d, \"roughness_spheres\": %d, \"pipes\": %d, "
+            "\"triangles\": %d, \"passed\": %d, \"remaining\": %d},\n",
             c->info.n_spheres, c->info.n_logs, c->info.n_rough, c->info.n_pipes, sd_world_triangle_count(c->w),
             c->n_passed, sd_world_body_count(c->w));
     if (s->flume_on) {
         res->p_v = pv;
-        for (int k = 0; k < SD_MAX_CLASSES; k++) res->p_v_class[k] = per[k];
+        for (int k = 0; k < SD_MAX_CLASSES; k++)
+            res->p_v_class[k] = per[k];
         res->p_v_logs = logs_ratio;
         res->n_upstream = n_up;
-        fprintf(f, "  \"trap_ratio\": %.6f,\n  \"capture_limit_s\": %.3f,\n  \"trap_ratio_class\": [", pv, s->capture_limit);
-        for (int k = 0; k < s->n_classes; k++) fprintf(f, "%s{\"diameter\": %g, \"p_v\": %.6f}", k ? ", " : "", s->class_diam[k], per[k]);
+        fprintf(f, "  \"trap_ratio\": %.6f,\n  \"capture_limit_s\": %.3f,\n  \"trap_ratio_class\": [", pv,
+                s->capture_limit);
+        for (int k = 0; k < s->n_classes; k++)
+            fprintf(f, "%s{\"diameter\": %g, \"p_v\": %.6f}", k ? ", " : "", s->class_diam[k], per[k]);
         double vt = c->vol_total_logs, vs = 0;
-        for (int k = 0; k < SD_MAX_CLASSES; k++) vs += c->vol_total_class[k];
-        fprintf(f, "],\n  \"trap_ratio_logs\": %.6f,\n  \"k_w\": %.6f,\n  \"solid_volume_m3\": {\"spheres\": %.9e, \"logs\": %.9e},\n",
+        for (int k = 0; k < SD_MAX_CLASSES; k++)
+            vs += c->vol_total_class[k];
+        fprintf(f,
+                "],\n  \"trap_ratio_logs\": %.6f,\n  \"k_w\": %.6f,\n  \"solid_volume_m3\": {\"spheres\": %.9e, "
+                "\"logs\": %.9e},\n",
                 logs_ratio, vt + vs > 0 ? vt / (vt + vs) : 0.0, vs, vt);
         /* deposit height at the dam: top of the highest element within the probe length */
         double dep = 0.0;
@@ -409,14 +431,19 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
         fprintf(f, "  \"phase_wall_s\": {\"packing\": %.2f, \"flow\": %.2f, \"capture\": %.2f},\n", c->phase_wall[0],
                 c->phase_wall[1], c->phase_wall[2]);
         if (c->flow_len_done)
-            fprintf(f, "  \"flow_at_1m_before_dam\": {\"t\": %.4f, \"length_q05_q95_m\": %.4f, \"q05_m\": %.4f, \"q95_m\": %.4f, \"front_m\": %.4f},\n",
+            fprintf(f,
+                    "  \"flow_at_1m_before_dam\": {\"t\": %.4f, \"length_q05_q95_m\": %.4f, \"q05_m\": %.4f, "
+                    "\"q95_m\": %.4f, \"front_m\": %.4f},\n",
                     c->flow_len_time, c->flow_len, c->flow_q05, c->flow_q95, c->flow_front);
         fprintf(f, "  \"pipes\": [\n");
         for (int k = 0; k < c->info.n_pipes; k++)
-            fprintf(f, "    {\"gid\": %d, \"kind\": \"%s\", \"%s\": %.4f, \"peak_force_N\": %.6e, \"peak_time_s\": %.5f, \"impulse_Ns\": %.6e, \"impulse_x_Ns\": %.6e}%s\n",
+            fprintf(f,
+                    "    {\"gid\": %d, \"kind\": \"%s\", \"%s\": %.4f, \"peak_force_N\": %.6e, \"peak_time_s\": %.5f, "
+                    "\"impulse_Ns\": %.6e, \"impulse_x_Ns\": %.6e}%s\n",
                     c->info.pipe_gid[k], c->info.pipe_is_column[k] ? "column" : "beam",
                     c->info.pipe_is_column[k] ? "y_m" : "z_axis_m", c->info.pipe_coord[k], c->pipe_peak[k],
-                    c->pipe_peak_t[k], c->pipe_impulse[k], c->pipe_impulse_vec[k].x, k + 1 < c->info.n_pipes ? "," : "");
+                    c->pipe_peak_t[k], c->pipe_impulse[k], c->pipe_impulse_vec[k].x,
+                    k + 1 < c->info.n_pipes ? "," : "");
         fprintf(f, "  ],\n");
     }
     sd_scenario_echo_json(s, f);
@@ -482,7 +509,8 @@ static void bput(bbuf *b, const void *p, size_t n)
     if (b->err) return;
     if (b->n + n > b->cap) {
         size_t cap = b->cap ? 2 * b->cap : 1024;
-        while (cap < b->n + n) cap *= 2;
+        while (cap < b->n + n)
+            cap *= 2;
         unsigned char *q = realloc(b->p, cap);
         if (!q) {
             b->err = 1;
@@ -560,16 +588,20 @@ static void state_pack(const run_ctx *c, bbuf *b, long series_len, long traj_len
     bput_i32(b, c->info.n_spheres);
     bput_i32(b, c->info.n_logs);
     bput_i32(b, c->info.first_moving_gid);
-    for (int k = 0; k < SD_MAX_CLASSES; k++) bput_f64(b, c->vol_total_class[k]);
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        bput_f64(b, c->vol_total_class[k]);
     bput_f64(b, c->vol_total_logs);
-    for (int k = 0; k < SD_MAX_CLASSES; k++) bput_f64(b, c->vol_passed_class[k]);
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        bput_f64(b, c->vol_passed_class[k]);
     bput_f64(b, c->vol_passed_logs);
     bput_f64(b, c->h_d);
     bput_f64(b, c->last_cross_time);
     bput_f64(b, c->ke_peak);
     bput_f64(b, c->dam_force_now);
-    for (int k = 0; k < 4; k++) bput_f64(b, c->phase_end[k]);
-    for (int k = 0; k < 4; k++) bput_f64(b, c->phase_wall[k]);
+    for (int k = 0; k < 4; k++)
+        bput_f64(b, c->phase_end[k]);
+    for (int k = 0; k < 4; k++)
+        bput_f64(b, c->phase_wall[k]);
     bput_f64(b, c->flow_len);
     bput_f64(b, c->flow_q05);
     bput_f64(b, c->flow_q95);
@@ -602,7 +634,8 @@ typedef struct {
 
 static void restored_free(restored *r)
 {
-    for (int k = 0; k < r->npvd; k++) free(r->pvd_file[k]);
+    for (int k = 0; k < r->npvd; k++)
+        free(r->pvd_file[k]);
     free(r->pvd_time);
     free(r->pvd_part);
     free(r->pvd_file);
@@ -639,16 +672,20 @@ static int state_unpack(run_ctx *c, const void *blob, size_t len, restored *r, c
     c->info.n_spheres = bget_i32(&b);
     c->info.n_logs = bget_i32(&b);
     c->info.first_moving_gid = bget_i32(&b);
-    for (int k = 0; k < SD_MAX_CLASSES; k++) c->vol_total_class[k] = bget_f64(&b);
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        c->vol_total_class[k] = bget_f64(&b);
     c->vol_total_logs = bget_f64(&b);
-    for (int k = 0; k < SD_MAX_CLASSES; k++) c->vol_passed_class[k] = bget_f64(&b);
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        c->vol_passed_class[k] = bget_f64(&b);
     c->vol_passed_logs = bget_f64(&b);
     c->h_d = bget_f64(&b);
     c->last_cross_time = bget_f64(&b);
     c->ke_peak = bget_f64(&b);
     c->dam_force_now = bget_f64(&b);
-    for (int k = 0; k < 4; k++) c->phase_end[k] = bget_f64(&b);
-    for (int k = 0; k < 4; k++) c->phase_wall[k] = bget_f64(&b);
+    for (int k = 0; k < 4; k++)
+        c->phase_end[k] = bget_f64(&b);
+    for (int k = 0; k < 4; k++)
+        c->phase_wall[k] = bget_f64(&b);
     c->flow_len = bget_f64(&b);
     c->flow_q05 = bget_f64(&b);
     c->flow_q95 = bget_f64(&b);
@@ -694,8 +731,8 @@ static int state_unpack(run_ctx *c, const void *blob, size_t len, restored *r, c
         restored_free(r);
         return -1;
     }
-    int ok = c->phase == PH_FLOW && c->flow_ended == 1 && c->dam_built == 0 && c->n_passed >= 0 &&
-             c->n_snap >= 0 && r->series_len >= 0 && r->traj_len >= -1 && isfinite(c->phase_t0) && isfinite(c->h_d);
+    int ok = c->phase == PH_FLOW && c->flow_ended == 1 && c->dam_built == 0 && c->n_passed >= 0 && c->n_snap >= 0 &&
+             r->series_len >= 0 && r->traj_len >= -1 && isfinite(c->phase_t0) && isfinite(c->h_d);
     if (!ok) {
         snprintf(msg, msglen, "is not a flow-end checkpoint of a flume run");
         restored_free(r);
@@ -707,9 +744,12 @@ static int state_unpack(run_ctx *c, const void *blob, size_t len, restored *r, c
 static void dir_of(const char *path, char *buf, size_t n)
 {
     const char *slash = strrchr(path, '/');
-    if (!slash) snprintf(buf, n, ".");
-    else if (slash == path) snprintf(buf, n, "/");
-    else snprintf(buf, n, "%.*s", (int)(slash - path), path);
+    if (!slash)
+        snprintf(buf, n, ".");
+    else if (slash == path)
+        snprintf(buf, n, "/");
+    else
+        snprintf(buf, n, "%.*s", (int)(slash - path), path);
 }
 
 static int same_dir(const char *a, const char *b)
@@ -749,8 +789,9 @@ static int copy_prefix(const char *src, const char *dst, long len, char *msg, si
         return -1;
     }
     if (len >= 0 && n < (size_t)len) {
-        snprintf(msg, msglen, "%s: %zu bytes, shorter than the %ld the checkpoint recorded (not the checkpoint's own output?)",
-                 src, n, len);
+        snprintf(msg, msglen,
+                 "%s: %zu bytes, shorter than the %ld the checkpoint recorded (not the checkpoint's own output?)", src,
+                 n, len);
         free(buf);
         return -1;
     }
@@ -872,8 +913,10 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         st = sd_build_scene_ex(c.w, s, &c.info, o->err, 0);
         if (!st) st = sd_world_check(c.w);
         if (st) {
-            if (st == SD_ERR_UNSTABLE) fprintf(o->err, "%s: solver.dt: %s\n", s->path, sd_status_message(st));
-            else fprintf(o->err, "%s: cannot build the scene: %s\n", s->path, sd_status_message(st));
+            if (st == SD_ERR_UNSTABLE)
+                fprintf(o->err, "%s: solver.dt: %s\n", s->path, sd_status_message(st));
+            else
+                fprintf(o->err, "%s: cannot build the scene: %s\n", s->path, sd_status_message(st));
             sd_world_destroy(c.w);
             return 2;
         }
@@ -900,7 +943,8 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
     snprintf(path, sizeof path, "%s/series.csv", c.dir);
     c.series = fopen(path, mode);
     if (c.series && !c.restarted_from)
-        fprintf(c.series, "t,phase,front_x,volume_upstream_m3,kinetic_energy_J,contacts,dam_force_N,p_v,h_d,elements,passed\n");
+        fprintf(c.series,
+                "t,phase,front_x,volume_upstream_m3,kinetic_energy_J,contacts,dam_force_N,p_v,h_d,elements,passed\n");
     if (s->n_traj > 0) {
         snprintf(path, sizeof path, "%s/trajectories.csv", c.dir);
         c.traj = fopen(path, mode);
@@ -926,8 +970,10 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
     if (!c.restarted_from) {
         for (int i = 0; i < b->n; i++) {
             if (b->fixed[i]) continue;
-            if (b->shape[i] == SD_SHAPE_CYLINDER) c.vol_total_logs += body_volume(b, i);
-            else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES) c.vol_total_class[b->tag[i]] += body_volume(b, i);
+            if (b->shape[i] == SD_SHAPE_CYLINDER)
+                c.vol_total_logs += body_volume(b, i);
+            else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES)
+                c.vol_total_class[b->tag[i]] += body_volume(b, i);
         }
         c.phase = s->flume_on ? PH_PACK : PH_RUN;
         c.h_d = s->water_h;
@@ -972,7 +1018,8 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
                     break;
                 }
                 if (o->log && !o->progress_tty)
-                    fprintf(o->log, "flow-end checkpoint %s written at t = %.4f s\n", o->checkpoint_flow_end, c.w->time);
+                    fprintf(o->log, "flow-end checkpoint %s written at t = %.4f s\n", o->checkpoint_flow_end,
+                            c.w->time);
             }
             if (o->stop_at_flow_end) {
                 res->stopped_at_flow_end = 1;
@@ -1088,13 +1135,15 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         if (!code) code = 1;
     }
     res->n_passed = c.n_passed;
-    for (int k = 0; k < c.info.n_pipes; k++) res->peak_dam_force = fmax(res->peak_dam_force, c.pipe_peak[k]);
+    for (int k = 0; k < c.info.n_pipes; k++)
+        res->peak_dam_force = fmax(res->peak_dam_force, c.pipe_peak[k]);
     res->steps = c.w->step;
     res->wall_time = sd_now() - c.wall0;
     res->flow_wall = c.flow_wall;
     res->restarted = c.restarted_from != NULL;
     res->state_hash = sd_world_state_hash(c.w);
-    for (int k = 0; k < 4; k++) res->phase_end[k] = c.phase_end[k];
+    for (int k = 0; k < 4; k++)
+        res->phase_end[k] = c.phase_end[k];
     sd_world_destroy(c.w);
     return code;
 }
