@@ -4,28 +4,28 @@
 
 #include "world_internal.h"
 
-#define SD_BODY_FIELDS(X)            \
-    X(gid, int32_t)                  \
-    X(shape, uint8_t)                \
-    X(fixed, uint8_t)                \
-    X(tag, int32_t)                  \
-    X(pos, sd_vec3)                  \
-    X(vel, sd_vec3)                  \
-    X(omega, sd_vec3)                \
-    X(angmom, sd_vec3)               \
-    X(quat, sd_quat)                 \
-    X(axis, sd_vec3)                 \
-    X(force, sd_vec3)                \
-    X(torque, sd_vec3)               \
-    X(ext_force, sd_vec3)            \
-    X(pos_ref, sd_vec3)              \
-    X(axis_ref, sd_vec3)             \
-    X(radius, double)                \
-    X(hl, double)                    \
-    X(mass, double)                  \
-    X(inv_mass, double)              \
-    X(inv_i_ax, double)              \
-    X(inv_i_tr, double)              \
+#define SD_BODY_FIELDS(X)                                                                                              \
+    X(gid, int32_t)                                                                                                    \
+    X(shape, uint8_t)                                                                                                  \
+    X(fixed, uint8_t)                                                                                                  \
+    X(tag, int32_t)                                                                                                    \
+    X(pos, sd_vec3)                                                                                                    \
+    X(vel, sd_vec3)                                                                                                    \
+    X(omega, sd_vec3)                                                                                                  \
+    X(angmom, sd_vec3)                                                                                                 \
+    X(quat, sd_quat)                                                                                                   \
+    X(axis, sd_vec3)                                                                                                   \
+    X(force, sd_vec3)                                                                                                  \
+    X(torque, sd_vec3)                                                                                                 \
+    X(ext_force, sd_vec3)                                                                                              \
+    X(pos_ref, sd_vec3)                                                                                                \
+    X(axis_ref, sd_vec3)                                                                                               \
+    X(radius, double)                                                                                                  \
+    X(hl, double)                                                                                                      \
+    X(mass, double)                                                                                                    \
+    X(inv_mass, double)                                                                                                \
+    X(inv_i_ax, double)                                                                                                \
+    X(inv_i_tr, double)                                                                                                \
     X(bound_r, double)
 
 void sd_bodies_for_each_field(sd_bodies *b, sd_field_fn fn, void *ctx)
@@ -58,7 +58,8 @@ sd_status sd_bodies_reserve(sd_bodies *b, int cap)
 {
     if (cap <= b->cap) return SD_OK;
     int nc = b->cap > 0 ? b->cap : 64;
-    while (nc < cap) nc *= 2;
+    while (nc < cap)
+        nc *= 2;
     grow_ctx g = {nc, 0};
     sd_bodies_for_each_field(b, grow_field, &g);
     if (g.failed) return SD_ERR_NOMEM;
@@ -115,7 +116,8 @@ static void permute_field(void *array, size_t elem, const char *name, void *ctx)
     (void)name;
     permute_ctx *pc = ctx;
     char *p = *(char **)array, *t = pc->scratch;
-    for (int i = 0; i < pc->n; i++) memcpy(t + (size_t)i * elem, p + (size_t)pc->perm[i] * elem, elem);
+    for (int i = 0; i < pc->n; i++)
+        memcpy(t + (size_t)i * elem, p + (size_t)pc->perm[i] * elem, elem);
     memcpy(p, t, (size_t)pc->n * elem);
 }
 

@@ -10,7 +10,8 @@
 sd_status sd_build_box(sd_world *w, sd_vec3 lo, sd_vec3 hi, int group)
 {
     sd_vec3 c[8];
-    for (int k = 0; k < 8; k++) c[k] = v3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+    for (int k = 0; k < 8; k++)
+        c[k] = v3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
     /* floor and four sides (open top): two triangles each */
     static const int q[5][4] = {{0, 1, 3, 2}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
     for (int f = 0; f < 5; f++) {
@@ -77,7 +78,8 @@ void sd_placer_destroy(sd_placer *p)
     if (!p) return;
     if (p->cells) {
         size_t nc = (size_t)p->nx * p->ny * p->nz;
-        for (size_t c = 0; c < nc; c++) free(p->cells[c]);
+        for (size_t c = 0; c < nc; c++)
+            free(p->cells[c]);
     }
     free(p->cells);
     free(p->ncell);
@@ -146,7 +148,8 @@ static int collides(const sd_placer *p, sd_vec3 pos, sd_vec3 axis, double r, dou
                     double reach = ext + sqrt(o->r * o->r + o->hl * o->hl);
                     if (v3_norm2(v3_sub(pos, o->pos)) >= reach * reach) continue;
                     int hit;
-                    if (hl == 0.0 && o->hl == 0.0) hit = sd_geom_sphere_sphere(pos, r + clearance, o->pos, o->r, &m);
+                    if (hl == 0.0 && o->hl == 0.0)
+                        hit = sd_geom_sphere_sphere(pos, r + clearance, o->pos, o->r, &m);
                     else if (hl == 0.0) {
                         sd_cyl cy = {o->pos, o->axis, o->r, o->hl};
                         hit = sd_geom_sphere_cyl(pos, r + clearance, &cy, &m);
@@ -205,7 +208,8 @@ int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double 
     double d = s->pipe_diam, r = 0.5 * d;
     if (s->n_columns > 0) {
         *n_col = s->n_columns;
-        for (int k = 0; k < s->n_columns; k++) col_y[k] = s->column_y[k];
+        for (int k = 0; k < s->n_columns; k++)
+            col_y[k] = s->column_y[k];
     } else {
         /* columns centred across the width, clear spacing l_h, wall gaps no wider than l_h */
         double pitch = s->l_h + d;
@@ -213,11 +217,13 @@ int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double 
         if (n < 1) n = 1;
         if (n > SD_MAX_PIPES) n = SD_MAX_PIPES;
         *n_col = n;
-        for (int k = 0; k < n; k++) col_y[k] = 0.5 * s->width + (k - 0.5 * (n - 1)) * pitch;
+        for (int k = 0; k < n; k++)
+            col_y[k] = 0.5 * s->width + (k - 0.5 * (n - 1)) * pitch;
     }
     if (s->n_beams > 0) {
         *n_beam = s->n_beams;
-        for (int k = 0; k < s->n_beams; k++) beam_z[k] = s->beam_z[k] + r;
+        for (int k = 0; k < s->n_beams; k++)
+            beam_z[k] = s->beam_z[k] + r;
     } else {
         int n = 0;
         if (s->l_v > 0.0 && s->l_v + d < s->top_beam) beam_z[n++] = s->l_v + r;
@@ -232,7 +238,8 @@ int sd_build_log_count(const sd_scenario *s)
     if (s->log_count >= 0) return s->log_count;
     if (s->log_kw <= 0.0) return 0;
     double vs = 0.0;
-    for (int k = 0; k < s->n_classes; k++) vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+    for (int k = 0; k < s->n_classes; k++)
+        vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
     double vlog = M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
     /* K_w = V_t / (V + V_t)  =>  V_t = K_w V / (1 - K_w) */
     return (int)lround(s->log_kw * vs / (1.0 - s->log_kw) / vlog);
@@ -280,7 +287,8 @@ sd_status sd_build_dam(sd_world *w, const sd_scenario *s, sd_build_info *info)
     return SD_OK;
 }
 
-static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *info, sd_rng *rng, FILE *err, int with_dam)
+static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *info, sd_rng *rng, FILE *err,
+                             int with_dam)
 {
     double W = s->width, H = s->wall_height, L = s->x_end;
     sd_status st;
@@ -347,7 +355,8 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
     for (int k = 0; k < nlogs; k++) {
         sd_vec3 pos, axis;
         if (!sd_placer_try_cylinder(pl, rng, 0.5 * s->log_diam, 0.5 * s->log_length, 0.0005, 200000, &pos, &axis)) {
-            fprintf(err, "%s: no room for log %d of %d in the packing box; raise flume.pack_height\n", s->path, k + 1, nlogs);
+            fprintf(err, "%s: no room for log %d of %d in the packing box; raise flume.pack_height\n", s->path, k + 1,
+                    nlogs);
             sd_placer_destroy(pl);
             return SD_ERR_ARG;
         }
@@ -446,7 +455,8 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
                 sd_vec3 pos;
                 double r = 0.5 * s->pile_diam[cl];
                 if (!sd_placer_try_sphere(pl, &rng, r, 0.0005, 200000, &pos)) {
-                    fprintf(err, "%s: no room for pile sphere %d of class %d; enlarge pile.min/pile.max\n", s->path, k + 1, cl);
+                    fprintf(err, "%s: no room for pile sphere %d of class %d; enlarge pile.min/pile.max\n", s->path,
+                            k + 1, cl);
                     sd_placer_destroy(pl);
                     return SD_ERR_ARG;
                 }

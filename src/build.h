@@ -2,8 +2,8 @@
 #ifndef SD_BUILD_H
 #define SD_BUILD_H
 
-#include "scenario.h"
 #include "core/rng.h"
+#include "scenario.h"
 
 enum { SD_GROUP_BED = 0, SD_GROUP_WALLS = 1, SD_GROUP_END = 2, SD_GROUP_GATE = 3, SD_GROUP_BOX = 4 };
 enum { SD_TAG_ROUGH = 100, SD_TAG_LOG = 200, SD_TAG_PIPE = 300 };

@@ -504,20 +504,6 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
     return count;
 }
 
-/* the first body whose body-triangle pairs start at or after pair k (bt_start ascends) */
-static int bt_split(const sd_world *w, long k)
-{
-    int lo = 0, hi = w->b.n;
-    while (lo < hi) {
-        int mid = (lo + hi) >> 1;
-        if (w->csr.bt_start[mid] < k)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
 static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
 {
     sd_bodies *b = &w->b;
@@ -609,12 +595,11 @@ static sd_status owned_update(sd_world *w, int T)
     }
     if (o->T != T) { /* new: even shares */
         for (int t = 0; t <= T; t++)
-            o->fo[t] = o->ft[t] = (double)t / T;
+            o->fo[t] = (double)t / T;
         for (int t = 0; t < T; t++)
-            o->tau_o[t] = o->tau_t[t] = 0.0;
+            o->tau[t] = 0.0;
     } else {
-        rebalance(o->fo, o->tau_o, T);
-        rebalance(o->ft, o->tau_t, T);
+        rebalance(o->fo, o->tau, T);
     }
     /* split by pairs, not bodies: the pairs are generated in order of their lower body
      * index, so range t starts at the lower body of pair nbb fo[t] */
@@ -628,11 +613,6 @@ static sd_status owned_update(sd_world *w, int T)
         o->B[t] = nbb > 0 ? (p->a < p->b ? p->a : p->b) : 0;
         if (o->B[t] < o->B[t - 1]) o->B[t] = o->B[t - 1];
     }
-    const long nbt = w->bt.n;
-    o->bt_k[0] = 0;
-    o->bt_k[T] = nbt;
-    for (int t = 1; t < T; t++)
-        o->bt_k[t] = (long)(nbt * o->ft[t]);
     /* count, then fill: owner t's list holds its own pairs and the cross pairs touching it,
      * in ascending pair order */
     int cnt[SD_MAX_OWNERS] = {0};
@@ -675,17 +655,34 @@ static sd_status owned_update(sd_world *w, int T)
     return SD_OK;
 }
 
-static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scratch)
+/* the first k with mov[k] >= i (mov ascends) */
+static int mov_lower(const int32_t *mov, int n, int i)
+{
+    int lo = 0, hi = n;
+    while (lo < hi) {
+        int mid = (lo + hi) >> 1;
+        if (mov[mid] < i)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* After pass 1 and its barrier, owner t reads and writes the bodies of its range only (its
+ * own pairs, the stored cross pairs, its bodies' wall pairs): so it can also move its bodies
+ * at once, while they are in its cache, with no barrier. */
+static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scratch, int *moved_out)
 {
     sd_bodies *b = &w->b;
-    const sd_owned *o = w->owned;
+    sd_owned *o = w->owned;
     const int nc = o->ncross;
     long count = 0;
-#pragma omp parallel num_threads(T) reduction(+ : count)
+    int moved = 0;
+#pragma omp parallel num_threads(T) reduction(+ : count) reduction(| : moved)
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
         bb_scratch *x = &scratch[tid];
-        sd_owned *ow = w->owned;
         /* pass 1: the cross pairs, into their own slots */
         const int c0 = (int)((long)nc * tid / nthr), c1 = (int)((long)nc * (tid + 1) / nthr);
         for (int c = c0; c < c1; c += SS_CHUNK) {
@@ -735,18 +732,14 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     }
                 }
             }
+            /* its bodies' wall pairs, then its moving bodies */
+            count += bt_range(w, law, i0, i1);
+            if (moved_out)
+                moved |= sd_integrate_list(w, w->mov, mov_lower(w->mov, w->mov_n, i0), mov_lower(w->mov, w->mov_n, i1));
         }
-        const double t1 = omp_get_wtime();
-        /* then the body-triangle pairs, in the same parallel region (no barrier) */
-        if (nthr == T) {
-            count += bt_range(w, law, bt_split(w, ow->bt_k[tid]), bt_split(w, ow->bt_k[tid + 1]));
-            ow->tau_o[tid] += t1 - t0;
-            ow->tau_t[tid] += omp_get_wtime() - t1;
-        } else {
-            const long nbt = w->bt.n;
-            count += bt_range(w, law, bt_split(w, nbt * tid / nthr), bt_split(w, nbt * (tid + 1) / nthr));
-        }
+        if (nthr == T) o->tau[tid] += omp_get_wtime() - t0;
     }
+    if (moved_out) *moved_out = moved;
     return count;
 }
 #endif
@@ -763,11 +756,12 @@ static int bb_owners(const sd_world *w)
     return 1;
 }
 
-sd_status sd_contact_compute(sd_world *w)
+sd_status sd_contact_compute(sd_world *w, int *integrated)
 {
     sd_law law = sd_law_make(&w->def.contact);
     long count = 0;
     const int T = bb_owners(w);
+    if (integrated) *integrated = 0;
     if (w->bb_scratch_n < T) {
         free(w->bb_scratch);
         w->bb_scratch_n = 0;
@@ -779,7 +773,10 @@ sd_status sd_contact_compute(sd_world *w)
     if (T > 1) {
         sd_status st = owned_update(w, T);
         if (st) return st;
-        count = bb_owned_pass(w, &law, T, w->bb_scratch);
+        int moved = 0;
+        count = bb_owned_pass(w, &law, T, w->bb_scratch, integrated ? &moved : NULL);
+        if (moved) w->need_rebuild = 1;
+        if (integrated) *integrated = 1;
     } else
 #endif
     {

@@ -23,25 +23,30 @@ sd_fluid_params sd_fluid_params_default(double slope_rad)
 double sd_fluid_discharge(double U, double h, sd_fluid_phase phase, double h_D, int n)
 {
     double top;
-    if (phase == SD_FLUID_FLOW) top = h;
-    else if (phase == SD_FLUID_CAPTURE) top = h_D >= h ? h_D : h;
-    else return 0.0;
+    if (phase == SD_FLUID_FLOW)
+        top = h;
+    else if (phase == SD_FLUID_CAPTURE)
+        top = h_D >= h ? h_D : h;
+    else
+        return 0.0;
     if (n < 2) n = 2;
     if (n % 2) n++;
     double dz = top / n, sum = 0.0;
     for (int k = 0; k <= n; k++) {
         double z = k == n ? top : k * dz; /* the last node exactly at the surface */
         double u = 0.0;
-        if (phase == SD_FLUID_FLOW) sd_fluid_speed_flow(U, h, z, &u);
-        else sd_fluid_speed_capture(U, h, h_D, z, &u);
+        if (phase == SD_FLUID_FLOW)
+            sd_fluid_speed_flow(U, h, z, &u);
+        else
+            sd_fluid_speed_capture(U, h, h_D, z, &u);
         double w = (k == 0 || k == n) ? 1.0 : (k % 2 ? 4.0 : 2.0);
         sum += w * u;
     }
     return sum * dz / 3.0;
 }
 
-double sd_fluid_dam_depth(double h, size_t n, const double *x, const double *z,
-                          const unsigned char *mask, double x_dam, double probe)
+double sd_fluid_dam_depth(double h, size_t n, const double *x, const double *z, const unsigned char *mask, double x_dam,
+                          double probe)
 {
     double hd = h;
     for (size_t i = 0; i < n; i++) {

@@ -6,19 +6,18 @@
  * q ← exp(ωΔt) q drifts at O(Δt) (see docs/physics.md). Spheres: ω ← ω + TΔt/I. */
 #include "world_internal.h"
 
-void sd_integrate(sd_world *w)
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1)
 {
     sd_bodies *b = &w->b;
     const double dt = w->def.dt;
     const sd_vec3 g = w->def.gravity;
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
-    /* the moving bodies only (w->mov, made current by sd_world_step): a fixed body has no
-     * triangle pairs to gather and does not move; split evenly among the threads */
-    const int nm = w->mov_n;
-    const int32_t *mov = w->mov;
-#pragma omp parallel for schedule(static) reduction(| : moved) if (nm > w->def.parallel_min)
-    for (int k = 0; k < nm; k++) {
+    for (int k = k0; k < k1; k++) {
         const int i = mov[k];
         sd_gather_body(w, i);
         sd_vec3 f = v3_add(b->force[i], b->ext_force[i]);
@@ -46,7 +45,25 @@ void sd_integrate(sd_world *w)
                 sqrt(v3_norm2(v3_sub(b->pos[i], b->pos_ref[i]))) + b->hl[i] * sqrt(v3_norm2(v3_sub(a, b->axis_ref[i])));
             disp = d * d;
         }
-        if (disp > lim2) moved = 1;
+        moved |= disp > lim2;
     }
+    return moved;
+}
+
+/* The moving bodies only (w->mov, made current by sd_world_step): a fixed body has no
+ * triangle pairs to gather and does not move; split evenly among the threads. */
+void sd_integrate(sd_world *w)
+{
+    const int nm = w->mov_n;
+    int moved = 0;
+#ifdef _OPENMP
+#pragma omp parallel reduction(| : moved) if (nm > w->def.parallel_min)
+    {
+        const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
+        moved |= sd_integrate_list(w, w->mov, (int)((long)nm * tid / nthr), (int)((long)nm * (tid + 1) / nthr));
+    }
+#else
+    moved = sd_integrate_list(w, w->mov, 0, nm);
+#endif
     if (moved) w->need_rebuild = 1;
 }

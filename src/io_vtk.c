@@ -93,8 +93,10 @@ static void wr(sd_afile *a, const char *fmt, ...)
 
 static void wr_header(sd_afile *a, const char *type)
 {
-    wr(a, "<?xml version=\"1.0\"?>\n"
-          "<VTKFile type=\"%s\" version=\"0.1\" byte_order=\"LittleEndian\">\n", type);
+    wr(a,
+       "<?xml version=\"1.0\"?>\n"
+       "<VTKFile type=\"%s\" version=\"0.1\" byte_order=\"LittleEndian\">\n",
+       type);
 }
 
 static void wr_double(sd_afile *a, double v)
@@ -137,7 +139,8 @@ static void wr_vectors(sd_afile *a, const char *name, size_t n, const sd_vec3 *v
 {
     wr_array_begin(a, "Float64", name, 3);
     sd_vec3 zero = {0.0, 0.0, 0.0};
-    for (size_t i = 0; i < n; i++) wr_vec(a, v ? v[i] : zero);
+    for (size_t i = 0; i < n; i++)
+        wr_vec(a, v ? v[i] : zero);
     wr_array_end(a);
 }
 
@@ -159,7 +162,8 @@ static void wr_cells(sd_afile *a, const char *tag, size_t ncell, int k)
     wr(a, "      <%s>\n", tag);
     wr_array_begin(a, "Int64", "connectivity", 1);
     size_t np = ncell * (size_t)k;
-    for (size_t i = 0; i < np; i++) wr(a, "%zu%s", i, (i % 16 == 15 || i + 1 == np) ? "\n" : " ");
+    for (size_t i = 0; i < np; i++)
+        wr(a, "%zu%s", i, (i % 16 == 15 || i + 1 == np) ? "\n" : " ");
     wr_array_end(a);
     wr_array_begin(a, "Int64", "offsets", 1);
     for (size_t i = 0; i < ncell; i++)
@@ -171,9 +175,10 @@ static void wr_cells(sd_afile *a, const char *tag, size_t ncell, int k)
 static void wr_piece_begin(sd_afile *a, size_t npts, size_t nverts, size_t npolys)
 {
     wr_header(a, "PolyData");
-    wr(a, "  <PolyData>\n"
-          "    <Piece NumberOfPoints=\"%zu\" NumberOfVerts=\"%zu\" NumberOfLines=\"0\""
-          " NumberOfStrips=\"0\" NumberOfPolys=\"%zu\">\n",
+    wr(a,
+       "  <PolyData>\n"
+       "    <Piece NumberOfPoints=\"%zu\" NumberOfVerts=\"%zu\" NumberOfLines=\"0\""
+       " NumberOfStrips=\"0\" NumberOfPolys=\"%zu\">\n",
        npts, nverts, npolys);
 }
 
@@ -197,8 +202,8 @@ static int bad_args(void)
     return -1;
 }
 
-int sd_vtk_write_spheres(const char *path, size_t n, const sd_vec3 *pos, const double *radius,
-                         const sd_vec3 *vel, const int *id, const int *tag)
+int sd_vtk_write_spheres(const char *path, size_t n, const sd_vec3 *pos, const double *radius, const sd_vec3 *vel,
+                         const int *id, const int *tag)
 {
     if (!path || (n > 0 && (!pos || !radius))) return bad_args();
     sd_afile a;
@@ -222,9 +227,8 @@ int sd_vtk_write_spheres(const char *path, size_t n, const sd_vec3 *pos, const d
     return afile_close(&a);
 }
 
-int sd_vtk_write_cylinders(const char *path, size_t n, const sd_vec3 *pos, const sd_vec3 *axis,
-                           const double *length, const double *radius, const sd_vec3 *vel,
-                           const int *id, const int *tag)
+int sd_vtk_write_cylinders(const char *path, size_t n, const sd_vec3 *pos, const sd_vec3 *axis, const double *length,
+                           const double *radius, const sd_vec3 *vel, const int *id, const int *tag)
 {
     if (!path || (n > 0 && (!pos || !axis || !length || !radius))) return bad_args();
     sd_afile a;
@@ -302,18 +306,29 @@ static void wr_escaped(sd_afile *a, const char *s)
 {
     for (; *s; s++) {
         switch (*s) {
-        case '&': wr(a, "&amp;"); break;
-        case '<': wr(a, "&lt;"); break;
-        case '>': wr(a, "&gt;"); break;
-        case '"': wr(a, "&quot;"); break;
-        case '\'': wr(a, "&apos;"); break;
-        default: wr(a, "%c", *s); break;
+        case '&':
+            wr(a, "&amp;");
+            break;
+        case '<':
+            wr(a, "&lt;");
+            break;
+        case '>':
+            wr(a, "&gt;");
+            break;
+        case '"':
+            wr(a, "&quot;");
+            break;
+        case '\'':
+            wr(a, "&apos;");
+            break;
+        default:
+            wr(a, "%c", *s);
+            break;
         }
     }
 }
 
-int sd_vtk_write_pvd(const char *path, size_t n, const double *time, const int *part,
-                     const char *const *file)
+int sd_vtk_write_pvd(const char *path, size_t n, const double *time, const int *part, const char *const *file)
 {
     if (!path || (n > 0 && (!time || !file))) return bad_args();
     for (size_t i = 0; i < n; i++)
@@ -388,7 +403,8 @@ nomem:
 void sd_vtk_series_free(sd_vtk_series *s)
 {
     if (!s) return;
-    for (size_t i = 0; i < s->n; i++) free(s->file[i]);
+    for (size_t i = 0; i < s->n; i++)
+        free(s->file[i]);
     free(s->file);
     free(s->time);
     free(s->part);

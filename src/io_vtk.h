@@ -30,15 +30,14 @@
 /* Spheres: points = centres; point data radius, diameter, velocity (3), id, tag; one vertex
  * cell per point. pos and radius required (may be NULL only when n == 0); vel NULL → zeros,
  * id NULL → 0..n-1, tag NULL → 0. */
-int sd_vtk_write_spheres(const char *path, size_t n, const sd_vec3 *pos, const double *radius,
-                         const sd_vec3 *vel, const int *id, const int *tag);
+int sd_vtk_write_spheres(const char *path, size_t n, const sd_vec3 *pos, const double *radius, const sd_vec3 *vel,
+                         const int *id, const int *tag);
 
 /* Cylinders (logs, dam pipes): points = centres; point data axis (3, unit; re-normalised,
  * a zero axis is written as (0,0,1)), length (full length L), radius, velocity (3), id, tag,
  * glyph_scale (3) = (L, 2r, 2r). pos, axis, length, radius required; vel, id, tag as above. */
-int sd_vtk_write_cylinders(const char *path, size_t n, const sd_vec3 *pos, const sd_vec3 *axis,
-                           const double *length, const double *radius, const sd_vec3 *vel,
-                           const int *id, const int *tag);
+int sd_vtk_write_cylinders(const char *path, size_t n, const sd_vec3 *pos, const sd_vec3 *axis, const double *length,
+                           const double *radius, const sd_vec3 *vel, const int *id, const int *tag);
 
 /* Triangle walls: n triangles, vertices verts[3k], verts[3k+1], verts[3k+2] (3n points, not
  * merged); one polygon per triangle with cell data group (group NULL → 0) and normal (3,
@@ -48,8 +47,7 @@ int sd_vtk_write_triangles(const char *path, size_t n, const sd_vec3 *verts, con
 /* .pvd collection: n DataSet entries (timestep time[i], part part[i] (NULL → 0),
  * file file[i]). File names are written as given (XML-escaped): give them relative to the
  * .pvd's directory so the set can be moved. */
-int sd_vtk_write_pvd(const char *path, size_t n, const double *time, const int *part,
-                     const char *const *file);
+int sd_vtk_write_pvd(const char *path, size_t n, const double *time, const int *part, const char *const *file);
 
 /* A growing .pvd: every add appends an entry and rewrites the whole collection atomically,
  * so the .pvd on disk is always valid and lists every snapshot written so far. If the

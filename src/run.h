@@ -9,11 +9,11 @@
 #include "scenario.h"
 
 typedef struct {
-    const char *outdir;            /* output directory (created) */
-    int progress_tty;              /* 1: live progress line; 0: plain log lines */
-    volatile sig_atomic_t *stop;   /* set asynchronously to stop cleanly (Ctrl-C) */
-    FILE *log;                     /* progress and messages */
-    FILE *err;                     /* errors */
+    const char *outdir;          /* output directory (created) */
+    int progress_tty;            /* 1: live progress line; 0: plain log lines */
+    volatile sig_atomic_t *stop; /* set asynchronously to stop cleanly (Ctrl-C) */
+    FILE *log;                   /* progress and messages */
+    FILE *err;                   /* errors */
     /* Branching (docs/sweep.md). A flume run builds its scene without the dam pipes and adds
      * them when the capture phase starts, so that everything before depends on no dam-layout
      * or capture-phase key (sd_scenario_is_capture_key). */
@@ -26,20 +26,20 @@ typedef struct {
 } sd_run_opts;
 
 typedef struct {
-    double p_v;                    /* trap ratio (eq 55) */
+    double p_v; /* trap ratio (eq 55) */
     double p_v_class[SD_MAX_CLASSES];
     double p_v_logs;
     double peak_dam_force; /* largest force on any one pipe, N */
     int n_upstream, n_passed, n_removed;
     double wall_time;
-    double phase_end[4];           /* simulated time at the end of packing, flow, capture */
+    double phase_end[4]; /* simulated time at the end of packing, flow, capture */
     int interrupted;
     long steps;
-    uint64_t state_hash;           /* sd_world_state_hash at the end */
-    int stopped_at_flow_end;       /* stop_at_flow_end was honoured */
-    int restarted;                 /* the run continued from opts.restart */
-    double flow_wall;              /* wall time from the start to the flow end (build, packing, flow), s;
-                                    * a restarted run: the checkpoint writer's */
+    uint64_t state_hash;     /* sd_world_state_hash at the end */
+    int stopped_at_flow_end; /* stop_at_flow_end was honoured */
+    int restarted;           /* the run continued from opts.restart */
+    double flow_wall;        /* wall time from the start to the flow end (build, packing, flow), s;
+                              * a restarted run: the checkpoint writer's */
 } sd_run_result;
 
 /* Build and run; returns 0 on success, 1 on a failed run, 2 on bad input, 130 when stopped. */

@@ -29,23 +29,30 @@ typedef struct {
 
 static const sd_param params[] = {
     {"solver.dt", P_DOUBLE, OFF(world.dt), 0, 0, "s", 0, 1, 1, "time step Δt"},
-    {"solver.duration", P_DOUBLE, OFF(duration), 0, 0, "s", 0, INF, 0, "simulated time (scenes without a flume; the flume run ends by its phases)"},
+    {"solver.duration", P_DOUBLE, OFF(duration), 0, 0, "s", 0, INF, 0,
+     "simulated time (scenes without a flume; the flume run ends by its phases)"},
     {"solver.margin", P_DOUBLE, OFF(world.margin), 0, 0, "m", 0, 1, 0, "candidate margin r_dam"},
     {"solver.t_reset", P_DOUBLE, OFF(world.t_reset), 0, 0, "s", 0, INF, 1, "candidate list rebuild interval"},
     {"solver.threads", P_INT, OFF(world.threads), 0, 0, "-", 0, 1024, 0, "OpenMP threads (0 = all cores)"},
-    {"solver.check_dt", P_BOOL, OFF(world.check_dt), 0, 0, "-", 0, 1, 0, "refuse a time step with fewer than 8 steps per contact half-period"},
+    {"solver.check_dt", P_BOOL, OFF(world.check_dt), 0, 0, "-", 0, 1, 0,
+     "refuse a time step with fewer than 8 steps per contact half-period"},
     {"solver.seed", P_INT, OFF(seed), 0, 0, "-", 0, 2147483647.0, 0, "random seed (packing, roughness, log axes)"},
-    {"gravity", P_VEC3, OFF(world.gravity), 0, 0, "m/s^2", -INF, INF, 0, "gravity vector (flume: set from flume.slope_deg)"},
+    {"gravity", P_VEC3, OFF(world.gravity), 0, 0, "m/s^2", -INF, INF, 0,
+     "gravity vector (flume: set from flume.slope_deg)"},
     {"contact.k_n", P_DOUBLE, OFF(world.contact.k_n), 0, 0, "N/m", 0, INF, 1, "normal spring K_n"},
     {"contact.k_s", P_DOUBLE, OFF(world.contact.k_s), 0, 0, "N/m", 0, INF, 0, "tangential spring K_s"},
-    {"contact.damping", P_DOUBLE, OFF(world.contact.damping), 0, 0, "-", 0, 1, 0, "damping ratio h (c = 2h sqrt(m* K))"},
+    {"contact.damping", P_DOUBLE, OFF(world.contact.damping), 0, 0, "-", 0, 1, 0,
+     "damping ratio h (c = 2h sqrt(m* K))"},
     {"contact.tan_phi", P_DOUBLE, OFF(world.contact.tan_phi), 0, 0, "-", 0, INF, 0, "friction tan φ"},
-    {"contact.cohesion", P_DOUBLE, OFF(world.contact.cohesion), 0, 0, "N", 0, INF, 0, "cohesion c in the Mohr–Coulomb limit"},
+    {"contact.cohesion", P_DOUBLE, OFF(world.contact.cohesion), 0, 0, "N", 0, INF, 0,
+     "cohesion c in the Mohr–Coulomb limit"},
     {"box.on", P_BOOL, OFF(box_on), 0, 0, "-", 0, 1, 0, "add an open-top box of triangles"},
     {"box.min", P_VEC3, OFF(box_min), 0, 0, "m", -INF, INF, 0, "box lower corner"},
     {"box.max", P_VEC3, OFF(box_max), 0, 0, "m", -INF, INF, 0, "box upper corner"},
-    {"pile.diameters", P_DLIST, OFF(pile_diam), OFF(pile_n_classes), SD_MAX_CLASSES, "m", 0, 1, 1, "sphere diameters of the random pile"},
-    {"pile.counts", P_ILIST, OFF(pile_count), OFF(pile_n_classes), SD_MAX_CLASSES, "-", 0, 1e7, 0, "sphere counts per diameter"},
+    {"pile.diameters", P_DLIST, OFF(pile_diam), OFF(pile_n_classes), SD_MAX_CLASSES, "m", 0, 1, 1,
+     "sphere diameters of the random pile"},
+    {"pile.counts", P_ILIST, OFF(pile_count), OFF(pile_n_classes), SD_MAX_CLASSES, "-", 0, 1e7, 0,
+     "sphere counts per diameter"},
     {"pile.density", P_DOUBLE, OFF(pile_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density"},
     {"pile.min", P_VEC3, OFF(pile_min), 0, 0, "m", -INF, INF, 0, "placement region lower corner"},
     {"pile.max", P_VEC3, OFF(pile_max), 0, 0, "m", -INF, INF, 0, "placement region upper corner"},
@@ -59,10 +66,13 @@ static const sd_param params[] = {
     {"flume.roughness", P_BOOL, OFF(roughness_on), 0, 0, "-", 0, 1, 0, "fixed roughness spheres on the bed"},
     {"flume.roughness_dmin", P_DOUBLE, OFF(rough_dmin), 0, 0, "m", 0, 1, 1, "smallest roughness diameter"},
     {"flume.roughness_dmax", P_DOUBLE, OFF(rough_dmax), 0, 0, "m", 0, 1, 1, "largest roughness diameter"},
-    {"flume.roughness_coverage", P_DOUBLE, OFF(rough_coverage), 0, 0, "-", 0, 0.9, 1, "bed area fraction covered by roughness spheres (random placement stops there or when jammed)"},
+    {"flume.roughness_coverage", P_DOUBLE, OFF(rough_coverage), 0, 0, "-", 0, 0.9, 1,
+     "bed area fraction covered by roughness spheres (random placement stops there or when jammed)"},
     {"flume.pack_height", P_DOUBLE, OFF(pack_height), 0, 0, "m", 0, INF, 1, "top of the packing box above the bed"},
-    {"spheres.diameters", P_DLIST, OFF(class_diam), OFF(n_classes), SD_MAX_CLASSES, "m", 0, 1, 1, "size classes (SPEC §8: 20, 15, 10, 5 mm)"},
-    {"spheres.counts", P_ILIST, OFF(class_count), OFF(n_classes), SD_MAX_CLASSES, "-", 0, 1e7, 0, "count per class (376, 891, 3010, 342)"},
+    {"spheres.diameters", P_DLIST, OFF(class_diam), OFF(n_classes), SD_MAX_CLASSES, "m", 0, 1, 1,
+     "size classes (SPEC §8: 20, 15, 10, 5 mm)"},
+    {"spheres.counts", P_ILIST, OFF(class_count), OFF(n_classes), SD_MAX_CLASSES, "-", 0, 1e7, 0,
+     "count per class (376, 891, 3010, 342)"},
     {"spheres.density", P_DOUBLE, OFF(sphere_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density (SG 1.9)"},
     {"logs.count", P_INT, OFF(log_count), 0, 0, "-", -1, 1e6, 0, "number of logs (-1: from logs.k_w)"},
     {"logs.k_w", P_DOUBLE, OFF(log_kw), 0, 0, "-", 0, 0.95, 0, "woody volume ratio K_w (eq 54), used when count = -1"},
@@ -72,25 +82,35 @@ static const sd_param params[] = {
     {"dam.on", P_BOOL, OFF(dam_on), 0, 0, "-", 0, 1, 0, "build the grid dam"},
     {"dam.pipe_diameter", P_DOUBLE, OFF(pipe_diam), 0, 0, "m", 0, 1, 1, "pipe diameter"},
     {"dam.l_h", P_DOUBLE, OFF(l_h), 0, 0, "m", 0, 1, 1, "clear spacing of the columns ℓ_H"},
-    {"dam.l_v", P_DOUBLE, OFF(l_v), 0, 0, "m", 0, 1, 0, "underside of the intermediate beam above the bed ℓ_V (0: none)"},
+    {"dam.l_v", P_DOUBLE, OFF(l_v), 0, 0, "m", 0, 1, 0,
+     "underside of the intermediate beam above the bed ℓ_V (0: none)"},
     {"dam.top_beam", P_DOUBLE, OFF(top_beam), 0, 0, "m", 0, 1, 1, "underside of the top beam above the bed"},
-    {"dam.columns", P_DLIST, OFF(column_y), OFF(n_columns), SD_MAX_PIPES, "m", 0, INF, 0, "explicit column positions y (empty: from l_h)"},
-    {"dam.beams", P_DLIST, OFF(beam_z), OFF(n_beams), SD_MAX_PIPES, "m", 0, INF, 0, "explicit beam undersides z (empty: from l_v, top_beam)"},
+    {"dam.columns", P_DLIST, OFF(column_y), OFF(n_columns), SD_MAX_PIPES, "m", 0, INF, 0,
+     "explicit column positions y (empty: from l_h)"},
+    {"dam.beams", P_DLIST, OFF(beam_z), OFF(n_beams), SD_MAX_PIPES, "m", 0, INF, 0,
+     "explicit beam undersides z (empty: from l_v, top_beam)"},
     {"water.on", P_BOOL, OFF(water_on), 0, 0, "-", 0, 1, 0, "fluid forces (SPEC §5)"},
     {"water.u", P_DOUBLE, OFF(water_u), 0, 0, "m/s", 0, INF, 0, "reference velocity U"},
     {"water.h", P_DOUBLE, OFF(water_h), 0, 0, "m", 0, INF, 1, "flow depth h"},
     {"water.rho", P_DOUBLE, OFF(water_rho), 0, 0, "kg/m^3", 0, INF, 0, "water density ρ"},
     {"water.c_d", P_DOUBLE, OFF(water_cd), 0, 0, "-", 0, INF, 0, "drag coefficient C_D"},
     {"water.probe", P_DOUBLE, OFF(water_probe), 0, 0, "m", 0, INF, 1, "capture-phase probe length upstream of the dam"},
-    {"water.h_d_floating", P_BOOL, OFF(water_hd_floating), 0, 0, "-", 0, 1, 0, "let elements lighter than water (logs) set the capture depth h_D (the paper's literal rule: a log buoyed to h_D lifts h_D with it, without bound; see docs/physics.md)"},
+    {"water.h_d_floating", P_BOOL, OFF(water_hd_floating), 0, 0, "-", 0, 1, 0,
+     "let elements lighter than water (logs) set the capture depth h_D (the paper's literal rule: a log buoyed to h_D "
+     "lifts h_D with it, without bound; see docs/physics.md)"},
     {"phases.packing_time", P_DOUBLE, OFF(packing_time), 0, 0, "s", 0, INF, 0, "packing (drop) time"},
     {"phases.flow_limit", P_DOUBLE, OFF(flow_limit), 0, 0, "s", 0, INF, 1, "longest flow phase"},
-    {"phases.capture_limit", P_DOUBLE, OFF(capture_limit), 0, 0, "s", 0, INF, 1, "capture time limit (reconstructed 6 s)"},
-    {"phases.quiet_time", P_DOUBLE, OFF(quiet_time), 0, 0, "s", 0, INF, 1, "settled when nothing crossed the dam for this long"},
-    {"phases.ke_fraction", P_DOUBLE, OFF(ke_fraction), 0, 0, "-", 0, 1, 0, "... and upstream kinetic energy below this fraction of its peak"},
-    {"output.snapshot_interval", P_DOUBLE, OFF(snapshot_interval), 0, 0, "s", 0, INF, 0, "VTK snapshot interval (0: none)"},
+    {"phases.capture_limit", P_DOUBLE, OFF(capture_limit), 0, 0, "s", 0, INF, 1,
+     "capture time limit (reconstructed 6 s)"},
+    {"phases.quiet_time", P_DOUBLE, OFF(quiet_time), 0, 0, "s", 0, INF, 1,
+     "settled when nothing crossed the dam for this long"},
+    {"phases.ke_fraction", P_DOUBLE, OFF(ke_fraction), 0, 0, "-", 0, 1, 0,
+     "... and upstream kinetic energy below this fraction of its peak"},
+    {"output.snapshot_interval", P_DOUBLE, OFF(snapshot_interval), 0, 0, "s", 0, INF, 0,
+     "VTK snapshot interval (0: none)"},
     {"output.log_interval", P_DOUBLE, OFF(log_interval), 0, 0, "s", 0, INF, 1, "time-series and progress interval"},
-    {"output.trajectory_ids", P_ILIST, OFF(traj_ids), OFF(n_traj), SD_MAX_IDS, "-", 0, 1e9, 0, "element ids whose trajectories are logged"},
+    {"output.trajectory_ids", P_ILIST, OFF(traj_ids), OFF(n_traj), SD_MAX_IDS, "-", 0, 1e9, 0,
+     "element ids whose trajectories are logged"},
     {"output.trajectory_interval", P_DOUBLE, OFF(traj_interval), 0, 0, "s", 0, INF, 1, "trajectory CSV interval"},
     {"output.vtk", P_BOOL, OFF(vtk_on), 0, 0, "-", 0, 1, 0, "write VTK snapshots"},
     {"output.png", P_BOOL, OFF(png_on), 0, 0, "-", 0, 1, 0, "draw side-view pictures (matplotlib)"},
@@ -200,9 +220,12 @@ static int parse_int(const char *txt, long *out)
 static int parse_bool(const char *txt, int *out)
 {
     if (!txt) return -1;
-    if (!strcmp(txt, "true") || !strcmp(txt, "yes") || !strcmp(txt, "on") || !strcmp(txt, "1")) *out = 1;
-    else if (!strcmp(txt, "false") || !strcmp(txt, "no") || !strcmp(txt, "off") || !strcmp(txt, "0")) *out = 0;
-    else return -1;
+    if (!strcmp(txt, "true") || !strcmp(txt, "yes") || !strcmp(txt, "on") || !strcmp(txt, "1"))
+        *out = 1;
+    else if (!strcmp(txt, "false") || !strcmp(txt, "no") || !strcmp(txt, "off") || !strcmp(txt, "0"))
+        *out = 0;
+    else
+        return -1;
     return 0;
 }
 
@@ -211,8 +234,10 @@ static int check_range(ectx *e, const sd_param *p, double v, int line, int col)
     int bad = p->strict_min ? !(v > p->min) : !(v >= p->min);
     if (bad || v > p->max) {
         char buf[160];
-        if (p->strict_min) snprintf(buf, sizeof buf, "must be > %g and <= %g (%s)", p->min, p->max, p->unit);
-        else snprintf(buf, sizeof buf, "must be in [%g, %g] (%s)", p->min, p->max, p->unit);
+        if (p->strict_min)
+            snprintf(buf, sizeof buf, "must be > %g and <= %g (%s)", p->min, p->max, p->unit);
+        else
+            snprintf(buf, sizeof buf, "must be in [%g, %g] (%s)", p->min, p->max, p->unit);
         report(e, line, col, "%s: %s", p->key, buf);
         return -1;
     }
@@ -230,7 +255,8 @@ static int parse_vec3_node(const sd_ynode *n, sd_vec3 *v)
 }
 
 /* Set one parameter from a node (or from override text when node is NULL). */
-static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode *n, const char *text, int line, int col)
+static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode *n, const char *text, int line,
+                      int col)
 {
     char *base = (char *)s;
     sd_ynode *tmp = NULL;
@@ -261,8 +287,10 @@ static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode
             break;
         }
         if (!check_range(e, p, (double)v, tmp ? line : n->line, tmp ? col : n->col)) {
-            if (p->off == OFF(seed)) *(long *)(base + p->off) = v;
-            else *(int *)(base + p->off) = (int)v;
+            if (p->off == OFF(seed))
+                *(long *)(base + p->off) = v;
+            else
+                *(int *)(base + p->off) = (int)v;
         }
         break;
     }
@@ -278,7 +306,8 @@ static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode
     case P_VEC3: {
         sd_vec3 v;
         if (parse_vec3_node(n, &v)) {
-            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected a list of three numbers [x, y, z]%s", p->key, "");
+            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected a list of three numbers [x, y, z]%s",
+                   p->key, "");
             break;
         }
         *(sd_vec3 *)(base + p->off) = v;
@@ -287,7 +316,8 @@ static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode
     case P_DLIST:
     case P_ILIST: {
         if (n->kind != SD_Y_SEQ || n->n > p->max_count) {
-            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected a list (at most the allowed length)%s", p->key, "");
+            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected a list (at most the allowed length)%s",
+                   p->key, "");
             break;
         }
         int ok = 1;
@@ -299,15 +329,19 @@ static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode
                 if (it->kind != SD_Y_SCALAR || parse_double(it->value, &v)) {
                     report(e, l, c, "%s: expected a number in the list%s", p->key, "");
                     ok = 0;
-                } else if (check_range(e, p, v, l, c)) ok = 0;
-                else ((double *)(base + p->off))[k] = v;
+                } else if (check_range(e, p, v, l, c))
+                    ok = 0;
+                else
+                    ((double *)(base + p->off))[k] = v;
             } else {
                 long v;
                 if (it->kind != SD_Y_SCALAR || parse_int(it->value, &v)) {
                     report(e, l, c, "%s: expected an integer in the list%s", p->key, "");
                     ok = 0;
-                } else if (check_range(e, p, (double)v, l, c)) ok = 0;
-                else ((int *)(base + p->off))[k] = (int)v;
+                } else if (check_range(e, p, (double)v, l, c))
+                    ok = 0;
+                else
+                    ((int *)(base + p->off))[k] = (int)v;
             }
         }
         if (ok) *(int *)(base + p->count_off) = n->n;
@@ -333,8 +367,8 @@ static int is_section(const char *prefix)
 }
 
 /* Element list entry keys. */
-static const char *elem_keys[] = {"type", "radius", "diameter", "length", "density", "position", "velocity",
-                                  "omega", "axis", "fixed", "tag", "vertices", "group", NULL};
+static const char *elem_keys[] = {"type",  "radius", "diameter", "length", "density",  "position", "velocity",
+                                  "omega", "axis",   "fixed",    "tag",    "vertices", "group",    NULL};
 
 static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
 {
@@ -354,9 +388,12 @@ static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
         report(e, n->line, n->col, "elements: missing 'type' (sphere, cylinder or triangle)%s%s", "", "");
         return;
     }
-    if (!strcmp(t->value, "sphere")) d.type = 0;
-    else if (!strcmp(t->value, "cylinder")) d.type = 1;
-    else if (!strcmp(t->value, "triangle")) d.type = 2;
+    if (!strcmp(t->value, "sphere"))
+        d.type = 0;
+    else if (!strcmp(t->value, "cylinder"))
+        d.type = 1;
+    else if (!strcmp(t->value, "triangle"))
+        d.type = 2;
     else {
         report(e, t->line, t->col, "elements.type: unknown element type '%s'%s", t->value, "");
         return;
@@ -366,7 +403,8 @@ static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
         const char *k = n->keys[i];
         const sd_ynode *v = n->items[i];
         int known = 0;
-        for (int j = 0; elem_keys[j]; j++) known |= !strcmp(elem_keys[j], k);
+        for (int j = 0; elem_keys[j]; j++)
+            known |= !strcmp(elem_keys[j], k);
         if (!known) {
             report(e, n->key_line[i], n->key_col[i], "elements: unknown key '%s'%s", k, "");
             continue;
@@ -377,19 +415,26 @@ static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
                 report(e, v->line, v->col, "elements.%s: expected a positive number%s", k, "");
                 continue;
             }
-            if (!strcmp(k, "radius")) d.radius = x;
-            else if (!strcmp(k, "diameter")) d.radius = 0.5 * x;
-            else if (!strcmp(k, "length")) d.length = x;
-            else d.density = x;
+            if (!strcmp(k, "radius"))
+                d.radius = x;
+            else if (!strcmp(k, "diameter"))
+                d.radius = 0.5 * x;
+            else if (!strcmp(k, "length"))
+                d.length = x;
+            else
+                d.density = x;
         } else if (!strcmp(k, "position") || !strcmp(k, "velocity") || !strcmp(k, "omega") || !strcmp(k, "axis")) {
             sd_vec3 vv;
             if (parse_vec3_node(v, &vv)) {
                 report(e, v->line, v->col, "elements.%s: expected [x, y, z]%s", k, "");
                 continue;
             }
-            if (!strcmp(k, "position")) d.pos = vv;
-            else if (!strcmp(k, "velocity")) d.vel = vv;
-            else if (!strcmp(k, "omega")) d.omega = vv;
+            if (!strcmp(k, "position"))
+                d.pos = vv;
+            else if (!strcmp(k, "velocity"))
+                d.vel = vv;
+            else if (!strcmp(k, "omega"))
+                d.omega = vv;
             else {
                 if (!(v3_norm(vv) > 0)) report(e, v->line, v->col, "elements.axis: must be non-zero%s%s", "", "");
                 d.axis = vv;
@@ -401,12 +446,15 @@ static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
             long iv;
             if (v->kind != SD_Y_SCALAR || parse_int(v->value, &iv) || iv < 0)
                 report(e, v->line, v->col, "elements.%s: expected a non-negative integer%s", k, "");
-            else if (!strcmp(k, "tag")) d.tag = (int)iv;
-            else d.group = (int)iv;
+            else if (!strcmp(k, "tag"))
+                d.tag = (int)iv;
+            else
+                d.group = (int)iv;
         } else if (!strcmp(k, "vertices")) {
             if (v->kind != SD_Y_SEQ || v->n != 3 || parse_vec3_node(v->items[0], &d.v[0]) ||
                 parse_vec3_node(v->items[1], &d.v[1]) || parse_vec3_node(v->items[2], &d.v[2]))
-                report(e, v->line, v->col, "elements.vertices: expected three points [[x,y,z],[x,y,z],[x,y,z]]%s%s", "", "");
+                report(e, v->line, v->col, "elements.vertices: expected three points [[x,y,z],[x,y,z],[x,y,z]]%s%s", "",
+                       "");
         }
     }
     if (e->errors != errs) return;
@@ -436,23 +484,28 @@ static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefi
 {
     for (int i = 0; i < map->n; i++) {
         char key[256];
-        if (*prefix) snprintf(key, sizeof key, "%s.%s", prefix, map->keys[i]);
-        else snprintf(key, sizeof key, "%s", map->keys[i]);
+        if (*prefix)
+            snprintf(key, sizeof key, "%s.%s", prefix, map->keys[i]);
+        else
+            snprintf(key, sizeof key, "%s", map->keys[i]);
         const sd_ynode *v = map->items[i];
         if (!*prefix && !strcmp(key, "elements")) {
             if (v->kind != SD_Y_SEQ) {
                 report(e, v->line, v->col, "elements: expected a list%s%s", "", "");
                 continue;
             }
-            for (int k = 0; k < v->n; k++) parse_element(e, s, v->items[k]);
+            for (int k = 0; k < v->n; k++)
+                parse_element(e, s, v->items[k]);
             continue;
         }
         const sd_param *p = find_param(key);
         if (p) {
             set_param(e, s, p, v, NULL, v->line, v->col);
         } else if (is_section(key)) {
-            if (v->kind != SD_Y_MAP) report(e, v->line, v->col, "%s: expected a mapping (section)%s", key, "");
-            else walk(e, s, v, key);
+            if (v->kind != SD_Y_MAP)
+                report(e, v->line, v->col, "%s: expected a mapping (section)%s", key, "");
+            else
+                walk(e, s, v, key);
         } else {
             report(e, map->key_line[i], map->key_col[i], "unknown key '%s'%s", key, "");
         }
@@ -476,7 +529,8 @@ static void validate(ectx *e, sd_scenario *s, const sd_ynode *root)
         }
         if (s->rough_dmin > s->rough_dmax) {
             n = sd_yaml_get(sd_yaml_get(root, "flume"), "roughness_dmin");
-            report(e, n ? n->line : 1, n ? n->col : 1, "flume.roughness_dmin must not exceed roughness_dmax%s%s", "", "");
+            report(e, n ? n->line : 1, n ? n->col : 1, "flume.roughness_dmin must not exceed roughness_dmax%s%s", "",
+                   "");
         }
     }
     if (s->box_on && (s->box_min.x >= s->box_max.x || s->box_min.y >= s->box_max.y || s->box_min.z >= s->box_max.z)) {
@@ -488,7 +542,8 @@ static void validate(ectx *e, sd_scenario *s, const sd_ynode *root)
     for (int i = 0; i < s->n_elems; i++) {
         const sd_elem_def *d = &s->elems[i];
         if (d->fixed || d->type == 2) continue;
-        double m = d->type == 0 ? sphere_mass(2 * d->radius, d->density) : d->density * M_PI * d->radius * d->radius * d->length;
+        double m = d->type == 0 ? sphere_mass(2 * d->radius, d->density)
+                                : d->density * M_PI * d->radius * d->radius * d->length;
         mmin = fmin(mmin, m);
     }
     for (int k = 0; k < s->pile_n_classes; k++)
@@ -523,7 +578,8 @@ int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overri
         return -1;
     }
     ectx e = {err, path, 0};
-    if (root->kind != SD_Y_MAP) report(&e, root->line, root->col, "the scenario must be a mapping of sections%s%s", "", "");
+    if (root->kind != SD_Y_MAP)
+        report(&e, root->line, root->col, "the scenario must be a mapping of sections%s%s", "", "");
     else {
         /* flume scenes default gravity to the slope unless given */
         const sd_ynode *fl = sd_yaml_get(root, "flume");
@@ -568,12 +624,18 @@ int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overri
 static const char *type_name(ptype t)
 {
     switch (t) {
-    case P_DOUBLE: return "number";
-    case P_INT: return "integer";
-    case P_BOOL: return "bool";
-    case P_VEC3: return "[x, y, z]";
-    case P_DLIST: return "list of numbers";
-    case P_ILIST: return "list of integers";
+    case P_DOUBLE:
+        return "number";
+    case P_INT:
+        return "integer";
+    case P_BOOL:
+        return "bool";
+    case P_VEC3:
+        return "[x, y, z]";
+    case P_DLIST:
+        return "list of numbers";
+    case P_ILIST:
+        return "list of integers";
     }
     return "?";
 }
@@ -582,12 +644,18 @@ static void print_value(FILE *f, const sd_scenario *s, const sd_param *p)
 {
     const char *base = (const char *)s;
     switch (p->type) {
-    case P_DOUBLE: fprintf(f, "%.10g", *(const double *)(base + p->off)); break;
-    case P_INT:
-        if (p->off == OFF(seed)) fprintf(f, "%ld", *(const long *)(base + p->off));
-        else fprintf(f, "%d", *(const int *)(base + p->off));
+    case P_DOUBLE:
+        fprintf(f, "%.10g", *(const double *)(base + p->off));
         break;
-    case P_BOOL: fprintf(f, "%s", *(const int *)(base + p->off) ? "true" : "false"); break;
+    case P_INT:
+        if (p->off == OFF(seed))
+            fprintf(f, "%ld", *(const long *)(base + p->off));
+        else
+            fprintf(f, "%d", *(const int *)(base + p->off));
+        break;
+    case P_BOOL:
+        fprintf(f, "%s", *(const int *)(base + p->off) ? "true" : "false");
+        break;
     case P_VEC3: {
         const sd_vec3 *v = (const sd_vec3 *)(base + p->off);
         fprintf(f, "[%.10g, %.10g, %.10g]", v->x, v->y, v->z);
@@ -598,8 +666,10 @@ static void print_value(FILE *f, const sd_scenario *s, const sd_param *p)
         int n = *(const int *)(base + p->count_off);
         fputc('[', f);
         for (int k = 0; k < n; k++) {
-            if (p->type == P_DLIST) fprintf(f, "%s%.10g", k ? ", " : "", ((const double *)(base + p->off))[k]);
-            else fprintf(f, "%s%d", k ? ", " : "", ((const int *)(base + p->off))[k]);
+            if (p->type == P_DLIST)
+                fprintf(f, "%s%.10g", k ? ", " : "", ((const double *)(base + p->off))[k]);
+            else
+                fprintf(f, "%s%d", k ? ", " : "", ((const int *)(base + p->off))[k]);
         }
         fputc(']', f);
         break;
@@ -616,11 +686,16 @@ void sd_scenario_print_params(FILE *f, int md)
     }
     for (int i = 0; i < N_PARAMS; i++) {
         const sd_param *p = &params[i];
-        if (md) fprintf(f, "| `%s` | %s | %s | `", p->key, type_name(p->type), p->unit);
-        else fprintf(f, "%-28s %-16s %-8s ", p->key, type_name(p->type), p->unit);
+        if (md)
+            fprintf(f, "| `%s` | %s | %s | `", p->key, type_name(p->type), p->unit);
+        else
+            fprintf(f, "%-28s %-16s %-8s ", p->key, type_name(p->type), p->unit);
         print_value(f, &d, p);
-        if (p->type == P_BOOL || p->type == P_VEC3) fprintf(f, md ? "` | | %s |\n" : "  %s\n", p->doc);
-        else fprintf(f, md ? "` | %s%g, %g] | %s |\n" : "  %s%g, %g]  %s\n", p->strict_min ? "(" : "[", p->min, p->max, p->doc);
+        if (p->type == P_BOOL || p->type == P_VEC3)
+            fprintf(f, md ? "` | | %s |\n" : "  %s\n", p->doc);
+        else
+            fprintf(f, md ? "` | %s%g, %g] | %s |\n" : "  %s%g, %g]  %s\n", p->strict_min ? "(" : "[", p->min, p->max,
+                    p->doc);
     }
 }
 
@@ -638,10 +713,11 @@ void sd_scenario_echo_json(const sd_scenario *s, FILE *f)
 /* Keys that act only from the capture phase on (see scenario.h). dam.pipe_diameter and dam.on
  * are not among them: the bed roughness keeps the dam foot clear by the pipe diameter, and the
  * trap plane (x_dam + d/2) enters the time series from the start. */
-static const char *const capture_keys[] = {"dam.l_h",           "dam.l_v",           "dam.top_beam",
-                                           "dam.columns",       "dam.beams",         "phases.capture_limit",
-                                           "phases.quiet_time", "phases.ke_fraction", "water.probe",
-                                           "water.h_d_floating"};
+static const char *const capture_keys[] = {"dam.l_h",           "dam.l_v",
+                                           "dam.top_beam",      "dam.columns",
+                                           "dam.beams",         "phases.capture_limit",
+                                           "phases.quiet_time", "phases.ke_fraction",
+                                           "water.probe",       "water.h_d_floating"};
 
 int sd_scenario_is_capture_key(const char *key)
 {
@@ -670,13 +746,21 @@ uint64_t sd_scenario_branch_hash(const sd_scenario *s)
         if (sd_scenario_is_capture_key(p->key) || !strcmp(p->key, "solver.threads")) continue;
         h = fnv_bytes(h, p->key, strlen(p->key) + 1);
         switch (p->type) {
-        case P_DOUBLE: h = fnv_bytes(h, base + p->off, sizeof(double)); break;
-        case P_INT:
-            if (p->off == OFF(seed)) h = fnv_bytes(h, base + p->off, sizeof(long));
-            else h = fnv_bytes(h, base + p->off, sizeof(int));
+        case P_DOUBLE:
+            h = fnv_bytes(h, base + p->off, sizeof(double));
             break;
-        case P_BOOL: h = fnv_bytes(h, base + p->off, sizeof(int)); break;
-        case P_VEC3: h = fnv_bytes(h, base + p->off, sizeof(sd_vec3)); break;
+        case P_INT:
+            if (p->off == OFF(seed))
+                h = fnv_bytes(h, base + p->off, sizeof(long));
+            else
+                h = fnv_bytes(h, base + p->off, sizeof(int));
+            break;
+        case P_BOOL:
+            h = fnv_bytes(h, base + p->off, sizeof(int));
+            break;
+        case P_VEC3:
+            h = fnv_bytes(h, base + p->off, sizeof(sd_vec3));
+            break;
         case P_DLIST:
         case P_ILIST: {
             int n = *(const int *)(base + p->count_off);

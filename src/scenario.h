@@ -24,7 +24,7 @@ typedef struct {
 typedef struct {
     char path[1024];
     sd_world_def world;
-    double duration;   /* s */
+    double duration; /* s */
     long seed;
     /* explicit elements */
     sd_elem_def *elems;

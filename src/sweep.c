@@ -65,17 +65,22 @@ static int load_sweep(const char *path, sweep_def *d, FILE *err)
             const char *slash = strrchr(path, '/');
             if (v->value[0] != '/' && slash)
                 snprintf(d->base, sizeof d->base, "%.*s/%s", (int)(slash - path), path, v->value);
-            else snprintf(d->base, sizeof d->base, "%s", v->value);
-        } else if ((!strcmp(k, "runs") || !strcmp(k, "seed_base") || !strcmp(k, "parallel")) && v->kind == SD_Y_SCALAR) {
+            else
+                snprintf(d->base, sizeof d->base, "%s", v->value);
+        } else if ((!strcmp(k, "runs") || !strcmp(k, "seed_base") || !strcmp(k, "parallel")) &&
+                   v->kind == SD_Y_SCALAR) {
             char *end;
             long x = strtol(v->value, &end, 10);
             if (*end || x < 0 || (!strcmp(k, "runs") && x < 1)) {
                 fprintf(err, "%s:%d:%d: %s: expected a %s integer\n", path, v->line, v->col, k,
                         !strcmp(k, "runs") ? "positive" : "non-negative");
                 bad = 1;
-            } else if (!strcmp(k, "runs")) d->runs = (int)x;
-            else if (!strcmp(k, "seed_base")) d->seed_base = x;
-            else d->parallel = (int)x;
+            } else if (!strcmp(k, "runs"))
+                d->runs = (int)x;
+            else if (!strcmp(k, "seed_base"))
+                d->seed_base = x;
+            else
+                d->parallel = (int)x;
         } else if (!strcmp(k, "vary") && v->kind == SD_Y_MAP) {
             for (int j = 0; j < v->n && !bad; j++) {
                 const sd_ynode *vals = v->items[j];
@@ -247,15 +252,19 @@ static int child_run(const sweep_def *d, const run_item *r, const char *restart)
         snprintf(path, sizeof path, "%s/result.csv", r->dir);
         snprintf(tmp, sizeof tmp, "%s.tmp", path);
         FILE *f = fopen(tmp, "w");
-        if (!f) code = 1;
+        if (!f)
+            code = 1;
         else {
             fprintf(f, "%d,%d", r->case_id, r->seed);
-            for (int v = 0; v < d->n_vary; v++) fprintf(f, ",%s", d->vary_val[v][r->idx[v]]);
+            for (int v = 0; v < d->n_vary; v++)
+                fprintf(f, ",%s", d->vary_val[v][r->idx[v]]);
             fprintf(f, ",%.6f", res.p_v);
-            for (int k = 0; k < SD_MAX_CLASSES && k < s.n_classes; k++) fprintf(f, ",%.6f", res.p_v_class[k]);
-            for (int k = s.n_classes; k < 4; k++) fprintf(f, ",");
-            fprintf(f, ",%.6f,%.6e,%d,%.2f,%.4f,%.2f,%d,%016llx\n", res.p_v_logs, res.peak_dam_force, res.n_passed, wall,
-                    s.capture_limit, res.flow_wall, res.restarted, (unsigned long long)res.state_hash);
+            for (int k = 0; k < SD_MAX_CLASSES && k < s.n_classes; k++)
+                fprintf(f, ",%.6f", res.p_v_class[k]);
+            for (int k = s.n_classes; k < 4; k++)
+                fprintf(f, ",");
+            fprintf(f, ",%.6f,%.6e,%d,%.2f,%.4f,%.2f,%d,%016llx\n", res.p_v_logs, res.peak_dam_force, res.n_passed,
+                    wall, s.capture_limit, res.flow_wall, res.restarted, (unsigned long long)res.state_hash);
             if (fclose(f) || rename(tmp, path)) code = 1;
         }
     }
@@ -318,7 +327,8 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
     sweep_def d;
     if (load_sweep(sweep_file, &d, err)) return 2;
     int ncase = 1;
-    for (int v = 0; v < d.n_vary; v++) ncase *= d.n_val[v];
+    for (int v = 0; v < d.n_vary; v++)
+        ncase *= d.n_val[v];
     int total = ncase * d.runs;
     run_item *items = calloc((size_t)total, sizeof(*items));
     if (!items) return 1;
@@ -393,11 +403,13 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
         if (file_exists(p)) {
             items[i].state = ST_SKIPPED;
             skipped++;
-        } else if (items[i].group >= 0) groups[items[i].group].n_todo++;
+        } else if (items[i].group >= 0)
+            groups[items[i].group].n_todo++;
     }
     int reused = 0, to_compute = 0;
     for (int g = 0; g < ng; g++) {
-        if (groups[g].n_todo == 0) groups[g].state = ST_UNNEEDED;
+        if (groups[g].n_todo == 0)
+            groups[g].state = ST_UNNEEDED;
         else if (file_exists(groups[g].ckpt)) {
             groups[g].state = ST_READY;
             groups[g].reused = 1;
@@ -411,14 +423,20 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
         fprintf(log, "sweep %s (dry run, outputs would go to %s): %d cases x %d seeds = %d runs, %d already done\n",
                 sweep_file, outdir, ncase, d.runs, total, skipped);
         if (branching)
-            fprintf(log, "branching on %s: %d shared flows (packing + flow, once each), %d layouts each; %d to compute, %d checkpoints to reuse\n",
+            fprintf(log,
+                    "branching on %s: %d shared flows (packing + flow, once each), %d layouts each; %d to compute, %d "
+                    "checkpoints to reuse\n",
                     branch_keys, ng, layouts, to_compute, reused);
         else
             fprintf(log, "no branching (%s): every run packs and flows on its own\n",
-                    so->no_branch ? "--no-branch" : !flume ? "not a flume scenario" : "no capture-phase key varies");
+                    so->no_branch ? "--no-branch"
+                    : !flume      ? "not a flume scenario"
+                                  : "no capture-phase key varies");
         for (int g = 0; g < ng; g++) {
             fprintf(log, "branch %s: %s ->", groups[g].key,
-                    groups[g].state == ST_UNNEEDED ? "not needed" : groups[g].reused ? "reuse checkpoint" : "pack + flow");
+                    groups[g].state == ST_UNNEEDED ? "not needed"
+                    : groups[g].reused             ? "reuse checkpoint"
+                                                   : "pack + flow");
             for (int i = 0; i < total; i++)
                 if (items[i].group == g) fprintf(log, " %s", items[i].name);
             fputc('\n', log);
@@ -426,7 +444,8 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
         for (int i = 0; i < total; i++) {
             const run_item *r = &items[i];
             fprintf(log, "run %s:", r->name);
-            for (int v = 0; v < d.n_vary; v++) fprintf(log, " %s=%s", d.vary_key[v], d.vary_val[v][r->idx[v]]);
+            for (int v = 0; v < d.n_vary; v++)
+                fprintf(log, " %s=%s", d.vary_key[v], d.vary_val[v][r->idx[v]]);
             fprintf(log, " solver.seed=%d", r->seed);
             if (r->group >= 0) fprintf(log, " (branch %s)", groups[r->group].key);
             fprintf(log, "%s\n", r->state == ST_SKIPPED ? " [done]" : "");
@@ -482,7 +501,9 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
     fprintf(log, "sweep %s: %d cases x %d runs = %d runs, %d already done, %d in parallel\n", sweep_file, ncase, d.runs,
             total, skipped, parallel);
     if (branching)
-        fprintf(log, "sweep: branching on %s: %d groups of %d layouts share their packing and flow (%d to compute, %d checkpoints reused)\n",
+        fprintf(log,
+                "sweep: branching on %s: %d groups of %d layouts share their packing and flow (%d to compute, %d "
+                "checkpoints reused)\n",
                 branch_keys, ng, layouts, to_compute, reused);
     int interrupted = 0;
     while (1) {
@@ -493,7 +514,8 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
                 if (groups[g].state == ST_PENDING) gi = g;
             if (gi < 0)
                 for (int i = 0; i < total && ri < 0; i++)
-                    if (items[i].state == ST_PENDING && (items[i].group < 0 || groups[items[i].group].state == ST_READY))
+                    if (items[i].state == ST_PENDING &&
+                        (items[i].group < 0 || groups[items[i].group].state == ST_READY))
                         ri = i;
             if (gi < 0 && ri < 0) break;
             fflush(NULL);
@@ -513,7 +535,8 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
                 groups[gi].pid = pid;
                 groups[gi].t_start = sd_now();
                 flows_run++;
-                fprintf(log, "sweep: flow %s started (packing + flow for %d runs)\n", groups[gi].key, groups[gi].n_todo);
+                fprintf(log, "sweep: flow %s started (packing + flow for %d runs)\n", groups[gi].key,
+                        groups[gi].n_todo);
             } else {
                 items[ri].state = ST_RUNNING;
                 items[ri].pid = pid;
@@ -521,7 +544,8 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
                 if (items[ri].group >= 0)
                     fprintf(log, "sweep: run %s started (capture from branch %s)\n", items[ri].name,
                             groups[items[ri].group].key);
-                else fprintf(log, "sweep: run %s started\n", items[ri].name);
+                else
+                    fprintf(log, "sweep: run %s started\n", items[ri].name);
             }
             fflush(log);
         }
@@ -582,8 +606,7 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
         double el = sd_now() - t0;
         int remaining = total - skipped - done - failed;
         fprintf(log, "sweep: %d/%d done (%d skipped, %d failed), %d running, elapsed %.0f s, ETA %.0f s\n",
-                done + skipped, total, skipped, failed, running, el,
-                done > 0 ? el / done * remaining : 0.0);
+                done + skipped, total, skipped, failed, running, el, done > 0 ? el / done * remaining : 0.0);
         fflush(log);
         if (stop && *stop && !interrupted) {
             interrupted = 1;
@@ -601,9 +624,12 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
     FILE *f = fopen(tmp, "w");
     if (f) {
         fprintf(f, "case,seed");
-        for (int v = 0; v < d.n_vary; v++) fprintf(f, ",%s", d.vary_key[v]);
-        fprintf(f, ",p_v,p_v_class0,p_v_class1,p_v_class2,p_v_class3,p_v_logs,peak_dam_force_N,passed,wall_s,capture_limit_s,"
-                   "flow_wall_s,branched,state_hash\n");
+        for (int v = 0; v < d.n_vary; v++)
+            fprintf(f, ",%s", d.vary_key[v]);
+        fprintf(
+            f,
+            ",p_v,p_v_class0,p_v_class1,p_v_class2,p_v_class3,p_v_logs,peak_dam_force_N,passed,wall_s,capture_limit_s,"
+            "flow_wall_s,branched,state_hash\n");
         for (int i = 0; i < total; i++) {
             char rp[1300], line[2048], copy[2048];
             snprintf(rp, sizeof rp, "%s/result.csv", items[i].dir);
@@ -640,14 +666,17 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
     free(gflow);
     free(gdone);
     char cmd[4096];
-    snprintf(cmd, sizeof cmd, "/usr/bin/python3 \"%s/scripts/plot_sweep.py\" \"%s\" > \"%s/plot.log\" 2>&1", SD_SOURCE_DIR,
-             outdir, outdir);
+    snprintf(cmd, sizeof cmd, "/usr/bin/python3 \"%s/scripts/plot_sweep.py\" \"%s\" > \"%s/plot.log\" 2>&1",
+             SD_SOURCE_DIR, outdir, outdir);
     if (!interrupted && system(cmd) != 0) fprintf(log, "note: figures not drawn (see %s/plot.log)\n", outdir);
-    fprintf(log, "sweep: this invocation started %d flow(s) and %d run(s) in %.1f s; %d run(s) were already done, %d flow checkpoint(s) reused\n",
+    fprintf(log,
+            "sweep: this invocation started %d flow(s) and %d run(s) in %.1f s; %d run(s) were already done, %d flow "
+            "checkpoint(s) reused\n",
             flows_run, runs_run, sd_now() - t0, skipped, reused);
     if (branching && cost_straight > 0)
-        fprintf(log, "sweep: branching saved %.1f s of %.1f s of run time (%.0f %%): %d runs continued from %d shared flows"
-                     " (process seconds, summed over the finished runs; a straight run packs and flows itself)\n",
+        fprintf(log,
+                "sweep: branching saved %.1f s of %.1f s of run time (%.0f %%): %d runs continued from %d shared flows"
+                " (process seconds, summed over the finished runs; a straight run packs and flows itself)\n",
                 saved, cost_straight, cost_straight > 0 ? 100.0 * saved / cost_straight : 0.0, n_branched, shared);
     free(groups);
     free(items);

@@ -9,11 +9,12 @@ sd_status sd_walls_reserve(sd_walls *w, int cap)
 {
     if (cap <= w->cap) return SD_OK;
     int nc = w->cap > 0 ? w->cap : 64;
-    while (nc < cap) nc *= 2;
+    while (nc < cap)
+        nc *= 2;
     void *p;
-#define SD_GROW(field)                                              \
-    p = realloc(w->field, (size_t)nc * sizeof(*w->field));         \
-    if (!p) return SD_ERR_NOMEM;                                   \
+#define SD_GROW(field)                                                                                                 \
+    p = realloc(w->field, (size_t)nc * sizeof(*w->field));                                                             \
+    if (!p) return SD_ERR_NOMEM;                                                                                       \
     w->field = p;
     SD_GROW(tri)
     SD_GROW(group)
@@ -129,13 +130,17 @@ sd_status sd_walls_weld(sd_walls *w)
         return SD_ERR_NOMEM;
     }
     w->edge_flat = flat;
-    for (int e = 0; e < w->n_edges; e++) flat[e] = 0;
+    for (int e = 0; e < w->n_edges; e++)
+        flat[e] = 0;
     for (int t = 0; t < w->n; t++)
         for (int k = 0; k < 3; k++) {
             int e = w->edge_id[t][k];
-            if (cnt[e] == 0) first[e] = t;
-            else if (cnt[e] == 1) flat[e] = fabs(v3_dot(w->tri[first[e]].n, w->tri[t].n)) > 1.0 - 1e-9;
-            else flat[e] = 0;
+            if (cnt[e] == 0)
+                first[e] = t;
+            else if (cnt[e] == 1)
+                flat[e] = fabs(v3_dot(w->tri[first[e]].n, w->tri[t].n)) > 1.0 - 1e-9;
+            else
+                flat[e] = 0;
             if (cnt[e] < 3) cnt[e]++;
         }
     free(first);

@@ -280,12 +280,13 @@ sd_status sd_world_step(sd_world *w)
         if ((st = sd_neighbor_rebuild(w))) return st;
     }
     double t1 = sd_now();
-    if ((st = sd_contact_compute(w))) return st;
+    if ((st = sd_world_moving_update(w))) return st;
+    int integrated;
+    if ((st = sd_contact_compute(w, &integrated))) return st;
     double t2 = sd_now();
     sd_contact_gather(w);
     double t3 = sd_now();
-    if ((st = sd_world_moving_update(w))) return st;
-    sd_integrate(w);
+    if (!integrated) sd_integrate(w);
     double t4 = sd_now();
     w->step++;
     w->time = (double)w->step * w->def.dt;

@@ -116,12 +116,10 @@ typedef struct {
     int32_t *list;
     int start[SD_MAX_OWNERS + 1];
     int list_cap;
-    /* balance by measured time (any split gives the same bits): the splits as fractions of
-     * the body-body pairs (fo) and of the body-triangle pairs (ft), and each owner's time in
-     * each part since they were set */
-    double fo[SD_MAX_OWNERS + 1], ft[SD_MAX_OWNERS + 1];
-    double tau_o[SD_MAX_OWNERS], tau_t[SD_MAX_OWNERS];
-    long bt_k[SD_MAX_OWNERS + 1]; /* body-triangle pairs of owner t: bodies from bt_split(bt_k[t]) */
+    /* balance by measured time (any split gives the same bits): the split as fractions of
+     * the body-body pairs, and each owner's time since it was set */
+    double fo[SD_MAX_OWNERS + 1];
+    double tau[SD_MAX_OWNERS];
 } sd_owned;
 
 struct sd_world {
@@ -195,8 +193,9 @@ typedef struct {
 sd_law sd_law_make(const sd_contact_def *d);
 /* sd_contact_law (contact_law.h, inline in the contact loop): force on A from one contact. */
 
-/* contact.c */
-sd_status sd_contact_compute(sd_world *w);
+/* contact.c: the forces of one step. With several threads and integrated != NULL, each thread
+ * also moves its own bodies (w->mov must be current) and *integrated is set to 1. */
+sd_status sd_contact_compute(sd_world *w, int *integrated);
 void sd_contact_gather(sd_world *w);
 
 /* The bed roughness (fixed spheres, never made free): nobody reads its load, so nothing is
@@ -238,6 +237,9 @@ static inline sd_cyl sd_body_cyl(const sd_bodies *b, int i)
 
 /* integrate.c */
 void sd_integrate(sd_world *w);
+/* Moves the bodies mov[k0 .. k1) (serial); returns 1 when one of them moved more than half
+ * the margin since the last rebuild. */
+int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1);
 
 /* world.c: bring w->mov up to date (O(n) when the store changed since it was made). */
 sd_status sd_world_moving_update(sd_world *w);

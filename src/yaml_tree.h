@@ -7,10 +7,10 @@ typedef enum { SD_Y_SCALAR, SD_Y_MAP, SD_Y_SEQ } sd_ynode_kind;
 
 typedef struct sd_ynode {
     sd_ynode_kind kind;
-    int line, col;      /* 1-based */
-    char *value;        /* scalar text */
-    int n;              /* children (seq items, or map values) */
-    char **keys;        /* map keys */
+    int line, col; /* 1-based */
+    char *value;   /* scalar text */
+    int n;         /* children (seq items, or map values) */
+    char **keys;   /* map keys */
     int *key_line, *key_col;
     struct sd_ynode **items;
 } sd_ynode;
