@@ -504,17 +504,55 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
     return count;
 }
 
+/* The near list (w->near): the body-body pairs worth testing each step. A sphere pair whose
+ * gap exceeds the near skin s = SD_NEAR_SKIN margin cannot touch before the moving spheres
+ * have drifted by s/2 between them (near_drift, summed from each step's largest |v| dt), so it
+ * is left out until then: its force is exactly zero, its spring is cleared here as the pass
+ * would clear it, and every body sums the same pairs in the same order (same bits). In a dense
+ * bed the margin's candidates are twice the contacts; most of the rest are far beyond s. */
+static sd_status near_update(sd_world *w)
+{
+    const double skin = SD_NEAR_SKIN * w->def.margin;
+    const int nbb = w->bb.n;
+    if (w->near_stamp == w->timers.rebuilds && w->near_nbb == nbb && w->near && !w->rebuild_every_step &&
+        2.0 * w->near_drift < 0.999 * skin)
+        return SD_OK;
+    if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    const sd_pair *pairs = w->bb.p;
+    const sd_vec3 *pos = w->b.pos;
+    const double *rad = w->b.radius;
+    sd_hist *hist = w->bb.hist;
+    int m = 0;
+    for (int k = 0; k < nbb; k++) {
+        const sd_pair *p = &pairs[k];
+        int keep = 1;
+        if (p->kind == SD_PAIR_SS) {
+            const double reach = rad[p->a] + rad[p->b] + skin;
+            keep = v3_norm2(v3_sub(pos[p->a], pos[p->b])) <= reach * reach;
+            if (!keep) hist[p->off].feature = -1;
+        }
+        w->near[m] = k;
+        m += keep;
+    }
+    w->near_n = m;
+    w->near_nbb = nbb;
+    w->near_stamp = w->timers.rebuilds;
+    w->near_version++;
+    w->near_drift = 0.0;
+    return SD_OK;
+}
+
 static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
 {
     sd_bodies *b = &w->b;
     long count = 0;
     for (int i = 0; i < b->n; i++)
         if (!sd_body_is_bed(b, i)) b->force[i] = b->torque[i] = v3(0, 0, 0);
-    const int nbb = w->bb.n;
-    for (int k0 = 0; k0 < nbb; k0 += SS_CHUNK) {
-        const int n = nbb - k0 < SS_CHUNK ? nbb - k0 : SS_CHUNK;
+    const int nn = w->near_n;
+    for (int k0 = 0; k0 < nn; k0 += SS_CHUNK) {
+        const int n = nn - k0 < SS_CHUNK ? nn - k0 : SS_CHUNK;
         for (int i = 0; i < n; i++)
-            x->ks[i] = k0 + i;
+            x->ks[i] = w->near[k0 + i];
         bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q);
         /* the pairs in contact, listed without a branch on each */
         int na = 0;
@@ -525,8 +563,9 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
         }
         for (int j = 0; j < na; j++) {
             const int i = x->act[j];
-            add_pair(b, w->bb.p[k0 + i].a, 0, &x->out[i]);
-            add_pair(b, w->bb.p[k0 + i].b, 1, &x->out[i]);
+            const sd_pair *p = &w->bb.p[x->ks[i]];
+            add_pair(b, p->a, 0, &x->out[i]);
+            add_pair(b, p->b, 1, &x->out[i]);
         }
     }
     return count;
@@ -584,9 +623,10 @@ static void rebalance(double *f, double *tau, int T)
 #ifdef _OPENMP
 static sd_status owned_update(sd_world *w, int T)
 {
-    const int n = w->b.n, nbb = w->bb.n;
+    const int n = w->b.n, nbb = w->near_n;
+    const int32_t *near = w->near;
     sd_owned *o = w->owned;
-    if (o && o->stamp == w->timers.rebuilds && o->T == T && o->n == n && o->nbb == nbb && o->pairs == w->bb.p)
+    if (o && o->stamp == w->near_version && o->T == T && o->n == n && o->nbb == nbb && o->pairs == w->bb.p)
         return SD_OK;
     if (!o) {
         o = calloc(1, sizeof *o);
@@ -609,7 +649,7 @@ static sd_status owned_update(sd_world *w, int T)
         long k = (long)(nbb * o->fo[t]);
         if (k > nbb - 1) k = nbb - 1;
         if (k < 0) k = 0;
-        const sd_pair *p = &w->bb.p[k];
+        const sd_pair *p = &w->bb.p[nbb > 0 ? near[k] : 0];
         o->B[t] = nbb > 0 ? (p->a < p->b ? p->a : p->b) : 0;
         if (o->B[t] < o->B[t - 1]) o->B[t] = o->B[t - 1];
     }
@@ -617,8 +657,8 @@ static sd_status owned_update(sd_world *w, int T)
      * in ascending pair order */
     int cnt[SD_MAX_OWNERS] = {0};
     int ncross = 0;
-    for (int k = 0; k < nbb; k++) {
-        const sd_pair *p = &w->bb.p[k];
+    for (int j = 0; j < nbb; j++) {
+        const sd_pair *p = &w->bb.p[near[j]];
         const int ta = owner_of(p->a, o->B, T), tb = owner_of(p->b, o->B, T);
         cnt[ta]++;
         if (ta != tb) {
@@ -636,7 +676,8 @@ static sd_status owned_update(sd_world *w, int T)
     for (int t = 0; t < T; t++)
         fill[t] = o->start[t];
     o->ncross = 0;
-    for (int k = 0; k < nbb; k++) {
+    for (int j = 0; j < nbb; j++) {
+        const int k = near[j];
         const sd_pair *p = &w->bb.p[k];
         const int ta = owner_of(p->a, o->B, T), tb = owner_of(p->b, o->B, T);
         if (ta == tb) {
@@ -647,7 +688,7 @@ static sd_status owned_update(sd_world *w, int T)
         o->list[fill[ta]++] = ~k;
         o->list[fill[tb]++] = ~k;
     }
-    o->stamp = w->timers.rebuilds;
+    o->stamp = w->near_version;
     o->T = T;
     o->n = n;
     o->nbb = nbb;
@@ -672,14 +713,15 @@ static int mov_lower(const int32_t *mov, int n, int i)
 /* After pass 1 and its barrier, owner t reads and writes the bodies of its range only (its
  * own pairs, the stored cross pairs, its bodies' wall pairs): so it can also move its bodies
  * at once, while they are in its cache, with no barrier. */
-static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scratch, int *moved_out)
+static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scratch, int *moved_out, double *v2max)
 {
     sd_bodies *b = &w->b;
     sd_owned *o = w->owned;
     const int nc = o->ncross;
     long count = 0;
     int moved = 0;
-#pragma omp parallel num_threads(T) reduction(+ : count) reduction(| : moved)
+    double v2 = 0.0;
+#pragma omp parallel num_threads(T) reduction(+ : count) reduction(| : moved) reduction(max : v2)
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
         bb_scratch *x = &scratch[tid];
@@ -735,11 +777,13 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
             /* its bodies' wall pairs, then its moving bodies */
             count += bt_range(w, law, i0, i1);
             if (moved_out)
-                moved |= sd_integrate_list(w, w->mov, mov_lower(w->mov, w->mov_n, i0), mov_lower(w->mov, w->mov_n, i1));
+                moved |=
+                    sd_integrate_list(w, w->mov, mov_lower(w->mov, w->mov_n, i0), mov_lower(w->mov, w->mov_n, i1), &v2);
         }
         if (nthr == T) o->tau[tid] += omp_get_wtime() - t0;
     }
     if (moved_out) *moved_out = moved;
+    *v2max = v2;
     return count;
 }
 #endif
@@ -762,6 +806,8 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
     long count = 0;
     const int T = bb_owners(w);
     if (integrated) *integrated = 0;
+    sd_status nst = near_update(w);
+    if (nst) return nst;
     if (w->bb_scratch_n < T) {
         free(w->bb_scratch);
         w->bb_scratch_n = 0;
@@ -774,9 +820,13 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         sd_status st = owned_update(w, T);
         if (st) return st;
         int moved = 0;
-        count = bb_owned_pass(w, &law, T, w->bb_scratch, integrated ? &moved : NULL);
+        double v2 = 0.0;
+        count = bb_owned_pass(w, &law, T, w->bb_scratch, integrated ? &moved : NULL, &v2);
         if (moved) w->need_rebuild = 1;
-        if (integrated) *integrated = 1;
+        if (integrated) {
+            *integrated = 1;
+            w->near_drift += sqrt(v2) * w->def.dt;
+        }
     } else
 #endif
     {

@@ -10,13 +10,14 @@
 #include <omp.h>
 #endif
 
-int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1)
+int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max)
 {
     sd_bodies *b = &w->b;
     const double dt = w->def.dt;
     const sd_vec3 g = w->def.gravity;
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
+    double vm = *v2max;
     for (int k = k0; k < k1; k++) {
         const int i = mov[k];
         sd_gather_body(w, i);
@@ -28,6 +29,8 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1)
         if (b->shape[i] == SD_SHAPE_SPHERE) {
             b->omega[i] = v3_madd(b->omega[i], b->torque[i], dt * b->inv_i_ax[i]);
             disp = v3_norm2(v3_sub(b->pos[i], b->pos_ref[i]));
+            const double v2 = v3_norm2(b->vel[i]);
+            vm = v2 > vm ? v2 : vm;
         } else {
             sd_vec3 L = v3_madd(b->angmom[i], b->torque[i], dt);
             b->angmom[i] = L;
@@ -47,6 +50,7 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1)
         }
         moved |= disp > lim2;
     }
+    *v2max = vm;
     return moved;
 }
 
@@ -56,14 +60,16 @@ void sd_integrate(sd_world *w)
 {
     const int nm = w->mov_n;
     int moved = 0;
+    double v2 = 0.0;
 #ifdef _OPENMP
-#pragma omp parallel reduction(| : moved) if (nm > w->def.parallel_min)
+#pragma omp parallel reduction(| : moved) reduction(max : v2) if (nm > w->def.parallel_min)
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
-        moved |= sd_integrate_list(w, w->mov, (int)((long)nm * tid / nthr), (int)((long)nm * (tid + 1) / nthr));
+        moved |= sd_integrate_list(w, w->mov, (int)((long)nm * tid / nthr), (int)((long)nm * (tid + 1) / nthr), &v2);
     }
 #else
-    moved = sd_integrate_list(w, w->mov, 0, nm);
+    moved = sd_integrate_list(w, w->mov, 0, nm, &v2);
 #endif
     if (moved) w->need_rebuild = 1;
+    w->near_drift += sqrt(v2) * w->def.dt;
 }

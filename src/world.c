@@ -60,6 +60,7 @@ sd_status sd_world_create(const sd_world_def *def, sd_world **out)
     w->def = *def;
     w->need_rebuild = 1;
     w->mov_stamp = -1;
+    w->near_stamp = -1;
 #ifdef _OPENMP
     if (def->threads > 0) omp_set_num_threads(def->threads);
 #endif
@@ -90,6 +91,7 @@ void sd_world_destroy(sd_world *w)
     free(w->range);
     free(w->trange);
     free(w->mov);
+    free(w->near);
     free(w);
 }
 

@@ -161,7 +161,18 @@ struct sd_world {
     int32_t *mov;
     int mov_n, mov_cap, mov_bn;
     long mov_stamp;
+    /* derived, never saved: the body-body pairs that can touch before the spheres have
+     * drifted by half the near skin (contact.c: every non-sphere pair, and the sphere pairs
+     * with a gap below SD_NEAR_SKIN margin), ascending; near_drift bounds how far any moving
+     * sphere has gone since the list was made (the largest |v| dt of each step, summed) */
+    int32_t *near;
+    int near_n, near_cap, near_nbb;
+    long near_stamp, near_version;
+    double near_drift;
 };
+
+/* the near skin as a fraction of the margin */
+#define SD_NEAR_SKIN 0.1
 
 /* bodies.c */
 sd_status sd_bodies_reserve(sd_bodies *b, int cap);
@@ -238,8 +249,8 @@ static inline sd_cyl sd_body_cyl(const sd_bodies *b, int i)
 /* integrate.c */
 void sd_integrate(sd_world *w);
 /* Moves the bodies mov[k0 .. k1) (serial); returns 1 when one of them moved more than half
- * the margin since the last rebuild. */
-int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1);
+ * the margin since the last rebuild. *v2max: raised to the largest |v|² of a sphere moved. */
+int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max);
 
 /* world.c: bring w->mov up to date (O(n) when the store changed since it was made). */
 sd_status sd_world_moving_update(sd_world *w);

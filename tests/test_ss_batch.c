@@ -135,6 +135,7 @@ static void run(int threads, cases *c, long *bad)
                 w->b.pos[i] = v3_add(w->b.pos[i], v3(sd_rng_range(&rng, -1, 1) * move[e] / 1.8,
                                                      sd_rng_range(&rng, -1, 1) * move[e] / 1.8,
                                                      sd_rng_range(&rng, -1, 1) * move[e] / 1.8));
+        w->near_stamp = -1; /* the bodies were moved by hand: the near list is stale */
         memcpy(old, w->bb.hist, (size_t)nh * sizeof *old);
         reference(w, old, F, T, hist, c);
         CHECK(sd_contact_compute(w, NULL) == SD_OK);
