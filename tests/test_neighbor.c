@@ -109,7 +109,8 @@ static void add_tris(sd_world *w, double L, int random_tris)
     for (int k = 0; k < random_tris; k++) {
         sd_vec3 c = v3(L * urand(), L * urand(), L * urand());
         sd_vec3 v[3];
-        for (int q = 0; q < 3; q++) v[q] = v3_add(c, v3(0.04 * (urand() - 0.5), 0.04 * (urand() - 0.5), 0.04 * (urand() - 0.5)));
+        for (int q = 0; q < 3; q++)
+            v[q] = v3_add(c, v3(0.04 * (urand() - 0.5), 0.04 * (urand() - 0.5), 0.04 * (urand() - 0.5)));
         CHECK(sd_world_add_triangle(w, v[0], v[1], v[2], 1 + k % 2) >= 0);
     }
 }
@@ -126,9 +127,11 @@ static void test_static(int dense)
             for (int k = 0; k < side; k++) {
                 sd_sphere_def s = sd_sphere_def_default();
                 s.radius = dense ? 0.0045 + 0.002 * urand() : 0.0025 + 0.0035 * urand();
-                if (dense) s.pos = v3(0.0105 * (i + 0.5 + 0.2 * (urand() - 0.5)), 0.0105 * (j + 0.5 + 0.2 * (urand() - 0.5)),
-                                      0.0105 * (k + 0.5 + 0.2 * (urand() - 0.5)));
-                else s.pos = v3(L * urand(), L * urand(), L * urand());
+                if (dense)
+                    s.pos = v3(0.0105 * (i + 0.5 + 0.2 * (urand() - 0.5)), 0.0105 * (j + 0.5 + 0.2 * (urand() - 0.5)),
+                               0.0105 * (k + 0.5 + 0.2 * (urand() - 0.5)));
+                else
+                    s.pos = v3(L * urand(), L * urand(), L * urand());
                 s.fixed = urand() < 0.1;
                 CHECK(sd_world_add_sphere(w, &s) >= 0);
             }
@@ -140,7 +143,8 @@ static void test_static(int dense)
     CHECK(sd_neighbor_rebuild(w) == SD_OK);
     long ov = check_candidates(w, 1, dense ? "dense, after rebuild" : "loose, after rebuild");
     if (dense) CHECK(ov > 500);
-    for (int k = 0; k < w->bt.n; k++) CHECK(w->w.active[w->bt.p[k].b]);
+    for (int k = 0; k < w->bt.n; k++)
+        CHECK(w->w.active[w->bt.p[k].b]);
     /* move every moving body by less than margin/2 in a random direction, no rebuild */
     double step = 0.49 * w->def.margin;
     for (int i = 0; i < w->b.n; i++) {
@@ -168,11 +172,26 @@ static void test_dynamic(void)
         s.vel = v3(0.5 * (urand() - 0.5), 0.5 * (urand() - 0.5), -0.5 - 1.5 * urand());
         CHECK(sd_world_add_sphere(w, &s) >= 0);
     }
-    long missing_steps = 0, checked = 0, max_contacts = 0;
-    long rebuilds0 = sd_world_get_timers(w).rebuilds;
+    long missing_steps = 0, checked = 0, max_contacts = 0, near_missing = 0, near_checked = 0, near_short = 0;
+    long rebuilds0 = sd_world_get_timers(w).rebuilds, near0 = w->near_version;
     for (int st = 0; st < 3000; st++) {
         CHECK(sd_world_step(w) == SD_OK);
         if (sd_world_contact_count(w) > max_contacts) max_contacts = sd_world_contact_count(w);
+        /* the near list (contact.c), when the next step will use it as it is: every touching
+         * sphere pair of the candidate list must be in it */
+        if (!sd_neighbor_needs_rebuild(w) && w->near_stamp == w->timers.rebuilds &&
+            2.0 * w->near_drift < 0.999 * SD_NEAR_SKIN * w->def.margin) {
+            near_checked++;
+            near_short += w->near_n < w->bb.n;
+            int j = 0;
+            for (int k = 0; k < w->bb.n; k++) {
+                while (j < w->near_n && w->near[j] < k)
+                    j++;
+                if (j < w->near_n && w->near[j] == k) continue;
+                const sd_pair *p = &w->bb.p[k];
+                if (v3_dist(w->b.pos[p->a], w->b.pos[p->b]) < w->b.radius[p->a] + w->b.radius[p->b]) near_missing++;
+            }
+        }
         if (sd_neighbor_needs_rebuild(w) || st % 10) continue;
         checked++;
         const sd_bodies *b = &w->b;
@@ -189,7 +208,8 @@ static void test_dynamic(void)
             for (int t = 0; t < w->w.n; t++) {
                 if (tri_dist(&w->w.tri[t], b->pos[i]) >= b->radius[i]) continue;
                 int found = 0;
-                for (int k = w->csr.bt_start[i]; k < w->csr.bt_start[i + 1] && !found; k++) found = w->bt.p[k].b == t;
+                for (int k = w->csr.bt_start[i]; k < w->csr.bt_start[i + 1] && !found; k++)
+                    found = w->bt.p[k].b == t;
                 if (!found) missing_steps++;
             }
     }
@@ -197,6 +217,12 @@ static void test_dynamic(void)
     printf("dynamic: 3000 steps, %ld rebuilds (displacement-triggered), %ld checks, missing contacts %ld, "
            "max contacts %ld\n",
            rebuilds, checked, missing_steps, max_contacts);
+    printf("near list: %ld versions, checked at %ld steps (%ld of them shorter than the candidate list), touching "
+           "pairs missing %ld\n",
+           w->near_version - near0, near_checked, near_short, near_missing);
+    CHECK(near_missing == 0);
+    CHECK(near_checked > 1000 && near_short > 1000);
+    CHECK(w->near_version - near0 > rebuilds + 10); /* rebuilt on drift, not only with the candidates */
     CHECK(missing_steps == 0);
     CHECK(rebuilds > 1 && rebuilds < 3000);
     CHECK(max_contacts > 20);
@@ -307,8 +333,8 @@ static void test_history(void)
         CHECK_VEC_NEAR(A.vel, B.vel, 1e-10);
         CHECK_VEC_NEAR(A.omega, B.omega, 1e-8);
     }
-    printf("rebuild every step vs by margin over 0.2 s: max position difference %.3g m (rebuilds %ld vs %ld)\n",
-           dmax, sd_world_get_timers(a).rebuilds, sd_world_get_timers(b).rebuilds);
+    printf("rebuild every step vs by margin over 0.2 s: max position difference %.3g m (rebuilds %ld vs %ld)\n", dmax,
+           sd_world_get_timers(a).rebuilds, sd_world_get_timers(b).rebuilds);
     sd_world_destroy(a);
     sd_world_destroy(b);
 }
