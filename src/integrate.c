@@ -10,14 +10,14 @@
 #include <omp.h>
 #endif
 
-int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max)
+int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *xfront)
 {
     sd_bodies *b = &w->b;
     const double dt = w->def.dt;
     const sd_vec3 g = w->def.gravity;
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
-    double vm = *v2max;
+    double vm = *v2max, xf = *xfront;
     for (int k = k0; k < k1; k++) {
         const int i = mov[k];
         sd_gather_body(w, i);
@@ -31,6 +31,8 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
             disp = v3_norm2(v3_sub(b->pos[i], b->pos_ref[i]));
             const double v2 = v3_norm2(b->vel[i]);
             vm = v2 > vm ? v2 : vm;
+            const double x = b->pos[i].x + b->radius[i];
+            xf = x > xf ? x : xf;
         } else {
             sd_vec3 L = v3_madd(b->angmom[i], b->torque[i], dt);
             b->angmom[i] = L;
@@ -47,10 +49,13 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
             double d =
                 sqrt(v3_norm2(v3_sub(b->pos[i], b->pos_ref[i]))) + b->hl[i] * sqrt(v3_norm2(v3_sub(a, b->axis_ref[i])));
             disp = d * d;
+            const double x = b->pos[i].x + sd_body_x_extent(b, i);
+            xf = x > xf ? x : xf;
         }
         moved |= disp > lim2;
     }
     *v2max = vm;
+    *xfront = xf;
     return moved;
 }
 
@@ -60,16 +65,17 @@ void sd_integrate(sd_world *w)
 {
     const int nm = w->mov_n;
     int moved = 0;
-    double v2 = 0.0;
+    double v2 = 0.0, xf = -INFINITY;
 #ifdef _OPENMP
-#pragma omp parallel reduction(| : moved) reduction(max : v2) if (nm > w->def.parallel_min)
+#pragma omp parallel reduction(| : moved) reduction(max : v2, xf) if (nm > w->def.parallel_min)
     {
-        const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
-        moved |= sd_integrate_list(w, w->mov, (int)((long)nm * tid / nthr), (int)((long)nm * (tid + 1) / nthr), &v2);
+        int k0, k1;
+        sd_mov_share(w, omp_get_thread_num(), omp_get_num_threads(), &k0, &k1);
+        moved |= sd_integrate_list(w, w->mov, k0, k1, &v2, &xf);
     }
 #else
-    moved = sd_integrate_list(w, w->mov, 0, nm, &v2);
+    moved = sd_integrate_list(w, w->mov, 0, nm, &v2, &xf);
 #endif
     if (moved) w->need_rebuild = 1;
-    w->near_drift += sqrt(v2) * w->def.dt;
+    sd_world_after_moves(w, v2, xf);
 }

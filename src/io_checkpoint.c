@@ -19,7 +19,7 @@
  * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
-_Static_assert(sizeof(struct sd_world) == 944, "struct sd_world changed: update io_checkpoint.c");
+_Static_assert(sizeof(struct sd_world) == 976, "struct sd_world changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_world_def) == 104, "sd_world_def changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_walls) == 88, "sd_walls changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_pairlist) == 56, "sd_pairlist changed: update io_checkpoint.c");
@@ -311,6 +311,7 @@ static void sync_dir(const char *path)
 sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *extra, size_t extra_len)
 {
     if (!path || !*path || !w || (extra_len > 0 && !extra)) return SD_ERR_ARG;
+    sd_contact_gather((sd_world *)w); /* the wall loads are a cache, summed when asked for */
     size_t plen = strlen(path);
     char *tmp = malloc(plen + sizeof(".tmp.XXXXXX"));
     if (!tmp) return SD_ERR_NOMEM;

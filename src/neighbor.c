@@ -192,6 +192,7 @@ static uint64_t key_of(const sd_world *w, const sd_pair *p)
 sd_status sd_neighbor_collect_history(sd_world *w)
 {
     if (w->keys_collected) return SD_OK;
+    sd_contact_gather(w); /* the wall loads of the last step, before its pairs go */
     int count = 0;
     const sd_pairlist *lists[2] = {&w->bb, &w->bt};
     for (int l = 0; l < 2; l++)
@@ -470,12 +471,15 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
                     if (x != (ri[0] > rj[0] ? ri[0] : rj[0]) || y != (ri[1] > rj[1] ? ri[1] : rj[1]) ||
                         z != (ri[2] > rj[2] ? ri[2] : rj[2]))
                         continue;
-                    sd_vec3 li, hi_, lj, hj;
-                    body_box(b, i, hm, &li, &hi_);
-                    body_box(b, j, hm, &lj, &hj);
-                    if (li.x > hj.x || lj.x > hi_.x || li.y > hj.y || lj.y > hi_.y || li.z > hj.z || lj.z > hi_.z)
-                        continue;
-                    if (b->shape[i] != SD_SHAPE_SPHERE || b->shape[j] != SD_SHAPE_SPHERE) {
+                    const int spheres = b->shape[i] == SD_SHAPE_SPHERE && b->shape[j] == SD_SHAPE_SPHERE;
+                    if (!spheres) {
+                        /* (two spheres within reach have overlapping boxes: the distance test
+                         * above is the box test and more) */
+                        sd_vec3 li, hi_, lj, hj;
+                        body_box(b, i, hm, &li, &hi_);
+                        body_box(b, j, hm, &lj, &hj);
+                        if (li.x > hj.x || lj.x > hi_.x || li.y > hj.y || lj.y > hi_.y || li.z > hj.z || lj.z > hi_.z)
+                            continue;
                         /* capsule test: a cylinder lies within radius r of its axis segment */
                         if (seg_gap(b, i, j) > b->radius[i] + b->radius[j] + w->def.margin) continue;
                     }

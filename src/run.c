@@ -100,11 +100,15 @@ static double trap_ratio(const run_ctx *c, double *per_class, double *logs_ratio
     return tot > 0 ? up / tot : 0.0;
 }
 
-static void apply_fluid(run_ctx *c)
+/* The fluid forces of the phase on every moving body, for the next step. Each thread takes
+ * the bodies it moves in the step (sd_mov_share: their data stay in its cache). */
+static sd_status apply_fluid(run_ctx *c)
 {
     sd_bodies *b = &c->w->b;
     const sd_scenario *s = c->s;
-    if (!s->water_on || c->phase == PH_PACK || c->phase == PH_RUN) return;
+    if (!s->water_on || c->phase == PH_PACK || c->phase == PH_RUN) return SD_OK;
+    sd_status st = sd_world_moving_update(c->w);
+    if (st) return st;
     sd_fluid_params fp = sd_fluid_params_default(s->slope_deg * M_PI / 180.0);
     fp.U = s->water_u;
     fp.h = s->water_h;
@@ -114,26 +118,28 @@ static void apply_fluid(run_ctx *c)
     const double xd = s->x_dam;
     const int capture = c->phase == PH_CAPTURE;
     const double h_d = c->h_d;
-    /* the moving bodies, split evenly (a split of the whole store gives one thread the bed);
-     * on a failed allocation, every body */
-    const int all = sd_world_moving_update(c->w) != SD_OK;
-    const int n = all ? b->n : c->w->mov_n;
-    const int32_t *mov = c->w->mov;
-#pragma omp parallel for schedule(static) if (n > c->w->def.parallel_min)
-    for (int k = 0; k < n; k++) {
-        const int i = all ? k : mov[k];
-        if (b->fixed[i]) continue;
-        sd_fluid_element e;
-        e.shape = b->shape[i];
-        e.pos = b->pos[i];
-        e.vel = b->vel[i];
-        e.axis = b->axis[i];
-        e.radius = b->radius[i];
-        e.length = 2.0 * b->hl[i];
-        /* the capture profile applies upstream of the dam; passed elements keep the flow one */
-        sd_fluid_phase ph = (capture && b->pos[i].x < xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
-        b->ext_force[i] = sd_fluid_force_total(&fp, ph, h_d, &e);
+    const sd_world *w = c->w;
+#pragma omp parallel if (w->mov_n > w->def.parallel_min)
+    {
+        int k0 = 0, k1 = w->mov_n;
+#ifdef _OPENMP
+        sd_mov_share(w, omp_get_thread_num(), omp_get_num_threads(), &k0, &k1);
+#endif
+        for (int k = k0; k < k1; k++) {
+            const int i = w->mov[k];
+            sd_fluid_element e;
+            e.shape = b->shape[i];
+            e.pos = b->pos[i];
+            e.vel = b->vel[i];
+            e.axis = b->axis[i];
+            e.radius = b->radius[i];
+            e.length = 2.0 * b->hl[i];
+            /* the capture profile applies upstream of the dam; passed elements keep the flow one */
+            sd_fluid_phase ph = (capture && b->pos[i].x < xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
+            b->ext_force[i] = sd_fluid_force_total(&fp, ph, h_d, &e);
+        }
     }
+    return SD_OK;
 }
 
 double sd_run_capture_depth(const sd_scenario *s, const sd_world *w)
@@ -167,22 +173,9 @@ static void remove_passed(run_ctx *c)
 
 /* Downstream extent of an element beyond its centre along x: r for a sphere, and for a log
  * the farthest point of the cylinder, hl |a_x| + r sqrt(1 - a_x^2). */
-static double x_extent(const sd_bodies *b, int i)
-{
-    if (b->shape[i] == SD_SHAPE_SPHERE) return b->radius[i];
-    double ax = b->axis[i].x;
-    return b->hl[i] * fabs(ax) + b->radius[i] * sqrt(fmax(0.0, 1.0 - ax * ax));
-}
 
-/* The front: the farthest downstream surface of any moving element. */
-static double front_x(const run_ctx *c)
-{
-    const sd_bodies *b = &c->w->b;
-    double f = -INFINITY;
-    for (int i = 0; i < b->n; i++)
-        if (!b->fixed[i] && b->pos[i].x + x_extent(b, i) > f) f = b->pos[i].x + x_extent(b, i);
-    return f;
-}
+/* The front: the farthest downstream surface of any moving element (kept by the step). */
+static double front_x(const run_ctx *c) { return sd_world_front_x(c->w); }
 
 static double upstream_ke(const run_ctx *c)
 {
@@ -1034,8 +1027,8 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
                 break;
             }
         }
-        apply_fluid(&c);
-        st = sd_world_step(c.w);
+        st = apply_fluid(&c);
+        if (!st) st = sd_world_step(c.w);
         if (st) {
             fprintf(o->err, "%s: step %ld, t = %.6f s: %s\n", s->path, c.w->step, c.w->time, sd_status_message(st));
             code = 1;

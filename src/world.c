@@ -270,6 +270,24 @@ sd_status sd_world_moving_update(sd_world *w)
     return SD_OK;
 }
 
+void sd_world_after_moves(sd_world *w, double v2max, double xfront)
+{
+    w->near_drift += sqrt(v2max) * w->def.dt;
+    w->front = xfront;
+    w->front_step = w->step + 1; /* the step that is ending */
+    w->front_bn = w->b.n;
+}
+
+double sd_world_front_x(const sd_world *w)
+{
+    if (w->front_step == w->step && w->front_bn == w->b.n && w->step > 0) return w->front;
+    const sd_bodies *b = &w->b;
+    double f = -INFINITY;
+    for (int i = 0; i < b->n; i++)
+        if (!b->fixed[i] && b->pos[i].x + sd_body_x_extent(b, i) > f) f = b->pos[i].x + sd_body_x_extent(b, i);
+    return f;
+}
+
 sd_status sd_world_step(sd_world *w)
 {
     sd_status st;
@@ -286,8 +304,7 @@ sd_status sd_world_step(sd_world *w)
     int integrated;
     if ((st = sd_contact_compute(w, &integrated))) return st;
     double t2 = sd_now();
-    sd_contact_gather(w);
-    double t3 = sd_now();
+    double t3 = sd_now(); /* the wall loads are summed when asked for (sd_contact_gather) */
     if (!integrated) sd_integrate(w);
     double t4 = sd_now();
     w->step++;
@@ -349,6 +366,7 @@ sd_status sd_world_body(const sd_world *w, int gid, sd_body_state *o)
 
 sd_vec3 sd_world_group_force(const sd_world *w, int group)
 {
+    sd_contact_gather((sd_world *)w); /* a cache of the last step's pairs (never a const object) */
     sd_vec3 f = v3(0, 0, 0);
     for (int t = 0; t < w->w.n; t++)
         if (w->w.group[t] == group && w->w.active[t]) f = v3_add(f, w->w.force[t]);

@@ -108,8 +108,9 @@ typedef struct {
     long stamp; /* timers.rebuilds of the pair list it was made from */
     int T, n, nbb;
     const void *pairs;
-    int B[SD_MAX_OWNERS + 1]; /* thread t owns bodies B[t] .. B[t+1]-1 */
-    int32_t *cross;           /* pairs whose bodies have different owners */
+    int B[SD_MAX_OWNERS + 1];      /* thread t owns bodies B[t] .. B[t+1]-1 */
+    int32_t *cross;                /* pairs whose bodies have different owners */
+    int cstart[SD_MAX_OWNERS + 1]; /* owner t computes cross[cstart[t] .. cstart[t+1]) */
     int ncross, cap;
     /* owner t's pairs, ascending: list[start[t] .. start[t+1]-1]; k for a pair it owns both
      * sides of, ~k (negative) for a cross pair touching it */
@@ -165,6 +166,10 @@ struct sd_world {
      * drifted by half the near skin (contact.c: every non-sphere pair, and the sphere pairs
      * with a gap below SD_NEAR_SKIN margin), ascending; near_drift bounds how far any moving
      * sphere has gone since the list was made (the largest |v| dt of each step, summed) */
+    int wall_force_stale; /* w.force not yet summed from the last step's wall pairs */
+    double front;         /* sd_world_front_x of the bodies as the last step left them ... */
+    long front_step;      /* ... valid while step == front_step and b.n == front_bn */
+    int front_bn;
     int32_t *near;
     int near_n, near_cap, near_nbb;
     long near_stamp, near_version;
@@ -207,6 +212,7 @@ sd_law sd_law_make(const sd_contact_def *d);
 /* contact.c: the forces of one step. With several threads and integrated != NULL, each thread
  * also moves its own bodies (w->mov must be current) and *integrated is set to 1. */
 sd_status sd_contact_compute(sd_world *w, int *integrated);
+/* Sums the last step's wall pairs into w.force if not done yet (lazy: see contact.c). */
 void sd_contact_gather(sd_world *w);
 
 /* The bed roughness (fixed spheres, never made free): nobody reads its load, so nothing is
@@ -235,6 +241,44 @@ void sd_pairlist_free(sd_pairlist *l);
  * contacts already represented by a face or edge contact (used by the force pass and by
  * sd_world_spring_energy, so that the energy counts the springs the forces use). */
 void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to);
+/* the first k with mov[k] >= i (mov ascends) */
+static inline int sd_mov_lower(const int32_t *mov, int n, int i)
+{
+    int lo = 0, hi = n;
+    while (lo < hi) {
+        int mid = (lo + hi) >> 1;
+        if (mov[mid] < i)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* Thread tid's share w->mov[*k0 .. *k1) of the moving bodies in a per-body pass with nthr
+ * threads: the bodies of its owner range in the body-body pass when there is one (their data
+ * are in its cache), else an even split. */
+static inline void sd_mov_share(const sd_world *w, int tid, int nthr, int *k0, int *k1)
+{
+    const sd_owned *o = w->owned;
+    if (o && o->T == nthr && o->n == w->b.n) {
+        *k0 = sd_mov_lower(w->mov, w->mov_n, o->B[tid]);
+        *k1 = sd_mov_lower(w->mov, w->mov_n, o->B[tid + 1]);
+    } else {
+        *k0 = (int)((long)w->mov_n * tid / nthr);
+        *k1 = (int)((long)w->mov_n * (tid + 1) / nthr);
+    }
+}
+
+/* Half extent along x of a body's box: r for a sphere, hl|a_x| + r sqrt(1 - a_x²) for a
+ * cylinder. */
+static inline double sd_body_x_extent(const sd_bodies *b, int i)
+{
+    if (b->shape[i] == SD_SHAPE_SPHERE) return b->radius[i];
+    const double ax = b->axis[i].x;
+    return b->hl[i] * fabs(ax) + b->radius[i] * sqrt(fmax(0.0, 1.0 - ax * ax));
+}
+
 /* Kernel shapes of a body. */
 static inline sd_cyl sd_body_cyl(const sd_bodies *b, int i)
 {
@@ -250,7 +294,13 @@ static inline sd_cyl sd_body_cyl(const sd_bodies *b, int i)
 void sd_integrate(sd_world *w);
 /* Moves the bodies mov[k0 .. k1) (serial); returns 1 when one of them moved more than half
  * the margin since the last rebuild. *v2max: raised to the largest |v|² of a sphere moved. */
-int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max);
+int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *xfront);
+/* After the bodies moved: v2max the largest |v|² of a sphere (the near list's drift), xfront
+ * the farthest downstream point of a moving body (sd_world_front_x). */
+void sd_world_after_moves(sd_world *w, double v2max, double xfront);
+/* The farthest downstream point (largest x of a surface) of the moving bodies, as they are:
+ * kept by the step, computed when the store changed since. -inf when none moves. */
+double sd_world_front_x(const sd_world *w);
 
 /* world.c: bring w->mov up to date (O(n) when the store changed since it was made). */
 sd_status sd_world_moving_update(sd_world *w);
