@@ -111,14 +111,48 @@ typedef struct {
     void *scratch;
 } permute_ctx;
 
+typedef struct {
+    uint64_t w[3];
+} blob24;
+typedef struct {
+    uint64_t w[4];
+} blob32;
+
 static void permute_field(void *array, size_t elem, const char *name, void *ctx)
 {
     (void)name;
     permute_ctx *pc = ctx;
     char *p = *(char **)array, *t = pc->scratch;
-    for (int i = 0; i < pc->n; i++)
-        memcpy(t + (size_t)i * elem, p + (size_t)pc->perm[i] * elem, elem);
-    memcpy(p, t, (size_t)pc->n * elem);
+    const int32_t *perm = pc->perm;
+    const int n = pc->n;
+    /* typed copies for the sizes the store has (a memcpy call per element was most of the
+     * permutation at every rebuild) */
+    switch (elem) {
+    case 1:
+        for (int i = 0; i < n; i++)
+            ((uint8_t *)t)[i] = ((const uint8_t *)p)[perm[i]];
+        break;
+    case 4:
+        for (int i = 0; i < n; i++)
+            ((int32_t *)t)[i] = ((const int32_t *)p)[perm[i]];
+        break;
+    case 8:
+        for (int i = 0; i < n; i++)
+            ((uint64_t *)t)[i] = ((const uint64_t *)p)[perm[i]];
+        break;
+    case 24:
+        for (int i = 0; i < n; i++)
+            ((blob24 *)t)[i] = ((const blob24 *)p)[perm[i]];
+        break;
+    case 32:
+        for (int i = 0; i < n; i++)
+            ((blob32 *)t)[i] = ((const blob32 *)p)[perm[i]];
+        break;
+    default:
+        for (int i = 0; i < n; i++)
+            memcpy(t + (size_t)i * elem, p + (size_t)perm[i] * elem, elem);
+    }
+    memcpy(p, t, (size_t)n * elem);
 }
 
 sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm)

@@ -278,6 +278,8 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l, const int32_t *fir
     if (sd_grow((void **)&l->out, &l->out_cap, l->n + 1, sizeof(sd_pair_out))) return SD_ERR_NOMEM;
     if (sd_grow((void **)&l->active, &l->active_cap, l->n + 1, 1)) return SD_ERR_NOMEM;
     memset(l->active, 0, (size_t)l->n + 1);
+    /* each pair fills its own slots */
+#pragma omp parallel for schedule(static) if (l->n > w->def.parallel_min)
     for (int k = 0; k < l->n; k++) {
         const sd_pair *p = &l->p[k];
         for (int s = 0; s < p->cap; s++)
@@ -298,6 +300,7 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l, const int32_t *fir
 static void set_effective_masses(sd_world *w)
 {
     const sd_bodies *b = &w->b;
+#pragma omp parallel for schedule(static) if (w->bb.n > w->def.parallel_min)
     for (int k = 0; k < w->bb.n; k++) {
         sd_pair *p = &w->bb.p[k];
         double ma = b->mass[p->a], mb = b->mass[p->b], m;
@@ -533,6 +536,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     w->mov_stamp = -1; /* the store was reordered */
     if ((st = sd_world_moving_update(w))) return st;
     if (sd_grow((void **)&w->range, &w->range_cap, b->n + 1, sizeof(*w->range))) return SD_ERR_NOMEM;
+#pragma omp parallel for schedule(static) if (b->n > w->def.parallel_min)
     for (int i = 0; i < b->n; i++) {
         sd_vec3 l, h;
         body_box(b, i, hm, &l, &h);
@@ -640,6 +644,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
 
     if (sd_grow((void **)&w->bt_man, &w->bt_man_cap, w->bt.n + 1, sizeof(sd_manifold))) return SD_ERR_NOMEM;
 
+#pragma omp parallel for schedule(static) if (b->n > w->def.parallel_min)
     for (int i = 0; i < b->n; i++) {
         b->pos_ref[i] = b->pos[i];
         b->axis_ref[i] = b->axis[i];
