@@ -19,7 +19,7 @@
  * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
-_Static_assert(sizeof(struct sd_world) == 976, "struct sd_world changed: update io_checkpoint.c");
+_Static_assert(sizeof(struct sd_world) == 984, "struct sd_world changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_world_def) == 104, "sd_world_def changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_walls) == 88, "sd_walls changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_pairlist) == 56, "sd_pairlist changed: update io_checkpoint.c");
@@ -854,6 +854,9 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
         goto out;
     }
     w->checked = 0; /* sd_world_check runs again at the next step; it passes as before */
+    /* how far the spheres drifted since the last rebuild is not saved: test each of them
+     * exactly at every step until the next rebuild (the same outcome as without the stop) */
+    w->ref_drift = INFINITY;
 
     /* the driver's blob */
     if ((st = open_section(r, pl, "XTRA", &c))) goto out;

@@ -651,6 +651,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     }
     w->last_rebuild_time = w->time;
     w->need_rebuild = 0;
+    w->ref_drift = 0.0;
     w->timers.rebuilds++;
     w->mov_stamp = w->timers.rebuilds; /* made after the sort above */
     return SD_OK;

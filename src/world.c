@@ -272,7 +272,24 @@ sd_status sd_world_moving_update(sd_world *w)
 
 void sd_world_after_moves(sd_world *w, double v2max, double xfront)
 {
-    w->near_drift += sqrt(v2max) * w->def.dt;
+    const double step = sqrt(v2max) * w->def.dt;
+    w->near_drift += step;
+    /* no sphere can have moved more than ref_drift since the rebuild: the exact test of
+     * each against half the margin (what the cylinders get every step) only once that bound
+     * is near it, with the same outcome */
+    w->ref_drift += step;
+    if (!w->need_rebuild && w->ref_drift >= 0.5 * w->def.margin * (1.0 - 1e-3)) {
+        const sd_bodies *b = &w->b;
+        const double lim2 = 0.25 * w->def.margin * w->def.margin;
+        const int nm = w->mov_n;
+        int moved = 0;
+#pragma omp parallel for schedule(static) reduction(| : moved) if (nm > w->def.parallel_min)
+        for (int k = 0; k < nm; k++) {
+            const int i = w->mov[k];
+            moved |= b->shape[i] == SD_SHAPE_SPHERE && v3_norm2(v3_sub(b->pos[i], b->pos_ref[i])) > lim2;
+        }
+        if (moved) w->need_rebuild = 1;
+    }
     w->front = xfront;
     w->front_step = w->step + 1; /* the step that is ending */
     w->front_bn = w->b.n;

@@ -174,6 +174,7 @@ struct sd_world {
     int near_n, near_cap, near_nbb;
     long near_stamp, near_version;
     double near_drift;
+    double ref_drift; /* the same bound since the last rebuild (pos_ref) */
 };
 
 /* the near skin as a fraction of the margin */
