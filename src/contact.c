@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "contact_law.h"
+#include "core/simd.h"
 #include "world_internal.h"
 
 #ifdef _OPENMP
@@ -110,14 +111,6 @@ typedef struct {
     double la[SS_CHUNK], lb[SS_CHUNK];                  /* lever arms */
     double redo[SS_CHUNK];                              /* nonzero: redo with the scalar law */
 } ss_batch;
-
-/* Built twice on x86-64 (AVX2 and baseline), picked at load time by the CPU. The lanes are
- * independent and nothing is contracted (-ffp-contract=off), so both give the same bits. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(SD_NO_CLONES)
-#define SD_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#else
-#define SD_SIMD_CLONES
-#endif
 
 SD_SIMD_CLONES
 static void ss_batch_law(const sd_law *law, double dt, ss_batch *restrict q, int m)

@@ -189,6 +189,15 @@ static inline sd_vec3 sd_fluid_force_total(const sd_fluid_params *p, sd_fluid_ph
     return r.total;
 }
 
+/* sd_fluid_force_total for n spheres at once, bit for bit (the same operations, no branch on
+ * the lanes, vectorized): centres (px, py, pz), velocities (vx, vy, vz), radii r; capture[j]
+ * nonzero for the capture profile, else the flow one; forces out in (fx, fy, fz). */
+void sd_fluid_sphere_batch(const sd_fluid_params *p, double h_D, int n, const double *restrict px,
+                           const double *restrict py, const double *restrict pz, const double *restrict vx,
+                           const double *restrict vy, const double *restrict vz, const double *restrict r,
+                           const double *restrict capture, double *restrict fx, double *restrict fy,
+                           double *restrict fz);
+
 /* Capture-phase depth h_D (SPEC §5): max(h, max z_i over the n elements with
  * x_dam − probe <= x_i <= x_dam). x and z are centre coordinates (z = height above the bed);
  * mask (may be NULL) skips element i when mask[i] == 0; non-finite entries are skipped. */

@@ -125,8 +125,28 @@ static sd_status apply_fluid(run_ctx *c)
 #ifdef _OPENMP
         sd_mov_share(w, omp_get_thread_num(), omp_get_num_threads(), &k0, &k1);
 #endif
-        for (int k = k0; k < k1; k++) {
+        /* spheres in batches (sd_fluid_sphere_batch: the same bits, vectorized), logs one by one */
+        enum { FB = 64 };
+        double px[FB], py[FB], pz[FB], vx[FB], vy[FB], vz[FB], rr[FB], cp[FB], fx[FB], fy[FB], fz[FB];
+        int idx[FB], m = 0;
+        for (int k = k0; k <= k1; k++) {
+            if (m == FB || (k == k1 && m > 0)) {
+                sd_fluid_sphere_batch(&fp, h_d, m, px, py, pz, vx, vy, vz, rr, cp, fx, fy, fz);
+                for (int j = 0; j < m; j++)
+                    b->ext_force[idx[j]] = v3(fx[j], fy[j], fz[j]);
+                m = 0;
+            }
+            if (k == k1) break;
             const int i = w->mov[k];
+            if (b->shape[i] == SD_SHAPE_SPHERE) {
+                idx[m] = i;
+                px[m] = b->pos[i].x, py[m] = b->pos[i].y, pz[m] = b->pos[i].z;
+                vx[m] = b->vel[i].x, vy[m] = b->vel[i].y, vz[m] = b->vel[i].z;
+                rr[m] = b->radius[i];
+                cp[m] = (capture && b->pos[i].x < xd) ? 1.0 : 0.0;
+                m++;
+                continue;
+            }
             sd_fluid_element e;
             e.shape = b->shape[i];
             e.pos = b->pos[i];

@@ -2,7 +2,9 @@
  * Water of the paper unless stated: U = 1.2 m/s, h = 0.03 m, ρ = 1000 kg/m³, C_D = 0.49,
  * so ½ C_D ρ = 245 kg/m³. Flume frame, θ = 15°. */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "check.h"
 #include "core/vmath.h"
@@ -39,18 +41,18 @@ static void test_flow_profile(void)
     double u;
     /* eq 50: U_i = (z/h/5 + 4/5) U, U = 1.2, h = 0.03 */
     CHECK(sd_fluid_speed_flow(1.2, 0.03, 0.0, &u) == 1);
-    CHECK_NEAR(u, 0.96, 1e-15);                 /* 0.8 × 1.2 */
+    CHECK_NEAR(u, 0.96, 1e-15); /* 0.8 × 1.2 */
     CHECK(sd_fluid_speed_flow(1.2, 0.03, 0.015, &u) == 1);
-    CHECK_NEAR(u, 1.08, 1e-15);                 /* (0.5/5 + 0.8) = 0.9; 0.9 × 1.2 */
+    CHECK_NEAR(u, 1.08, 1e-15); /* (0.5/5 + 0.8) = 0.9; 0.9 × 1.2 */
     CHECK(sd_fluid_speed_flow(1.2, 0.03, 0.012, &u) == 1);
-    CHECK_NEAR(u, 1.056, 1e-15);                /* 0.4/5 = 0.08; 0.88 × 1.2 */
+    CHECK_NEAR(u, 1.056, 1e-15); /* 0.4/5 = 0.08; 0.88 × 1.2 */
     CHECK(sd_fluid_speed_flow(1.2, 0.03, 0.03, &u) == 1);
-    CHECK_NEAR(u, 1.2, 1e-15);                  /* surface: U */
+    CHECK_NEAR(u, 1.2, 1e-15); /* surface: U */
     CHECK(sd_fluid_speed_flow(1.2, 0.03, -0.004, &u) == 1);
-    CHECK_NEAR(u, 0.96, 1e-15);                 /* below the bed read as z = 0 */
+    CHECK_NEAR(u, 0.96, 1e-15); /* below the bed read as z = 0 */
     u = 99.0;
     CHECK(sd_fluid_speed_flow(1.2, 0.03, 0.0301, &u) == 0);
-    CHECK(u == 0.0);                            /* above the surface: none */
+    CHECK(u == 0.0); /* above the surface: none */
     CHECK(sd_fluid_speed_flow(1.2, 0.03, NAN, &u) == 0);
 }
 
@@ -78,11 +80,11 @@ static void test_capture_profile(void)
     CHECK_NEAR(a, 0.35, 1e-15);
     CHECK(b == 1.0);
     CHECK(sd_fluid_speed_capture(1.2, 0.03, 0.04, 0.0, &u) == 1);
-    CHECK_NEAR(u, 0.42, 1e-15);                 /* 0.35 × 1.2 */
+    CHECK_NEAR(u, 0.42, 1e-15); /* 0.35 × 1.2 */
     CHECK(sd_fluid_speed_capture(1.2, 0.03, 0.04, 0.02, &u) == 1);
-    CHECK_NEAR(u, 0.81, 1e-15);                 /* (0.65 × 0.5 + 0.35) = 0.675; × 1.2 */
+    CHECK_NEAR(u, 0.81, 1e-15); /* (0.65 × 0.5 + 0.35) = 0.675; × 1.2 */
     CHECK(sd_fluid_speed_capture(1.2, 0.03, 0.04, 0.04, &u) == 1);
-    CHECK_NEAR(u, 1.2, 1e-15);                  /* β U at the surface h_D */
+    CHECK_NEAR(u, 1.2, 1e-15);                                      /* β U at the surface h_D */
     CHECK(sd_fluid_speed_capture(1.2, 0.03, 0.04, 0.035, &u) == 1); /* above h, below h_D */
     CHECK(sd_fluid_speed_capture(1.2, 0.03, 0.04, 0.0401, &u) == 0);
     CHECK(u == 0.0);
@@ -92,20 +94,20 @@ static void test_capture_profile(void)
     CHECK_NEAR(a, 0.1, 1e-15);
     CHECK_NEAR(b, 0.98, 1e-15);
     CHECK(sd_fluid_speed_capture(1.2, 0.03, 0.05, 0.0, &u) == 1);
-    CHECK_NEAR(u, 0.12, 1e-15);                 /* 0.1 × 1.2 */
+    CHECK_NEAR(u, 0.12, 1e-15); /* 0.1 × 1.2 */
     CHECK(sd_fluid_speed_capture(1.2, 0.03, 0.05, 0.025, &u) == 1);
-    CHECK_NEAR(u, 0.648, 1e-15);                /* (0.88 × 0.5 + 0.1) = 0.54; × 1.2 */
+    CHECK_NEAR(u, 0.648, 1e-15); /* (0.88 × 0.5 + 0.1) = 0.54; × 1.2 */
     CHECK(sd_fluid_speed_capture(1.2, 0.03, 0.05, 0.05, &u) == 1);
-    CHECK_NEAR(u, 1.176, 1e-15);                /* 0.98 × 1.2 */
+    CHECK_NEAR(u, 1.176, 1e-15); /* 0.98 × 1.2 */
 
     /* h_D = 0.09: 1.8 × 0.03/0.09 = 0.6, α = −0.4 → 0.1, β = 0.5 */
     sd_fluid_capture_coeffs(0.03, 0.09, &a, &b);
     CHECK_NEAR(a, 0.1, 1e-15);
     CHECK_NEAR(b, 0.5, 1e-15);
     CHECK(sd_fluid_speed_capture(1.2, 0.03, 0.09, 0.045, &u) == 1);
-    CHECK_NEAR(u, 0.36, 1e-15);                 /* (0.4 × 0.5 + 0.1) = 0.3; × 1.2 */
+    CHECK_NEAR(u, 0.36, 1e-15); /* (0.4 × 0.5 + 0.1) = 0.3; × 1.2 */
     CHECK(sd_fluid_speed_capture(1.2, 0.03, 0.09, 0.09, &u) == 1);
-    CHECK_NEAR(u, 0.6, 1e-15);                  /* 0.5 × 1.2 */
+    CHECK_NEAR(u, 0.6, 1e-15); /* 0.5 × 1.2 */
 
     /* branch boundary h_D = 1.8 h/1.1 = 0.054/1.1: α = 0.1, β = 1 from either side,
      * and the profile is continuous across it */
@@ -116,8 +118,8 @@ static void test_capture_profile(void)
     double a1, b1, a2, b2;
     sd_fluid_capture_coeffs(0.03, hb * (1.0 - 1e-9), &a1, &b1);
     sd_fluid_capture_coeffs(0.03, hb * (1.0 + 1e-9), &a2, &b2);
-    CHECK(a1 > 0.1 && b1 == 1.0);  /* α branch */
-    CHECK(a2 == 0.1 && b2 < 1.0);  /* clamped branch */
+    CHECK(a1 > 0.1 && b1 == 1.0); /* α branch */
+    CHECK(a2 == 0.1 && b2 < 1.0); /* clamped branch */
     CHECK_NEAR(a1, a2, 1e-8);
     CHECK_NEAR(b1, b2, 1e-8);
 }
@@ -326,8 +328,56 @@ static void test_dam_depth(void)
     CHECK(sd_fluid_dam_depth(0.03, 7, x, z, NULL, 4.0, 0.2) == 0.2);
 }
 
+/* The batched sphere force against sd_fluid_force_total, bit for bit, over wet and dry, flow
+ * and capture lanes, centres below the bed, both capture regimes (alpha clamped or not) and
+ * a tilted frame. */
+static void test_sphere_batch(void)
+{
+    uint64_t st = 0x9E3779B97F4A7C15ULL;
+    enum { N = 1000 };
+    static double px[N], py[N], pz[N], vx[N], vy[N], vz[N], r[N], cap[N], fx[N], fy[N], fz[N];
+    long differ = 0, wet = 0, dry = 0, ncap = 0;
+    for (int frame = 0; frame < 2; frame++) {
+        sd_fluid_params p = sd_fluid_params_default(15.0 * M_PI / 180.0);
+        if (frame) { /* a tilted bed and another flow direction */
+            p.bed_normal = v3_normalize(v3(0.1, -0.2, 1.0));
+            p.flow_dir = v3_normalize(v3_cross(v3(0.0, 1.0, 0.0), p.bed_normal));
+            p.z_bed = 0.01;
+        }
+        for (int hcase = 0; hcase < 3; hcase++) {
+            const double h_D = hcase == 0 ? 0.02 : (hcase == 1 ? 0.04 : 0.12); /* below h, alpha > 0.1, clamped */
+            for (int j = 0; j < N; j++) {
+                double u[8];
+                for (int k = 0; k < 8; k++) {
+                    st ^= st << 13, st ^= st >> 7, st ^= st << 17;
+                    u[k] = (double)(st >> 11) / 9007199254740992.0;
+                }
+                px[j] = 4.0 * u[0], py[j] = 0.3 * u[1] - 0.15, pz[j] = 0.16 * u[2] - 0.01;
+                vx[j] = 2.0 * u[3] - 0.5, vy[j] = 0.4 * u[4] - 0.2, vz[j] = 0.4 * u[5] - 0.2;
+                r[j] = 0.0025 + 0.0075 * u[6];
+                cap[j] = u[7] < 0.5 ? 1.0 : 0.0;
+                if (j % 97 == 0) vx[j] = vy[j] = vz[j] = 0.0;
+            }
+            sd_fluid_sphere_batch(&p, h_D, N, px, py, pz, vx, vy, vz, r, cap, fx, fy, fz);
+            for (int j = 0; j < N; j++) {
+                sd_fluid_element e = {
+                    SD_SHAPE_SPHERE, v3(px[j], py[j], pz[j]), v3(vx[j], vy[j], vz[j]), v3(0, 0, 1), r[j], 0.0};
+                sd_fluid_force_result res;
+                const int w = sd_fluid_force(&p, cap[j] != 0.0 ? SD_FLUID_CAPTURE : SD_FLUID_FLOW, h_D, &e, &res);
+                wet += w, dry += !w, ncap += cap[j] != 0.0 && w;
+                differ += memcmp(&res.total.x, &fx[j], sizeof(double)) ||
+                          memcmp(&res.total.y, &fy[j], sizeof(double)) || memcmp(&res.total.z, &fz[j], sizeof(double));
+            }
+        }
+    }
+    printf("sphere batch: %ld wet (%ld capture), %ld dry, %ld differ from the scalar force\n", wet, ncap, dry, differ);
+    CHECK(differ == 0);
+    CHECK(wet > 1000 && dry > 1000 && ncap > 500);
+}
+
 int main(void)
 {
+    test_sphere_batch();
     test_flow_profile();
     test_capture_profile();
     test_discharge();
