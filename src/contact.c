@@ -498,18 +498,18 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
 }
 
 /* The near list (w->near): the body-body pairs worth testing each step. A sphere pair whose
- * gap exceeds the near skin s = SD_NEAR_SKIN margin cannot touch before the moving spheres
+ * gap exceeds the near skin s (w->near_skin) cannot touch before the moving spheres
  * have drifted by s/2 between them (near_drift, summed from each step's largest |v| dt), so it
  * is left out until then: its force is exactly zero, its spring is cleared here as the pass
  * would clear it, and every body sums the same pairs in the same order (same bits). In a dense
  * bed the margin's candidates are twice the contacts; most of the rest are far beyond s. */
 static sd_status near_update(sd_world *w)
 {
-    const double skin = SD_NEAR_SKIN * w->def.margin;
     const int nbb = w->bb.n;
     if (w->near_stamp == w->timers.rebuilds && w->near_nbb == nbb && w->near && !w->rebuild_every_step &&
-        2.0 * w->near_drift < 0.999 * skin)
+        2.0 * w->near_drift < 0.999 * w->near_skin)
         return SD_OK;
+    const double skin = SD_NEAR_SKIN * w->def.margin;
     if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     const sd_pair *pairs = w->bb.p;
     const sd_vec3 *pos = w->b.pos;
@@ -532,6 +532,7 @@ static sd_status near_update(sd_world *w)
     w->near_stamp = w->timers.rebuilds;
     w->near_version++;
     w->near_drift = 0.0;
+    w->near_skin = skin;
     return SD_OK;
 }
 
