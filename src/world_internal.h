@@ -108,9 +108,8 @@ typedef struct {
     long stamp; /* timers.rebuilds of the pair list it was made from */
     int T, n, nbb;
     const void *pairs;
-    int B[SD_MAX_OWNERS + 1];      /* thread t owns bodies B[t] .. B[t+1]-1 */
-    int32_t *cross;                /* pairs whose bodies have different owners */
-    int cstart[SD_MAX_OWNERS + 1]; /* owner t computes cross[cstart[t] .. cstart[t+1]) */
+    int B[SD_MAX_OWNERS + 1]; /* thread t owns bodies B[t] .. B[t+1]-1 */
+    int32_t *cross;           /* pairs whose bodies have different owners */
     int ncross, cap;
     /* owner t's pairs, ascending: list[start[t] .. start[t+1]-1]; k for a pair it owns both
      * sides of, ~k (negative) for a cross pair touching it */
