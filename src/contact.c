@@ -497,9 +497,9 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
     return count;
 }
 
-/* The near list (w->near): the body-body pairs worth testing each step. A sphere pair whose
- * gap exceeds the near skin s (w->near_skin) cannot touch before the moving spheres
- * have drifted by s/2 between them (near_drift, summed from each step's largest |v| dt), so it
+/* The near list (w->near): the body-body pairs worth testing each step. A pair whose gap
+ * exceeds the near skin s (w->near_skin) cannot touch before the moving bodies have drifted
+ * by s/2 between them (near_drift, summed from each step's largest move of a surface), so it
  * is left out until then: its force is exactly zero, its spring is cleared here as the pass
  * would clear it, and every body sums the same pairs in the same order (same bits). In a dense
  * bed the margin's candidates are twice the contacts; most of the rest are far beyond s. */
@@ -523,6 +523,19 @@ static sd_status near_update(sd_world *w)
             const double reach = rad[p->a] + rad[p->b] + skin;
             keep = v3_norm2(v3_sub(pos[p->a], pos[p->b])) <= reach * reach;
             if (!keep) hist[p->off].feature = -1;
+        } else {
+            /* a log lies within its radius of its axis segment: a sphere (or the other log's
+             * bounding sphere) farther than the radii and the skin from it cannot touch */
+            const sd_cyl c = sd_body_cyl(&w->b, p->b);
+            const double ra = p->kind == SD_PAIR_SC ? rad[p->a] : w->b.bound_r[p->a];
+            const sd_vec3 d = v3_sub(pos[p->a], c.c);
+            double t = v3_dot(d, c.a);
+            t = t > c.hl ? c.hl : (t < -c.hl ? -c.hl : t);
+            const double reach = ra + c.r + skin;
+            keep = v3_norm2(v3_madd(d, c.a, -t)) <= reach * reach;
+            if (!keep)
+                for (int s = 0; s < p->cap; s++)
+                    hist[p->off + s].feature = -1;
         }
         w->near[m] = k;
         m += keep;
@@ -694,15 +707,15 @@ static sd_status owned_update(sd_world *w, int T)
  * own pairs, the stored cross pairs, its bodies' wall pairs): so it can also move its bodies
  * at once, while they are in its cache, with no barrier. */
 static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scratch, int *moved_out, double *v2max,
-                          double *xfront)
+                          double *dcyl, double *xfront)
 {
     sd_bodies *b = &w->b;
     sd_owned *o = w->owned;
     const int nc = o->ncross;
     long count = 0;
     int moved = 0;
-    double v2 = 0.0, xf = -INFINITY;
-#pragma omp parallel num_threads(T) reduction(+ : count) reduction(| : moved) reduction(max : v2, xf)
+    double v2 = 0.0, dc = 0.0, xf = -INFINITY;
+#pragma omp parallel num_threads(T) reduction(+ : count) reduction(| : moved) reduction(max : v2, dc, xf)
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
         bb_scratch *x = &scratch[tid];
@@ -762,12 +775,13 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
             count += bt_range(w, law, i0, i1);
             if (moved_out)
                 moved |= sd_integrate_list(w, w->mov, sd_mov_lower(w->mov, w->mov_n, i0),
-                                           sd_mov_lower(w->mov, w->mov_n, i1), &v2, &xf);
+                                           sd_mov_lower(w->mov, w->mov_n, i1), &v2, &dc, &xf);
         }
         if (nthr == T) o->tau[tid] += omp_get_wtime() - t0;
     }
     if (moved_out) *moved_out = moved;
     *v2max = v2;
+    *dcyl = dc;
     *xfront = xf;
     return count;
 }
@@ -805,12 +819,12 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         sd_status st = owned_update(w, T);
         if (st) return st;
         int moved = 0;
-        double v2 = 0.0, xf = -INFINITY;
-        count = bb_owned_pass(w, &law, T, w->bb_scratch, integrated ? &moved : NULL, &v2, &xf);
+        double v2 = 0.0, dc = 0.0, xf = -INFINITY;
+        count = bb_owned_pass(w, &law, T, w->bb_scratch, integrated ? &moved : NULL, &v2, &dc, &xf);
         if (moved) w->need_rebuild = 1;
         if (integrated) {
             *integrated = 1;
-            sd_world_after_moves(w, v2, xf);
+            sd_world_after_moves(w, v2, dc, xf);
         }
     } else
 #endif

@@ -10,14 +10,14 @@
 #include <omp.h>
 #endif
 
-int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *xfront)
+int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *dcyl, double *xfront)
 {
     sd_bodies *b = &w->b;
     const double dt = w->def.dt;
     const sd_vec3 g = w->def.gravity;
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
-    double vm = *v2max, xf = *xfront;
+    double vm = *v2max, dc = *dcyl, xf = *xfront;
     for (int k = k0; k < k1; k++) {
         const int i = mov[k];
         sd_gather_body(w, i);
@@ -40,6 +40,7 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
             sd_vec3 L = v3_madd(b->angmom[i], b->torque[i], dt);
             b->angmom[i] = L;
             sd_vec3 a = b->axis[i];
+            const sd_vec3 a_old = a;
             double spin = (b->inv_i_ax[i] - b->inv_i_tr[i]) * v3_dot(L, a) * dt;
             sd_quat q_body = quat_from_rotvec(v3(0.0, 0.0, spin));
             sd_quat q_space = quat_from_rotvec(v3_scale(L, b->inv_i_tr[i] * dt));
@@ -52,12 +53,19 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
             double d =
                 sqrt(v3_norm2(v3_sub(b->pos[i], b->pos_ref[i]))) + b->hl[i] * sqrt(v3_norm2(v3_sub(a, b->axis_ref[i])));
             disp = d * d;
+            /* how far its surface can have gone this step: the centre's move plus the tilt
+             * of the axis times the bounding radius (with room for chord against arc); the
+             * spin about the axis moves no surface */
+            const double step =
+                sqrt(v3_norm2(b->vel[i])) * dt + 1.01 * b->bound_r[i] * sqrt(v3_norm2(v3_sub(a, a_old)));
+            dc = step > dc ? step : dc;
             const double x = b->pos[i].x + sd_body_x_extent(b, i);
             xf = x > xf ? x : xf;
         }
         moved |= disp > lim2;
     }
     *v2max = vm;
+    *dcyl = dc;
     *xfront = xf;
     return moved;
 }
@@ -68,17 +76,17 @@ void sd_integrate(sd_world *w)
 {
     const int nm = w->mov_n;
     int moved = 0;
-    double v2 = 0.0, xf = -INFINITY;
+    double v2 = 0.0, dc = 0.0, xf = -INFINITY;
 #ifdef _OPENMP
-#pragma omp parallel reduction(| : moved) reduction(max : v2, xf) if (nm > w->def.parallel_min)
+#pragma omp parallel reduction(| : moved) reduction(max : v2, dc, xf) if (nm > w->def.parallel_min)
     {
         int k0, k1;
         sd_mov_share(w, omp_get_thread_num(), omp_get_num_threads(), &k0, &k1);
-        moved |= sd_integrate_list(w, w->mov, k0, k1, &v2, &xf);
+        moved |= sd_integrate_list(w, w->mov, k0, k1, &v2, &dc, &xf);
     }
 #else
-    moved = sd_integrate_list(w, w->mov, 0, nm, &v2, &xf);
+    moved = sd_integrate_list(w, w->mov, 0, nm, &v2, &dc, &xf);
 #endif
     if (moved) w->need_rebuild = 1;
-    sd_world_after_moves(w, v2, xf);
+    sd_world_after_moves(w, v2, dc, xf);
 }

@@ -270,10 +270,10 @@ sd_status sd_world_moving_update(sd_world *w)
     return SD_OK;
 }
 
-void sd_world_after_moves(sd_world *w, double v2max, double xfront)
+void sd_world_after_moves(sd_world *w, double v2max, double dcyl, double xfront)
 {
     const double step = sqrt(v2max) * w->def.dt;
-    w->near_drift += step;
+    w->near_drift += step > dcyl ? step : dcyl;
     /* no sphere can have moved more than ref_drift since the rebuild: the exact test of
      * each against half the margin (what the cylinders get every step) only once that bound
      * is near it, with the same outcome */

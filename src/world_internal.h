@@ -295,11 +295,13 @@ static inline sd_cyl sd_body_cyl(const sd_bodies *b, int i)
 /* integrate.c */
 void sd_integrate(sd_world *w);
 /* Moves the bodies mov[k0 .. k1) (serial); returns 1 when one of them moved more than half
- * the margin since the last rebuild. *v2max: raised to the largest |v|² of a sphere moved. */
-int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *xfront);
-/* After the bodies moved: v2max the largest |v|² of a sphere (the near list's drift), xfront
+ * the margin since the last rebuild. *v2max: raised to the largest |v|² of a sphere moved,
+ * *dcyl to the largest move of a cylinder's surface, *xfront to the farthest downstream point. */
+int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *dcyl, double *xfront);
+/* After the bodies moved: v2max the largest |v|² of a sphere, dcyl the largest move of a
+ * cylinder's surface (the near list's drift), xfront
  * the farthest downstream point of a moving body (sd_world_front_x). */
-void sd_world_after_moves(sd_world *w, double v2max, double xfront);
+void sd_world_after_moves(sd_world *w, double v2max, double dcyl, double xfront);
 /* The farthest downstream point (largest x of a surface) of the moving bodies, as they are:
  * kept by the step, computed when the store changed since. -inf when none moves. */
 double sd_world_front_x(const sd_world *w);

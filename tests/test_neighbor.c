@@ -159,6 +159,8 @@ static void test_static(int dense)
 /* The near list (contact.c), when the next step will use it as it is: every touching sphere
  * pair of the candidate list must be in it. Counts the steps checked, those where the list was
  * shorter than the candidates, and the touching pairs missing. */
+static long near_logs_out; /* log pairs left out of the near list, summed over the checks */
+
 static void near_check(const sd_world *w, long *checked, long *shorter, long *missing)
 {
     if (sd_neighbor_needs_rebuild(w) || w->near_stamp != w->timers.rebuilds ||
@@ -172,12 +174,25 @@ static void near_check(const sd_world *w, long *checked, long *shorter, long *mi
             j++;
         if (j < w->near_n && w->near[j] == k) continue;
         const sd_pair *p = &w->bb.p[k];
-        if (v3_dist(w->b.pos[p->a], w->b.pos[p->b]) < w->b.radius[p->a] + w->b.radius[p->b]) (*missing)++;
+        if (p->kind == SD_PAIR_SS) {
+            if (v3_dist(w->b.pos[p->a], w->b.pos[p->b]) < w->b.radius[p->a] + w->b.radius[p->b]) (*missing)++;
+            continue;
+        }
+        near_logs_out++;
+        sd_manifold m;
+        const sd_cyl cb = sd_body_cyl(&w->b, p->b);
+        if (p->kind == SD_PAIR_SC) {
+            sd_geom_sphere_cyl(w->b.pos[p->a], w->b.radius[p->a], &cb, &m);
+        } else {
+            const sd_cyl ca = sd_body_cyl(&w->b, p->a);
+            sd_geom_cyl_cyl(&ca, &cb, &m);
+        }
+        *missing += m.n > 0;
     }
 }
 
-/* Spheres on a lattice settling gently onto a floor (speeds below 0.5 m/s): the near list is
- * remade on drift, leaves pairs out, and never a touching one. */
+/* Spheres on a lattice settling gently onto a floor, logs thrown down on them (below 2.5 m/s):
+ * the near list is remade on drift, leaves pairs out (logs' too), and never a touching one. */
 static void test_near_slow(void)
 {
     sd_world *w = new_world();
@@ -194,23 +209,44 @@ static void test_near_slow(void)
                 s.vel = v3(0.05 * (urand() - 0.5), 0.05 * (urand() - 0.5), 0.05 * (urand() - 0.5));
                 CHECK(sd_world_add_sphere(w, &s) >= 0);
             }
+    /* and logs dropped onto them, tumbling */
+    for (int k = 0; k < 6; k++) {
+        sd_cylinder_def c = sd_cylinder_def_default();
+        c.radius = 0.003;
+        c.length = 0.03;
+        /* 4 cm apart (longer than a log): no log starts touching another */
+        c.pos = v3(0.02 + 0.04 * (k & 1), 0.02 + 0.04 * ((k >> 1) & 1), 0.045 + 0.04 * (k >> 2));
+        c.axis = v3_normalize(v3(urand() - 0.5, urand() - 0.5, urand() - 0.5));
+        c.omega = v3(20.0 * (urand() - 0.5), 20.0 * (urand() - 0.5), 20.0 * (urand() - 0.5));
+        c.vel = v3(0.0, 0.0, -1.5); /* thrown down: faster than any sphere until they meet */
+        CHECK(sd_world_add_cylinder(w, &c) >= 0);
+    }
+    near_logs_out = 0;
     long checked = 0, shorter = 0, missing = 0, max_contacts = 0;
     const long near0 = w->near_version;
     double vmax = 0.0;
-    for (int st = 0; st < 6000; st++) {
+    long log_touch = 0; /* log pairs in contact, summed over the steps */
+    for (int st = 0; st < 9000; st++) {
         CHECK(sd_world_step(w) == SD_OK);
         near_check(w, &checked, &shorter, &missing);
+        for (int k = 0; k < w->bb.n; k++)
+            if (w->bb.p[k].kind != SD_PAIR_SS)
+                for (int q = 0; q < w->bb.p[k].cap; q++)
+                    log_touch += w->bb.hist[w->bb.p[k].off + q].feature >= 0;
         if (sd_world_contact_count(w) > max_contacts) max_contacts = sd_world_contact_count(w);
         for (int i = 0; i < w->b.n; i++)
             if (v3_norm(w->b.vel[i]) > vmax) vmax = v3_norm(w->b.vel[i]);
     }
     const long rebuilds = sd_world_get_timers(w).rebuilds;
-    printf("near list, settling lattice: top speed %.3f m/s, %ld versions, %ld rebuilds, checked at %ld steps (%ld "
-           "shorter than the candidates), max contacts %ld, touching pairs missing %ld\n",
-           vmax, w->near_version - near0, rebuilds, checked, shorter, max_contacts, missing);
-    CHECK(vmax < 0.6);
+    printf("near list, settling lattice and logs: top speed %.3f m/s, %ld versions, %ld rebuilds, checked at %ld "
+           "steps (%ld shorter than the candidates, %ld log pairs left out), max contacts %ld, touching pairs "
+           "missing %ld\n",
+           vmax, w->near_version - near0, rebuilds, checked, shorter, near_logs_out, max_contacts, missing);
+    printf("log contact points, summed over the steps: %ld\n", log_touch);
+    CHECK(near_logs_out > 2000 && log_touch > 1000);
+    CHECK(vmax < 2.5);
     CHECK(missing == 0);
-    CHECK(checked > 4000 && shorter > 4000 && max_contacts > 100);
+    CHECK(checked > 6000 && shorter > 6000 && max_contacts > 80);
     CHECK(w->near_version - near0 > rebuilds + 10); /* remade on drift, not only with the candidates */
     sd_world_destroy(w);
 }
