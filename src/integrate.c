@@ -25,13 +25,11 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
         sd_vec3 acc = v3_madd(g, f, b->inv_mass[i]);
         b->vel[i] = v3_madd(b->vel[i], acc, dt);
         b->pos[i] = v3_madd(b->pos[i], b->vel[i], dt);
-        double disp;
         if (b->shape[i] == SD_SHAPE_SPHERE) {
             b->omega[i] = v3_madd(b->omega[i], b->torque[i], dt * b->inv_i_ax[i]);
             /* a sphere's displacement since the rebuild is bounded by the summed largest
              * |v| dt (sd_world_after_moves checks it exactly only when that bound nears half
              * the margin) */
-            disp = 0.0;
             const double v2 = v3_norm2(b->vel[i]);
             vm = v2 > vm ? v2 : vm;
             const double x = b->pos[i].x + b->radius[i];
@@ -52,7 +50,7 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
             b->omega[i] = v3_madd(v3_scale(L, b->inv_i_tr[i]), a, (b->inv_i_ax[i] - b->inv_i_tr[i]) * v3_dot(L, a));
             double d =
                 sqrt(v3_norm2(v3_sub(b->pos[i], b->pos_ref[i]))) + b->hl[i] * sqrt(v3_norm2(v3_sub(a, b->axis_ref[i])));
-            disp = d * d;
+            moved |= d * d > lim2;
             /* how far its surface can have gone this step: the centre's move plus the tilt
              * of the axis times the bounding radius (with room for chord against arc); the
              * spin about the axis moves no surface */
@@ -62,7 +60,6 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
             const double x = b->pos[i].x + sd_body_x_extent(b, i);
             xf = x > xf ? x : xf;
         }
-        moved |= disp > lim2;
     }
     *v2max = vm;
     *dcyl = dc;

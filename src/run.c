@@ -100,6 +100,22 @@ static double trap_ratio(const run_ctx *c, double *per_class, double *logs_ratio
     return tot > 0 ? up / tot : 0.0;
 }
 
+/* Spheres gathered for sd_fluid_sphere_batch. */
+enum { FLUID_BATCH = 64 };
+typedef struct {
+    double px[FLUID_BATCH], py[FLUID_BATCH], pz[FLUID_BATCH], vx[FLUID_BATCH], vy[FLUID_BATCH], vz[FLUID_BATCH];
+    double r[FLUID_BATCH], cap[FLUID_BATCH], fx[FLUID_BATCH], fy[FLUID_BATCH], fz[FLUID_BATCH];
+    int idx[FLUID_BATCH], m;
+} fluid_batch;
+
+static void fluid_flush(fluid_batch *q, const sd_fluid_params *fp, double h_d, sd_bodies *b)
+{
+    sd_fluid_sphere_batch(fp, h_d, q->m, q->px, q->py, q->pz, q->vx, q->vy, q->vz, q->r, q->cap, q->fx, q->fy, q->fz);
+    for (int j = 0; j < q->m; j++)
+        b->ext_force[q->idx[j]] = v3(q->fx[j], q->fy[j], q->fz[j]);
+    q->m = 0;
+}
+
 /* The fluid forces of the phase on every moving body, for the next step. Each thread takes
  * the bodies it moves in the step (sd_mov_share: their data stay in its cache). */
 static sd_status apply_fluid(run_ctx *c)
@@ -126,25 +142,18 @@ static sd_status apply_fluid(run_ctx *c)
         sd_mov_share(w, omp_get_thread_num(), omp_get_num_threads(), &k0, &k1);
 #endif
         /* spheres in batches (sd_fluid_sphere_batch: the same bits, vectorized), logs one by one */
-        enum { FB = 64 };
-        double px[FB], py[FB], pz[FB], vx[FB], vy[FB], vz[FB], rr[FB], cp[FB], fx[FB], fy[FB], fz[FB];
-        int idx[FB], m = 0;
-        for (int k = k0; k <= k1; k++) {
-            if (m == FB || (k == k1 && m > 0)) {
-                sd_fluid_sphere_batch(&fp, h_d, m, px, py, pz, vx, vy, vz, rr, cp, fx, fy, fz);
-                for (int j = 0; j < m; j++)
-                    b->ext_force[idx[j]] = v3(fx[j], fy[j], fz[j]);
-                m = 0;
-            }
-            if (k == k1) break;
+        fluid_batch q;
+        q.m = 0;
+        for (int k = k0; k < k1; k++) {
             const int i = w->mov[k];
             if (b->shape[i] == SD_SHAPE_SPHERE) {
-                idx[m] = i;
-                px[m] = b->pos[i].x, py[m] = b->pos[i].y, pz[m] = b->pos[i].z;
-                vx[m] = b->vel[i].x, vy[m] = b->vel[i].y, vz[m] = b->vel[i].z;
-                rr[m] = b->radius[i];
-                cp[m] = (capture && b->pos[i].x < xd) ? 1.0 : 0.0;
-                m++;
+                const int j = q.m++;
+                q.idx[j] = i;
+                q.px[j] = b->pos[i].x, q.py[j] = b->pos[i].y, q.pz[j] = b->pos[i].z;
+                q.vx[j] = b->vel[i].x, q.vy[j] = b->vel[i].y, q.vz[j] = b->vel[i].z;
+                q.r[j] = b->radius[i];
+                q.cap[j] = (capture && b->pos[i].x < xd) ? 1.0 : 0.0;
+                if (q.m == FLUID_BATCH) fluid_flush(&q, &fp, h_d, b);
                 continue;
             }
             sd_fluid_element e;
@@ -158,6 +167,7 @@ static sd_status apply_fluid(run_ctx *c)
             sd_fluid_phase ph = (capture && b->pos[i].x < xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
             b->ext_force[i] = sd_fluid_force_total(&fp, ph, h_d, &e);
         }
+        fluid_flush(&q, &fp, h_d, b);
     }
     return SD_OK;
 }
