@@ -503,20 +503,15 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
  * is left out until then: its force is exactly zero, its spring is cleared here as the pass
  * would clear it, and every body sums the same pairs in the same order (same bits). In a dense
  * bed the margin's candidates are twice the contacts; most of the rest are far beyond s. */
-static sd_status near_update(sd_world *w)
+/* the candidates k0 .. k1-1 worth testing, into out (ascending); returns how many */
+static int near_filter(sd_world *w, double skin, int k0, int k1, int32_t *out)
 {
-    const int nbb = w->bb.n;
-    if (w->near_stamp == w->timers.rebuilds && w->near_nbb == nbb && w->near && !w->rebuild_every_step &&
-        2.0 * w->near_drift < 0.999 * w->near_skin)
-        return SD_OK;
-    const double skin = SD_NEAR_SKIN * w->def.margin;
-    if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     const sd_pair *pairs = w->bb.p;
     const sd_vec3 *pos = w->b.pos;
     const double *rad = w->b.radius;
     sd_hist *hist = w->bb.hist;
     int m = 0;
-    for (int k = 0; k < nbb; k++) {
+    for (int k = k0; k < k1; k++) {
         const sd_pair *p = &pairs[k];
         int keep = 1;
         if (p->kind == SD_PAIR_SS) {
@@ -537,9 +532,53 @@ static sd_status near_update(sd_world *w)
                 for (int s = 0; s < p->cap; s++)
                     hist[p->off + s].feature = -1;
         }
-        w->near[m] = k;
+        out[m] = k;
         m += keep;
     }
+    return m;
+}
+
+static int bb_owners(const sd_world *w);
+static sd_owned *owned_get(sd_world *w);
+
+static sd_status near_update(sd_world *w)
+{
+    const int nbb = w->bb.n;
+    if (w->near_stamp == w->timers.rebuilds && w->near_nbb == nbb && w->near && !w->rebuild_every_step &&
+        2.0 * w->near_drift < 0.999 * w->near_skin)
+        return SD_OK;
+    const double skin = SD_NEAR_SKIN * w->def.margin;
+    if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    int m = 0;
+    const int T = bb_owners(w);
+#ifdef _OPENMP
+    if (T > 1) {
+        /* each thread filters a chunk into the scratch at the chunk's start, then moves its
+         * part to its place: the list of one thread */
+        sd_owned *o = owned_get(w);
+        if (!o || sd_grow((void **)&o->tmp, &o->tmp_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+        int cnt[SD_MAX_OWNERS + 1];
+#pragma omp parallel num_threads(T)
+        {
+            const int tid = omp_get_thread_num(), nthr = omp_get_num_threads();
+            const int k0 = (int)((long)nbb * tid / nthr), k1 = (int)((long)nbb * (tid + 1) / nthr);
+            cnt[tid] = near_filter(w, skin, k0, k1, o->tmp + k0);
+#pragma omp barrier
+            int off = 0;
+            for (int t = 0; t < tid; t++)
+                off += cnt[t];
+            memcpy(w->near + off, o->tmp + k0, (size_t)cnt[tid] * sizeof(int32_t));
+#pragma omp single
+            {
+                m = 0;
+                for (int t = 0; t < nthr; t++)
+                    m += cnt[t];
+            }
+        }
+    } else
+#endif
+        m = near_filter(w, skin, 0, nbb, w->near);
+    (void)T;
     w->near_n = m;
     w->near_nbb = nbb;
     w->near_stamp = w->timers.rebuilds;
@@ -592,6 +631,23 @@ static inline int owner_of(int i, const int *B, int T)
     return lo;
 }
 
+/* The body a pair is split by: its lower index, or the other body where that one is the
+ * bed (which is never written, and sits after the moving bodies in the store). */
+static inline int pair_lead(const sd_bodies *b, const sd_pair *p)
+{
+    const int lo = p->a < p->b ? p->a : p->b, hi = p->a < p->b ? p->b : p->a;
+    return sd_body_is_bed(b, lo) ? hi : lo;
+}
+
+/* The owners of a pair's two bodies; a bed body takes its partner's owner (nothing is added
+ * to it), so a pair with the bed is never a cross pair wherever the bed sits. */
+static inline void pair_owners(const sd_bodies *b, const sd_pair *p, const int *B, int T, int *ta, int *tb)
+{
+    const int bed_a = sd_body_is_bed(b, p->a), bed_b = sd_body_is_bed(b, p->b);
+    *ta = owner_of(bed_a ? p->b : p->a, B, T);
+    *tb = bed_b || bed_a ? *ta : owner_of(p->b, B, T);
+}
+
 /* New split fractions f[0..T] (f[0] = 0, f[T] = 1) that would have given the T owners the
  * same time, had each owner's time tau[t] been spread evenly over its share f[t]..f[t+1];
  * taken half way from the old split (measured times are noisy), then the times restart. The
@@ -627,6 +683,12 @@ static void rebalance(double *f, double *tau, int T)
 
 /* The body ranges, spans and cross pairs for T owners, from the current pair list (serial,
  * O(pairs), once per candidate rebuild). */
+static sd_owned *owned_get(sd_world *w)
+{
+    if (!w->owned) w->owned = calloc(1, sizeof *w->owned);
+    return w->owned;
+}
+
 #ifdef _OPENMP
 static sd_status owned_update(sd_world *w, int T)
 {
@@ -635,11 +697,7 @@ static sd_status owned_update(sd_world *w, int T)
     sd_owned *o = w->owned;
     if (o && o->stamp == w->near_version && o->T == T && o->n == n && o->nbb == nbb && o->pairs == w->bb.p)
         return SD_OK;
-    if (!o) {
-        o = calloc(1, sizeof *o);
-        if (!o) return SD_ERR_NOMEM;
-        w->owned = o;
-    }
+    if (!(o = owned_get(w))) return SD_ERR_NOMEM;
     if (o->T != T) { /* new: even shares */
         for (int t = 0; t <= T; t++)
             o->fo[t] = (double)t / T;
@@ -657,44 +715,79 @@ static sd_status owned_update(sd_world *w, int T)
         if (k > nbb - 1) k = nbb - 1;
         if (k < 0) k = 0;
         const sd_pair *p = &w->bb.p[nbb > 0 ? near[k] : 0];
-        o->B[t] = nbb > 0 ? (p->a < p->b ? p->a : p->b) : 0;
+        o->B[t] = nbb > 0 ? pair_lead(&w->b, p) : 0;
         if (o->B[t] < o->B[t - 1]) o->B[t] = o->B[t - 1];
     }
-    /* count, then fill: owner t's list holds its own pairs and the cross pairs touching it,
-     * in ascending pair order */
-    int cnt[SD_MAX_OWNERS] = {0};
-    int ncross = 0;
-    for (int j = 0; j < nbb; j++) {
-        const sd_pair *p = &w->bb.p[near[j]];
-        const int ta = owner_of(p->a, o->B, T), tb = owner_of(p->b, o->B, T);
-        cnt[ta]++;
-        if (ta != tb) {
-            cnt[tb]++;
-            ncross++;
+    if (o->n != n || o->nf_stamp != w->timers.rebuilds) {
+        o->nf = n;
+        while (o->nf > 0 && sd_body_is_bed(&w->b, o->nf - 1))
+            o->nf--;
+        o->nf_stamp = w->timers.rebuilds;
+    }
+    /* owner t's list holds its own pairs and the cross pairs touching it, in ascending pair
+     * order; made by T threads over T chunks of the near list: count, place, fill */
+    _Static_assert(SD_MAX_OWNERS <= 64, "the per-chunk counts live on the stack");
+    int cnt[SD_MAX_OWNERS][SD_MAX_OWNERS], ccross[SD_MAX_OWNERS + 1];
+    int nomem = 0;
+#pragma omp parallel num_threads(T)
+    {
+        const int c = omp_get_thread_num(), nc = omp_get_num_threads();
+        const int j0 = (int)((long)nbb * c / nc), j1 = (int)((long)nbb * (c + 1) / nc);
+        int *mine = cnt[c];
+        for (int t = 0; t < T; t++)
+            mine[t] = 0;
+        int nx = 0;
+        for (int j = j0; j < j1; j++) {
+            int ta, tb;
+            pair_owners(&w->b, &w->bb.p[near[j]], o->B, T, &ta, &tb);
+            mine[ta]++;
+            if (ta != tb) {
+                mine[tb]++;
+                nx++;
+            }
+        }
+        ccross[c] = nx;
+#pragma omp barrier
+#pragma omp single
+        {
+            /* cnt[c][t] becomes where chunk c's entries of owner t go; ccross[c] likewise */
+            int at = 0;
+            for (int t = 0; t < T; t++) {
+                o->start[t] = at;
+                for (int q = 0; q < nc; q++) {
+                    const int k = cnt[q][t];
+                    cnt[q][t] = at;
+                    at += k;
+                }
+            }
+            o->start[T] = at;
+            int xc = 0;
+            for (int q = 0; q < nc; q++) {
+                const int k = ccross[q];
+                ccross[q] = xc;
+                xc += k;
+            }
+            o->ncross = xc;
+            nomem = sd_grow((void **)&o->cross, &o->cap, xc > 0 ? xc : 1, sizeof(int32_t)) ||
+                    sd_grow((void **)&o->list, &o->list_cap, at > 0 ? at : 1, sizeof(int32_t));
+        }
+        if (!nomem) {
+            int xc = ccross[c];
+            for (int j = j0; j < j1; j++) {
+                const int k = near[j];
+                int ta, tb;
+                pair_owners(&w->b, &w->bb.p[k], o->B, T, &ta, &tb);
+                if (ta == tb) {
+                    o->list[mine[ta]++] = k;
+                    continue;
+                }
+                o->cross[xc++] = k;
+                o->list[mine[ta]++] = ~k;
+                o->list[mine[tb]++] = ~k;
+            }
         }
     }
-    o->start[0] = 0;
-    for (int t = 0; t < T; t++)
-        o->start[t + 1] = o->start[t] + cnt[t];
-    if (sd_grow((void **)&o->cross, &o->cap, ncross > 0 ? ncross : 1, sizeof(int32_t)) ||
-        sd_grow((void **)&o->list, &o->list_cap, o->start[T] > 0 ? o->start[T] : 1, sizeof(int32_t)))
-        return SD_ERR_NOMEM;
-    int fill[SD_MAX_OWNERS];
-    for (int t = 0; t < T; t++)
-        fill[t] = o->start[t];
-    o->ncross = 0;
-    for (int j = 0; j < nbb; j++) {
-        const int k = near[j];
-        const sd_pair *p = &w->bb.p[k];
-        const int ta = owner_of(p->a, o->B, T), tb = owner_of(p->b, o->B, T);
-        if (ta == tb) {
-            o->list[fill[ta]++] = k;
-            continue;
-        }
-        o->cross[o->ncross++] = k;
-        o->list[fill[ta]++] = ~k;
-        o->list[fill[tb]++] = ~k;
-    }
+    if (nomem) return SD_ERR_NOMEM;
     o->stamp = w->near_version;
     o->T = T;
     o->n = n;
@@ -738,8 +831,8 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
         const double t0 = omp_get_wtime();
         /* pass 2: each owner its span, in pair order */
         for (int t = tid; t < T; t += nthr) {
-            const int i0 = o->B[t], i1 = o->B[t + 1];
-            for (int i = i0; i < i1; i++)
+            const int i0 = o->B[t], i1 = o->B[t + 1], i1f = i1 < o->nf ? i1 : o->nf;
+            for (int i = i0; i < i1f; i++)
                 if (!sd_body_is_bed(b, i)) b->force[i] = b->torque[i] = v3(0, 0, 0);
             for (int j0 = o->start[t]; j0 < o->start[t + 1]; j0 += SS_CHUNK) {
                 const int j1 = o->start[t + 1] - j0 < SS_CHUNK ? o->start[t + 1] : j0 + SS_CHUNK;
@@ -772,7 +865,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 }
             }
             /* its bodies' wall pairs, then its moving bodies */
-            count += bt_range(w, law, i0, i1);
+            count += bt_range(w, law, i0, i1f > i0 ? i1f : i0);
             if (moved_out)
                 moved |= sd_integrate_list(w, w->mov, sd_mov_lower(w->mov, w->mov_n, i0),
                                            sd_mov_lower(w->mov, w->mov_n, i1), &v2, &dc, &xf);

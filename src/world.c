@@ -81,6 +81,7 @@ void sd_world_destroy(sd_world *w)
     if (w->owned) {
         free(w->owned->cross);
         free(w->owned->list);
+        free(w->owned->tmp);
     }
     free(w->owned);
     free(w->bb_scratch);

@@ -107,6 +107,8 @@ typedef struct {
 typedef struct {
     long stamp; /* timers.rebuilds of the pair list it was made from */
     int T, n, nbb;
+    int nf; /* bodies before the trailing bed (sd_body_is_bed): the passes stop there */
+    long nf_stamp;
     const void *pairs;
     int B[SD_MAX_OWNERS + 1]; /* thread t owns bodies B[t] .. B[t+1]-1 */
     int32_t *cross;           /* pairs whose bodies have different owners */
@@ -120,6 +122,10 @@ typedef struct {
      * the body-body pairs, and each owner's time since it was set */
     double fo[SD_MAX_OWNERS + 1];
     double tau[SD_MAX_OWNERS];
+    /* scratch of the parallel near-list filter: each thread's kept pairs at its chunk's
+     * start, then packed into w->near */
+    int32_t *tmp;
+    int tmp_cap;
 } sd_owned;
 
 struct sd_world {
