@@ -4,6 +4,10 @@
 
 #include "world_internal.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #define SD_BODY_FIELDS(X)                                                                                              \
     X(gid, int32_t)                                                                                                    \
     X(shape, uint8_t)                                                                                                  \
@@ -106,25 +110,15 @@ void sd_bodies_swap_remove(sd_bodies *b, int i)
 }
 
 typedef struct {
-    const int32_t *perm; /* new index -> old index */
-    int n;
-    void *scratch;
-} permute_ctx;
-
-typedef struct {
     uint64_t w[3];
 } blob24;
 typedef struct {
     uint64_t w[4];
 } blob32;
 
-static void permute_field(void *array, size_t elem, const char *name, void *ctx)
+/* a[i] <- a[perm[i]] for i < n, through the scratch t */
+static void permute_array(char *p, size_t elem, const int32_t *perm, int n, char *t)
 {
-    (void)name;
-    permute_ctx *pc = ctx;
-    char *p = *(char **)array, *t = pc->scratch;
-    const int32_t *perm = pc->perm;
-    const int n = pc->n;
     /* typed copies for the sizes the store has (a memcpy call per element was most of the
      * permutation at every rebuild) */
     switch (elem) {
@@ -155,13 +149,44 @@ static void permute_field(void *array, size_t elem, const char *name, void *ctx)
     memcpy(p, t, (size_t)n * elem);
 }
 
-sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm)
+#define SD_MAX_FIELDS 64
+typedef struct {
+    char *array[SD_MAX_FIELDS];
+    size_t elem[SD_MAX_FIELDS];
+    int n;
+} field_list;
+
+static void list_field(void *array, size_t elem, const char *name, void *ctx)
 {
-    /* the widest field is a quaternion */
-    void *scratch = malloc((size_t)(b->n + 1) * sizeof(sd_quat));
+    (void)name;
+    field_list *f = ctx;
+    if (f->n < SD_MAX_FIELDS) {
+        f->array[f->n] = *(char **)array;
+        f->elem[f->n] = elem;
+    }
+    f->n++;
+}
+
+sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n)
+{
+    field_list f = {.n = 0};
+    sd_bodies_for_each_field(b, list_field, &f);
+    if (f.n > SD_MAX_FIELDS) return SD_ERR_NOMEM;
+    int T = 1;
+#ifdef _OPENMP
+    T = n > 2000 ? omp_get_max_threads() : 1;
+#endif
+    /* one scratch per thread, as wide as the widest field (a quaternion) */
+    char *scratch = malloc((size_t)T * (size_t)(n + 1) * sizeof(sd_quat));
     if (!scratch) return SD_ERR_NOMEM;
-    permute_ctx pc = {perm, b->n, scratch};
-    sd_bodies_for_each_field(b, permute_field, &pc);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(T) if (T > 1)
+    for (int k = 0; k < f.n; k++) {
+        int tid = 0;
+#ifdef _OPENMP
+        tid = omp_get_thread_num();
+#endif
+        permute_array(f.array[k], f.elem[k], perm, n, scratch + (size_t)tid * (size_t)(n + 1) * sizeof(sd_quat));
+    }
     free(scratch);
     return SD_OK;
 }

@@ -371,7 +371,8 @@ static sd_status sort_bodies_by_cell(sd_world *w)
         st = SD_ERR_NOMEM;
         goto done;
     }
-    int sorted = 1;
+    int unsorted = 0;
+#pragma omp parallel for schedule(static) reduction(| : unsorted) if (n > w->def.parallel_min)
     for (int i = 0; i < n; i++) {
         sd_vec3 c = b->pos[i];
         int r[6];
@@ -383,17 +384,23 @@ static sd_status sort_bodies_by_cell(sd_world *w)
          * else: the per-step passes walk the moving bodies densely, and the bed, which never
          * moves, keeps its place from one rebuild to the next */
         cell[i] += sd_body_is_bed(b, i) ? ncell : 0;
-        if (i && cell[i] < cell[i - 1]) sorted = 0;
-        count[cell[i] + 1]++;
     }
-    if (sorted) goto done;
+    for (int i = 1; i < n; i++)
+        unsorted |= cell[i] < cell[i - 1];
+    if (!unsorted) goto done;
+    for (int i = 0; i < n; i++)
+        count[cell[i] + 1]++;
     for (int c = 0; c < 2 * ncell; c++)
         count[c + 1] += count[c];
     for (int i = 0; i < n; i++)
         perm[count[cell[i]]++] = i;
-    st = sd_bodies_permute(b, perm);
+    /* the bed at the end stays where it was: permute the part before it only */
+    int m = n;
+    while (m > 0 && perm[m - 1] == m - 1)
+        m--;
+    st = sd_bodies_permute(b, perm, m);
     if (st) goto done;
-    for (int i = 0; i < n; i++)
+    for (int i = 0; i < m; i++)
         w->gid_map[b->gid[i]] = i;
 done:
     free(cell);
@@ -449,7 +456,7 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
     const sd_bodies *b = &w->b;
     const sd_grid *g = &w->grid;
     const int32_t *ri = w->range[i];
-    const int fixed_i = b->fixed[i];
+    const int fixed_i = b->fixed[i], use_mi = fixed_i && mi->start;
     const double bri = b->bound_r[i], margin = w->def.margin;
     const sd_vec3 pi = b->pos[i];
     for (int z = ri[2]; z <= ri[5]; z++)
@@ -458,9 +465,9 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
                 int c = (z * g->ny + y) * g->nx + x;
                 /* a cell lists its bodies in ascending order: start past i (a fixed body
                  * looks at the moving ones only, the same j in the same order) */
-                const int32_t *items = fixed_i ? mi->items : g->items;
-                int k = fixed_i ? mi->start[c] : g->cell_start[c];
-                const int kend = fixed_i ? mi->start[c + 1] : g->cell_start[c + 1];
+                const int32_t *items = use_mi ? mi->items : g->items;
+                int k = use_mi ? mi->start[c] : g->cell_start[c];
+                const int kend = use_mi ? mi->start[c + 1] : g->cell_start[c + 1];
                 for (int hi = kend; k < hi;) {
                     int mid = (k + hi) >> 1;
                     if (items[mid] <= i)
@@ -505,6 +512,45 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
     return 0;
 }
 
+/* The body–triangle candidates of body i, in triangle-grid order. Returns nonzero when out
+ * of memory. */
+static int bt_scan(const sd_world *w, int i, double hm, cand_buf *out)
+{
+    const sd_bodies *b = &w->b;
+    const sd_grid *tg = &w->tgrid;
+    if (b->fixed[i] || w->w.n == 0) return 0;
+    sd_vec3 l, h;
+    body_box(b, i, hm, &l, &h);
+    const sd_vec3 tlo = tg->lo;
+    const sd_vec3 thi = v3_add(tg->lo, v3(tg->nx * tg->cell, tg->ny * tg->cell, tg->nz * tg->cell));
+    if (h.x < tlo.x || h.y < tlo.y || h.z < tlo.z || l.x > thi.x || l.y > thi.y || l.z > thi.z) return 0;
+    int32_t ri[6];
+    cell_range(tg, l, h, ri);
+    for (int z = ri[2]; z <= ri[5]; z++)
+        for (int y = ri[1]; y <= ri[4]; y++)
+            for (int x = ri[0]; x <= ri[3]; x++) {
+                const int c = (z * tg->ny + y) * tg->nx + x;
+                for (int k = tg->cell_start[c]; k < tg->cell_start[c + 1]; k++) {
+                    const int t = tg->items[k];
+                    const int32_t *rt = w->trange[t];
+                    if (!boxes_overlap(ri, rt)) continue;
+                    if (x != (ri[0] > rt[0] ? ri[0] : rt[0]) || y != (ri[1] > rt[1] ? ri[1] : rt[1]) ||
+                        z != (ri[2] > rt[2] ? ri[2] : rt[2]))
+                        continue;
+                    const sd_tri *tr = &w->w.tri[t];
+                    const double s = v3_dot(v3_sub(b->pos[i], tr->v[0]), tr->n);
+                    if (fabs(s) > b->bound_r[i] + w->def.margin) continue;
+                    int q;
+                    const sd_vec3 cp = sd_geom_closest_on_tri(tr, b->pos[i], &q);
+                    const double reach = b->bound_r[i] + w->def.margin;
+                    if (v3_norm2(v3_sub(cp, b->pos[i])) > reach * reach) continue;
+                    if (sd_grow((void **)&out->c, &out->cap, out->n + 1, sizeof(cand))) return 1;
+                    out->c[out->n++] = (cand){i, t, b->shape[i] == SD_SHAPE_SPHERE ? SD_PAIR_ST : SD_PAIR_CT};
+                }
+            }
+    return 0;
+}
+
 sd_status sd_neighbor_rebuild(sd_world *w)
 {
     sd_bodies *b = &w->b;
@@ -515,6 +561,8 @@ sd_status sd_neighbor_rebuild(sd_world *w)
 
     /* cell size: the largest sphere diameter plus the margin; cylinders span several cells */
     double dmax = 0.0;
+    const int par = b->n > w->def.parallel_min;
+#pragma omp parallel for schedule(static) reduction(max : dmax) if (par)
     for (int i = 0; i < b->n; i++)
         dmax = fmax(dmax, 2.0 * b->radius[i]);
     if (dmax <= 0.0) dmax = 0.01;
@@ -525,13 +573,15 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         if (st) return st;
     }
 
-    sd_vec3 lo = v3(1e300, 1e300, 1e300), hi = v3(-1e300, -1e300, -1e300);
+    double lx = 1e300, ly = 1e300, lz = 1e300, hx = -1e300, hy = -1e300, hz = -1e300;
+#pragma omp parallel for schedule(static) reduction(min : lx, ly, lz) reduction(max : hx, hy, hz) if (par)
     for (int i = 0; i < b->n; i++) {
         sd_vec3 l, h;
         body_box(b, i, hm, &l, &h);
-        lo = v3(fmin(lo.x, l.x), fmin(lo.y, l.y), fmin(lo.z, l.z));
-        hi = v3(fmax(hi.x, h.x), fmax(hi.y, h.y), fmax(hi.z, h.z));
+        lx = fmin(lx, l.x), ly = fmin(ly, l.y), lz = fmin(lz, l.z);
+        hx = fmax(hx, h.x), hy = fmax(hy, h.y), hz = fmax(hz, h.z);
     }
+    sd_vec3 lo = v3(lx, ly, lz), hi = v3(hx, hy, hz);
     if (b->n == 0) lo = hi = v3(0, 0, 0);
     long max_cells = 8L * b->n + 4096;
     st = grid_layout(&w->grid, lo, hi, cell, max_cells);
@@ -549,10 +599,14 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL);
     if (st) return st;
 
-    /* body–body candidates, generated in body order: T threads scan contiguous body ranges
-     * into their own buffers, concatenated in range order (the list of one thread) */
+    /* candidates, generated in body order: the bodies cut into K chunks of about the same
+     * number of moving bodies, scanned by T threads as they come free, each chunk into its
+     * own buffers, concatenated in chunk order (the lists of one thread) */
     w->bb.n = 0;
     w->bb.nh = 0;
+    w->bt.n = 0;
+    w->bt.nh = 0;
+    if (sd_grow((void **)&w->csr.bt_start, &w->csr.cap_bt_start, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     {
         int T = 1;
 #ifdef _OPENMP
@@ -560,82 +614,57 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
         if (b->n <= w->def.parallel_min) T = 1;
 #endif
-        cand_buf buf[SD_MAX_OWNERS];
-        memset(buf, 0, sizeof buf);
-        moving_index mi;
-        if (moving_index_make(w, &mi)) {
+        const int K = T > 1 ? 8 * T : 1;
+        /* past the last moving body, a fixed body has no candidates (j > i would be fixed) */
+        int nscan = b->n, nfixed = 0;
+        while (nscan > 0 && b->fixed[nscan - 1])
+            nscan--;
+        for (int i = 0; i < nscan; i++)
+            nfixed += b->fixed[i];
+        cand_buf *buf = calloc(2 * (size_t)K, sizeof(cand_buf)); /* K body-body, K body-triangle */
+        /* the moving bodies of each cell, for the fixed bodies' scans: worth making when there
+         * are many (the bed, sorted last, has none to scan; the dam's pipes are a few) */
+        moving_index mi = {NULL, NULL};
+        if (!buf || (nfixed > 64 && moving_index_make(w, &mi))) {
+            free(buf);
             free(mi.start);
             free(mi.items);
             return SD_ERR_NOMEM;
         }
+        const int nm = w->mov_n;
         int nomem = 0;
-#pragma omp parallel num_threads(T) reduction(| : nomem) if (T > 1)
-        {
-            int tid = 0, nthr = 1;
-#ifdef _OPENMP
-            tid = omp_get_thread_num();
-            nthr = omp_get_num_threads();
-#endif
-            /* ranges holding about the same number of moving bodies (the scans of fixed ones
-             * are short) */
-            const int nm = w->mov_n;
-            const int i0 = tid == 0 ? 0 : nm ? w->mov[(long)nm * tid / nthr] : (int)((long)b->n * tid / nthr);
-            const int i1 = tid + 1 == nthr ? b->n
-                           : nm            ? w->mov[(long)nm * (tid + 1) / nthr]
-                                           : (int)((long)b->n * (tid + 1) / nthr);
-            for (int i = i0; i < i1 && !nomem; i++)
-                nomem |= bb_scan(w, i, hm, &mi, &buf[tid]);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(T) reduction(| : nomem) if (T > 1)
+        for (int c = 0; c < K; c++) {
+            const int i0 = c == 0 ? 0 : nm ? w->mov[(long)nm * c / K] : (int)((long)nscan * c / K);
+            const int i1 = c + 1 == K ? nscan : nm ? w->mov[(long)nm * (c + 1) / K] : (int)((long)nscan * (c + 1) / K);
+            for (int i = i0; i < i1 && !nomem; i++) {
+                nomem |= bb_scan(w, i, hm, &mi, &buf[c]);
+                nomem |= bt_scan(w, i, hm, &buf[K + c]);
+            }
         }
         free(mi.start);
         free(mi.items);
-        for (int t = 0; t < T && !nomem; t++)
-            for (int k = 0; k < buf[t].n && !st; k++)
-                st = push_pair(&w->bb, buf[t].c[k].a, buf[t].c[k].b, buf[t].c[k].kind);
-        for (int t = 0; t < T; t++)
-            free(buf[t].c);
+        for (int c = 0; c < K && !nomem; c++)
+            for (int k = 0; k < buf[c].n && !st; k++)
+                st = push_pair(&w->bb, buf[c].c[k].a, buf[c].c[k].b, buf[c].c[k].kind);
+        /* body–triangle pairs grouped by body, ascending (the mesh dedup in contact.c relies
+         * on it) */
+        int i = 0;
+        for (int c = K; c < 2 * K && !nomem; c++)
+            for (int k = 0; k < buf[c].n && !st; k++) {
+                const cand *e = &buf[c].c[k];
+                while (i <= e->a)
+                    w->csr.bt_start[i++] = w->bt.n;
+                st = push_pair(&w->bt, e->a, e->b, e->kind);
+            }
+        while (i <= b->n)
+            w->csr.bt_start[i++] = w->bt.n;
+        for (int c = 0; c < 2 * K; c++)
+            free(buf[c].c);
+        free(buf);
         if (nomem) return SD_ERR_NOMEM;
         if (st) return st;
     }
-
-    /* body–triangle candidates, grouped by body (the mesh dedup in contact.c relies on it) */
-    if (sd_grow((void **)&w->csr.bt_start, &w->csr.cap_bt_start, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    w->bt.n = 0;
-    w->bt.nh = 0;
-    sd_grid *tg = &w->tgrid;
-    for (int i = 0; i < b->n; i++) {
-        w->csr.bt_start[i] = w->bt.n;
-        if (b->fixed[i] || w->w.n == 0) continue;
-        sd_vec3 l, h;
-        body_box(b, i, hm, &l, &h);
-        sd_vec3 tlo = tg->lo;
-        sd_vec3 thi = v3_add(tg->lo, v3(tg->nx * tg->cell, tg->ny * tg->cell, tg->nz * tg->cell));
-        if (h.x < tlo.x || h.y < tlo.y || h.z < tlo.z || l.x > thi.x || l.y > thi.y || l.z > thi.z) continue;
-        int32_t ri[6];
-        cell_range(tg, l, h, ri);
-        for (int z = ri[2]; z <= ri[5]; z++)
-            for (int y = ri[1]; y <= ri[4]; y++)
-                for (int x = ri[0]; x <= ri[3]; x++) {
-                    int c = (z * tg->ny + y) * tg->nx + x;
-                    for (int k = tg->cell_start[c]; k < tg->cell_start[c + 1]; k++) {
-                        int t = tg->items[k];
-                        const int32_t *rt = w->trange[t];
-                        if (!boxes_overlap(ri, rt)) continue;
-                        if (x != (ri[0] > rt[0] ? ri[0] : rt[0]) || y != (ri[1] > rt[1] ? ri[1] : rt[1]) ||
-                            z != (ri[2] > rt[2] ? ri[2] : rt[2]))
-                            continue;
-                        const sd_tri *tr = &w->w.tri[t];
-                        double s = v3_dot(v3_sub(b->pos[i], tr->v[0]), tr->n);
-                        if (fabs(s) > b->bound_r[i] + w->def.margin) continue;
-                        int q;
-                        sd_vec3 cp = sd_geom_closest_on_tri(tr, b->pos[i], &q);
-                        double reach = b->bound_r[i] + w->def.margin;
-                        if (v3_norm2(v3_sub(cp, b->pos[i])) > reach * reach) continue;
-                        int kind = b->shape[i] == SD_SHAPE_SPHERE ? SD_PAIR_ST : SD_PAIR_CT;
-                        if ((st = push_pair(&w->bt, i, t, kind))) return st;
-                    }
-                }
-    }
-    w->csr.bt_start[b->n] = w->bt.n;
 
     set_effective_masses(w);
     int32_t *first = old_first_index(w);

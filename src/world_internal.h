@@ -192,7 +192,8 @@ sd_status sd_bodies_reserve(sd_bodies *b, int cap);
 void sd_bodies_free(sd_bodies *b);
 void sd_bodies_swap_remove(sd_bodies *b, int i);
 /* Reorder every field: new index i takes old index perm[i]. */
-sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm);
+/* a[i] <- a[perm[i]] in every field, for the first n bodies (perm maps 0..n-1 onto itself) */
+sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n);
 /* Iterate over the field table: calls fn(ptr, elem_size, ctx) for each field array. */
 typedef void (*sd_field_fn)(void *array, size_t elem_size, const char *name, void *ctx);
 void sd_bodies_for_each_field(sd_bodies *b, sd_field_fn fn, void *ctx);
