@@ -463,7 +463,7 @@ typedef struct {
 
 static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
 {
-    if (sd_body_is_bed(b, i)) return; /* its load is never read: stays zero (sd_gather_body) */
+    if (sd_body_is_bed(b, i)) return; /* its load is never read: stays zero (bt_range adds nothing to a fixed body) */
     if (as_b) {
         b->force[i] = v3_sub(b->force[i], o->f_a);
         b->torque[i] = v3_add(b->torque[i], o->t_b);
@@ -477,22 +477,34 @@ static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
  * pair's slot (gathered per body in pair order by sd_contact_gather). */
 static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
 {
-    const sd_bodies *b = &w->b;
+    sd_bodies *b = &w->b;
     long count = 0;
-    for (int i = i0; i < i1; i++) {
-        int from = w->csr.bt_start[i], to = w->csr.bt_start[i + 1];
-        if (from == to) continue;
+    /* the pairs are grouped by body: walk the pairs, not the bodies (most have none) */
+    const int kend = w->csr.bt_start[i1];
+    for (int from = w->csr.bt_start[i0]; from < kend;) {
+        const int i = w->bt.p[from].a;
+        const int to = w->csr.bt_start[i + 1];
         int multi = 0;
         for (int k = from; k < to; k++)
             multi += narrow_bt(b, &w->w, &w->bt.p[k], &w->bt_man[k]) > 0;
         if (multi > 1) sd_contact_mesh_dedup(&w->w, w->bt.p, w->bt_man, from, to);
+        /* each pair into its slot (the wall loads, sd_contact_gather) and onto its body after
+         * the body-body sum, in pair order */
+        sd_vec3 f = b->force[i], t = b->torque[i];
         for (int k = from; k < to; k++) {
             const sd_pair *p = &w->bt.p[k];
             int used = apply_manifold(w, law, &w->bt_man[k], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
                                       &w->bt.out[k]);
             w->bt.active[k] = (uint8_t)(used > 0);
             count += used;
+            if (used > 0) {
+                f = v3_add(f, w->bt.out[k].f_a);
+                t = v3_add(t, w->bt.out[k].t_a);
+            }
         }
+        b->force[i] = f;
+        b->torque[i] = t;
+        from = to;
     }
     return count;
 }
@@ -934,7 +946,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
  * slots of the last step, when they are asked for (sd_world_group_force, a checkpoint, or
  * before the pair lists are taken apart): done every step, it read each thread's slots into
  * one thread's cache and cost 5-15 % of a two-thread step. The bodies' own totals are gathered
- * body by body just before each body moves (sd_gather_body). */
+ * pair by pair onto each body after its body-body sum (bt_range). */
 void sd_contact_gather(sd_world *w)
 {
     if (!w->wall_force_stale) return;

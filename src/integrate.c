@@ -20,7 +20,6 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
     double vm = *v2max, dc = *dcyl, xf = *xfront;
     for (int k = k0; k < k1; k++) {
         const int i = mov[k];
-        sd_gather_body(w, i);
         sd_vec3 f = v3_add(b->force[i], b->ext_force[i]);
         sd_vec3 acc = v3_madd(g, f, b->inv_mass[i]);
         b->vel[i] = v3_madd(b->vel[i], acc, dt);

@@ -230,21 +230,6 @@ void sd_contact_gather(sd_world *w);
  * cylinders) are summed. */
 static inline int sd_body_is_bed(const sd_bodies *b, int i) { return b->fixed[i] && b->shape[i] == SD_SHAPE_SPHERE; }
 
-/* Body i's contact force and torque: the body-body part, already summed in pair order by
- * sd_contact_compute, plus its body-triangle pairs in pair order. */
-static inline void sd_gather_body(sd_world *w, int i)
-{
-    sd_bodies *b = &w->b;
-    if (sd_body_is_bed(b, i)) return;
-    sd_vec3 f = b->force[i], t = b->torque[i];
-    for (int k = w->csr.bt_start[i]; k < w->csr.bt_start[i + 1]; k++) {
-        if (!w->bt.active[k]) continue;
-        f = v3_add(f, w->bt.out[k].f_a);
-        t = v3_add(t, w->bt.out[k].t_a);
-    }
-    b->force[i] = f;
-    b->torque[i] = t;
-}
 void sd_pairlist_free(sd_pairlist *l);
 /* Mesh rule on the manifolds man[from..to) of one body's triangle pairs: drops edge and vertex
  * contacts already represented by a face or edge contact (used by the force pass and by
