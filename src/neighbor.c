@@ -89,12 +89,16 @@ static sd_status grid_layout(sd_grid *g, sd_vec3 lo, sd_vec3 hi, double cell, lo
     return SD_OK;
 }
 
-/* Counting sort of items into cells given each item's range. */
-static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const uint8_t *skip)
+/* Counting sort of items into cells given each item's range. With reg0 and slot: item i's
+ * entries are reg0[i] .. reg0[i+1]-1 in the order z, y, x of its range, and slot[r] is where
+ * entry r went in items (so the items after it in that cell are exactly those above i). */
+static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const uint8_t *skip, int32_t *reg0,
+                           int32_t **slot, int *slot_cap)
 {
     int ncell = g->nx * g->ny * g->nz;
     long total = 0;
     for (int i = 0; i < n; i++) {
+        if (reg0) reg0[i] = (int32_t)total;
         if (skip && skip[i]) continue;
         const int32_t *r = range[i];
         for (int z = r[2]; z <= r[5]; z++)
@@ -103,17 +107,24 @@ static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const u
                     g->cell_start[(z * g->ny + y) * g->nx + x + 1]++;
         total += (long)(r[3] - r[0] + 1) * (r[4] - r[1] + 1) * (r[5] - r[2] + 1);
     }
+    if (reg0) reg0[n] = (int32_t)total;
     for (int c = 0; c < ncell; c++)
         g->cell_start[c + 1] += g->cell_start[c];
     if (sd_grow((void **)&g->items, &g->cap_items, (int)total + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    if (slot && sd_grow((void **)slot, slot_cap, (int)total + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     /* fill using cell_start as a cursor, then shift back */
+    int32_t *sl = slot ? *slot : NULL;
+    long e = 0;
     for (int i = 0; i < n; i++) {
         if (skip && skip[i]) continue;
         const int32_t *r = range[i];
         for (int z = r[2]; z <= r[5]; z++)
             for (int y = r[1]; y <= r[4]; y++)
-                for (int x = r[0]; x <= r[3]; x++)
-                    g->items[g->cell_start[(z * g->ny + y) * g->nx + x]++] = i;
+                for (int x = r[0]; x <= r[3]; x++) {
+                    const int at = g->cell_start[(z * g->ny + y) * g->nx + x]++;
+                    g->items[at] = i;
+                    if (sl) sl[e++] = at;
+                }
     }
     for (int c = ncell; c > 0; c--)
         g->cell_start[c] = g->cell_start[c - 1];
@@ -348,7 +359,7 @@ static sd_status rebuild_triangle_grid(sd_world *w, double cell)
     if (!skip) return SD_ERR_NOMEM;
     for (int t = 0; t < wl->n; t++)
         skip[t] = !wl->active[t];
-    st = grid_fill(&w->tgrid, wl->n, (const int32_t(*)[6])w->trange, skip);
+    st = grid_fill(&w->tgrid, wl->n, (const int32_t(*)[6])w->trange, skip, NULL, NULL, NULL);
     free(skip);
     if (st) return st;
     st = sd_walls_weld(wl);
@@ -459,6 +470,7 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
     const int fixed_i = b->fixed[i], use_mi = fixed_i && mi->start;
     const double bri = b->bound_r[i], margin = w->def.margin;
     const sd_vec3 pi = b->pos[i];
+    int e = w->reg0[i]; /* i's entries, in the order of the loops below (grid_fill) */
     for (int z = ri[2]; z <= ri[5]; z++)
         for (int y = ri[1]; y <= ri[4]; y++)
             for (int x = ri[0]; x <= ri[3]; x++) {
@@ -466,14 +478,19 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
                 /* a cell lists its bodies in ascending order: start past i (a fixed body
                  * looks at the moving ones only, the same j in the same order) */
                 const int32_t *items = use_mi ? mi->items : g->items;
-                int k = use_mi ? mi->start[c] : g->cell_start[c];
+                int k;
                 const int kend = use_mi ? mi->start[c + 1] : g->cell_start[c + 1];
-                for (int hi = kend; k < hi;) {
-                    int mid = (k + hi) >> 1;
-                    if (items[mid] <= i)
-                        k = mid + 1;
-                    else
-                        hi = mid;
+                if (use_mi) {
+                    k = mi->start[c];
+                    for (int hi = kend; k < hi;) {
+                        int mid = (k + hi) >> 1;
+                        if (items[mid] <= i)
+                            k = mid + 1;
+                        else
+                            hi = mid;
+                    }
+                } else {
+                    k = w->slot[e++] + 1; /* just past i's own entry in this cell */
                 }
                 for (; k < kend; k++) {
                     int j = items[k];
@@ -596,7 +613,8 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         body_box(b, i, hm, &l, &h);
         cell_range(&w->grid, l, h, w->range[i]);
     }
-    st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL);
+    if (sd_grow((void **)&w->reg0, &w->reg0_cap, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL, w->reg0, &w->slot, &w->slot_cap);
     if (st) return st;
 
     /* candidates, generated in body order: the bodies cut into K chunks of about the same

@@ -90,6 +90,8 @@ void sd_world_destroy(sd_world *w)
     free(w->old_hist);
     free(w->old_keys);
     free(w->range);
+    free(w->reg0);
+    free(w->slot);
     free(w->trange);
     free(w->mov);
     free(w->near);

@@ -159,6 +159,10 @@ struct sd_world {
     int keys_collected;  /* old keys already taken (a body was removed since) */
     int32_t (*range)[6]; /* per-body cell range in the body grid */
     int range_cap;
+    /* body i's entries in the body grid are reg0[i] .. reg0[i+1]-1, slot[e] the place of
+     * entry e in the grid's items (neighbor.c grid_fill; scratch, not saved) */
+    int32_t *reg0, *slot;
+    int reg0_cap, slot_cap;
     int32_t (*trange)[6]; /* per-triangle cell range in the triangle grid */
     int trange_cap;
     /* derived, never saved: the indices of the moving bodies, ascending, for the per-body
