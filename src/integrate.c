@@ -18,6 +18,7 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
     double vm = *v2max, dc = *dcyl, xf = *xfront;
+    if (w->ext_fn) w->ext_fn(w->ext_ctx, w, mov, k0, k1);
     for (int k = k0; k < k1; k++) {
         const int i = mov[k];
         sd_vec3 f = v3_add(b->force[i], b->ext_force[i]);

@@ -55,6 +55,11 @@ typedef struct {
     const char *restarted_from;
     double flow_wall; /* wall time from the start to the flow end, build included (a restarted
                        * run: that of the run that wrote the checkpoint) */
+    struct fluid_ctx {
+        sd_fluid_params fp;
+        double h_d, xd;
+        int capture;
+    } fluid; /* what the step's fluid forces need (set_fluid) */
 } run_ctx;
 
 static double body_volume(const sd_bodies *b, int i)
@@ -116,60 +121,66 @@ static void fluid_flush(fluid_batch *q, const sd_fluid_params *fp, double h_d, s
     q->m = 0;
 }
 
-/* The fluid forces of the phase on every moving body, for the next step. Each thread takes
- * the bodies it moves in the step (sd_mov_share: their data stay in its cache). */
-static sd_status apply_fluid(run_ctx *c)
+/* The fluid forces on the moving bodies mov[k0 .. k1): called by the world's step for each
+ * thread's bodies just before it moves them (sd_world.ext_fn), so their data are read once,
+ * in that core's cache. Spheres in batches (sd_fluid_sphere_batch: the same bits, vectorized),
+ * logs one by one. */
+static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int k1)
 {
-    sd_bodies *b = &c->w->b;
+    const struct fluid_ctx *fc = ctx;
+    sd_bodies *b = &w->b;
+    const sd_fluid_params *fp = &fc->fp;
+    const double xd = fc->xd, h_d = fc->h_d;
+    const int capture = fc->capture;
+    fluid_batch q;
+    q.m = 0;
+    for (int k = k0; k < k1; k++) {
+        const int i = mov[k];
+        if (b->shape[i] == SD_SHAPE_SPHERE) {
+            const int j = q.m++;
+            q.idx[j] = i;
+            q.px[j] = b->pos[i].x, q.py[j] = b->pos[i].y, q.pz[j] = b->pos[i].z;
+            q.vx[j] = b->vel[i].x, q.vy[j] = b->vel[i].y, q.vz[j] = b->vel[i].z;
+            q.r[j] = b->radius[i];
+            q.cap[j] = (capture && b->pos[i].x < xd) ? 1.0 : 0.0;
+            if (q.m == FLUID_BATCH) fluid_flush(&q, fp, h_d, b);
+            continue;
+        }
+        sd_fluid_element e;
+        e.shape = b->shape[i];
+        e.pos = b->pos[i];
+        e.vel = b->vel[i];
+        e.axis = b->axis[i];
+        e.radius = b->radius[i];
+        e.length = 2.0 * b->hl[i];
+        /* the capture profile applies upstream of the dam; passed elements keep the flow one */
+        sd_fluid_phase ph = (capture && b->pos[i].x < xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
+        b->ext_force[i] = sd_fluid_force_total(fp, ph, h_d, &e);
+    }
+    fluid_flush(&q, fp, h_d, b);
+}
+
+/* The fluid forces of the phase on every moving body, for the next step: handed to the world
+ * (fluid_range), or none while packing (the external forces stay as they are). */
+static void set_fluid(run_ctx *c)
+{
     const sd_scenario *s = c->s;
-    if (!s->water_on || c->phase == PH_PACK || c->phase == PH_RUN) return SD_OK;
-    sd_status st = sd_world_moving_update(c->w);
-    if (st) return st;
+    if (!s->water_on || c->phase == PH_PACK || c->phase == PH_RUN) {
+        c->w->ext_fn = NULL;
+        return;
+    }
     sd_fluid_params fp = sd_fluid_params_default(s->slope_deg * M_PI / 180.0);
     fp.U = s->water_u;
     fp.h = s->water_h;
     fp.rho = s->water_rho;
     fp.C_D = s->water_cd;
     fp.gravity = c->w->def.gravity;
-    const double xd = s->x_dam;
-    const int capture = c->phase == PH_CAPTURE;
-    const double h_d = c->h_d;
-    const sd_world *w = c->w;
-#pragma omp parallel if (w->mov_n > w->def.parallel_min)
-    {
-        int k0 = 0, k1 = w->mov_n;
-#ifdef _OPENMP
-        sd_mov_share(w, omp_get_thread_num(), omp_get_num_threads(), &k0, &k1);
-#endif
-        /* spheres in batches (sd_fluid_sphere_batch: the same bits, vectorized), logs one by one */
-        fluid_batch q;
-        q.m = 0;
-        for (int k = k0; k < k1; k++) {
-            const int i = w->mov[k];
-            if (b->shape[i] == SD_SHAPE_SPHERE) {
-                const int j = q.m++;
-                q.idx[j] = i;
-                q.px[j] = b->pos[i].x, q.py[j] = b->pos[i].y, q.pz[j] = b->pos[i].z;
-                q.vx[j] = b->vel[i].x, q.vy[j] = b->vel[i].y, q.vz[j] = b->vel[i].z;
-                q.r[j] = b->radius[i];
-                q.cap[j] = (capture && b->pos[i].x < xd) ? 1.0 : 0.0;
-                if (q.m == FLUID_BATCH) fluid_flush(&q, &fp, h_d, b);
-                continue;
-            }
-            sd_fluid_element e;
-            e.shape = b->shape[i];
-            e.pos = b->pos[i];
-            e.vel = b->vel[i];
-            e.axis = b->axis[i];
-            e.radius = b->radius[i];
-            e.length = 2.0 * b->hl[i];
-            /* the capture profile applies upstream of the dam; passed elements keep the flow one */
-            sd_fluid_phase ph = (capture && b->pos[i].x < xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
-            b->ext_force[i] = sd_fluid_force_total(&fp, ph, h_d, &e);
-        }
-        fluid_flush(&q, &fp, h_d, b);
-    }
-    return SD_OK;
+    c->fluid.fp = fp;
+    c->fluid.xd = s->x_dam;
+    c->fluid.capture = c->phase == PH_CAPTURE;
+    c->fluid.h_d = c->h_d;
+    c->w->ext_fn = fluid_range;
+    c->w->ext_ctx = &c->fluid;
 }
 
 double sd_run_capture_depth(const sd_scenario *s, const sd_world *w)
@@ -1057,8 +1068,8 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
                 break;
             }
         }
-        st = apply_fluid(&c);
-        if (!st) st = sd_world_step(c.w);
+        set_fluid(&c);
+        st = sd_world_step(c.w);
         if (st) {
             fprintf(o->err, "%s: step %ld, t = %.6f s: %s\n", s->path, c.w->step, c.w->time, sd_status_message(st));
             code = 1;

@@ -128,8 +128,14 @@ typedef struct {
     int tmp_cap;
 } sd_owned;
 
+/* External forces of a step on the moving bodies mov[k0 .. k1) (into ext_force), called just
+ * before they move, by the thread that moves them. */
+typedef void (*sd_ext_force_fn)(void *ctx, struct sd_world *w, const int32_t *mov, int k0, int k1);
+
 struct sd_world {
     sd_world_def def;
+    sd_ext_force_fn ext_fn; /* NULL: ext_force kept as it is (set by the driver, not saved) */
+    void *ext_ctx;
     sd_bodies b;
     sd_walls w;
     sd_pairlist bb;      /* body–body */
