@@ -244,7 +244,17 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
         sd_vec3 nxa = a->a, nxb = b->a; /* outward normals at the witness search point */
         if (found < 0) {
             sd_vec3 x = w[0];
-            for (int it = 0; it < 64; it++) x = cc_project(b, cc_project(a, x));
+            for (int it = 0; it < 64; it++) {
+                const sd_vec3 xa = cc_project(a, x), xb = cc_project(b, xa);
+                /* two solids apart (most pairs that get here): the step from A's point to B's
+                 * is a separating axis once the iterates settle; exact test, then done */
+                const sd_vec3 n = v3_sub(xa, xb);
+                const double nn = v3_norm(n);
+                if (nn > 1e-12 * (a->r + b->r) && cc_sat_overlap(a, b, v3_scale(n, 1.0 / nn)) <= 0.0) return 0;
+                /* a fixed point: the remaining iterations would not move it */
+                if (xb.x == x.x && xb.y == x.y && xb.z == x.z) break;
+                x = xb;
+            }
             /* x is (nearly) in the intersection if there is one; step into both solids along
              * the sum of their inward normals to get a strict witness */
             int fa, fb;
