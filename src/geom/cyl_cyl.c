@@ -177,9 +177,11 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
         for (int k = 0; k < 5; k++) {
             double nn = v3_norm(axes[k]);
             if (!(nn > 1e-12)) continue;
-            if (cc_sat_overlap(a, b, v3_scale(axes[k], 1.0 / nn)) <= 0.0 ||
-                cc_sat_overlap(a, b, v3_scale(axes[k], -1.0 / nn)) <= 0.0)
-                return 0;
+            /* the overlaps along +n and -n (cc_sat_overlap both ways): the extents do not
+             * depend on the sign of n, bit for bit */
+            const sd_vec3 n = v3_scale(axes[k], 1.0 / nn);
+            const double e = sd_cyl_extent(a, n) + sd_cyl_extent(b, n), x = v3_dot(dc, n);
+            if (e - x <= 0.0 || e + x <= 0.0) return 0;
         }
     }
 
