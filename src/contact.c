@@ -509,13 +509,8 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
     return count;
 }
 
-/* The near list (w->near): the body-body pairs worth testing each step. A pair whose gap
- * exceeds the near skin s (w->near_skin) cannot touch before the moving bodies have drifted
- * by s/2 between them (near_drift, summed from each step's largest move of a surface), so it
- * is left out until then: its force is exactly zero, its spring is cleared here as the pass
- * would clear it, and every body sums the same pairs in the same order (same bits). In a dense
- * bed the margin's candidates are twice the contacts; most of the rest are far beyond s. */
-/* the candidates k0 .. k1-1 worth testing, into out (ascending); returns how many */
+/* The candidates k0 .. k1-1 worth testing (near_update), into out in ascending order; returns
+ * how many. */
 static int near_filter(sd_world *w, double skin, int k0, int k1, int32_t *out)
 {
     const sd_pair *pairs = w->bb.p;
@@ -551,8 +546,19 @@ static int near_filter(sd_world *w, double skin, int k0, int k1, int32_t *out)
 }
 
 static int bb_owners(const sd_world *w);
-static sd_owned *owned_get(sd_world *w);
 
+static sd_owned *owned_get(sd_world *w)
+{
+    if (!w->owned) w->owned = calloc(1, sizeof *w->owned);
+    return w->owned;
+}
+
+/* The near list (w->near): the body-body pairs worth testing each step. A pair whose gap
+ * exceeds the near skin s (w->near_skin) cannot touch before the moving bodies have drifted
+ * by s/2 between them (near_drift, summed from each step's largest move of a surface), so it
+ * is left out until then: its force is exactly zero, its spring is cleared here as the pass
+ * would clear it, and every body sums the same pairs in the same order (same bits). In a dense
+ * bed the margin's candidates are twice the contacts; most of the rest are far beyond s. */
 static sd_status near_update(sd_world *w)
 {
     const int nbb = w->bb.n;
@@ -580,12 +586,7 @@ static sd_status near_update(sd_world *w)
             for (int t = 0; t < tid; t++)
                 off += cnt[t];
             memcpy(w->near + off, o->tmp + k0, (size_t)cnt[tid] * sizeof(int32_t));
-#pragma omp single
-            {
-                m = 0;
-                for (int t = 0; t < nthr; t++)
-                    m += cnt[t];
-            }
+            if (tid == nthr - 1) m = off + cnt[tid]; /* the last part ends the list */
         }
     } else
 #endif
@@ -693,14 +694,8 @@ static void rebalance(double *f, double *tau, int T)
         tau[t] = 0.0;
 }
 
-/* The body ranges, spans and cross pairs for T owners, from the current pair list (serial,
- * O(pairs), once per candidate rebuild). */
-static sd_owned *owned_get(sd_world *w)
-{
-    if (!w->owned) w->owned = calloc(1, sizeof *w->owned);
-    return w->owned;
-}
-
+/* The body ranges, owner lists and cross pairs for T owners, from the current near list
+ * (O(pairs) on all threads, at each change of the near list). */
 #ifdef _OPENMP
 static sd_status owned_update(sd_world *w, int T)
 {
