@@ -493,6 +493,14 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
         sd_vec3 f = b->force[i], t = b->torque[i];
         for (int k = from; k < to; k++) {
             const sd_pair *p = &w->bt.p[k];
+            if (w->bt_man[k].n == 0) {
+                /* no contact (most wall candidates): what apply_manifold leaves, empty springs;
+                 * the slot's force is not read while the pair is inactive */
+                for (int s = 0; s < p->cap; s++)
+                    w->bt.hist[p->off + s].feature = -1;
+                w->bt.active[k] = 0;
+                continue;
+            }
             int used = apply_manifold(w, law, &w->bt_man[k], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
                                       &w->bt.out[k]);
             w->bt.active[k] = (uint8_t)(used > 0);
