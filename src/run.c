@@ -160,8 +160,8 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
     fluid_flush(&q, fp, h_d, b);
 }
 
-/* The fluid forces of the phase on every moving body, for the next step: handed to the world
- * (fluid_range), or none while packing (the external forces stay as they are). */
+/* The fluid forces of the current phase for the coming step: handed to the world, which calls
+ * fluid_range inside the step; none while packing (the external forces stay as they are). */
 static void set_fluid(run_ctx *c)
 {
     const sd_scenario *s = c->s;
