@@ -110,6 +110,9 @@ typedef struct {
     double nfx[SS_CHUNK], nfy[SS_CHUNK], nfz[SS_CHUNK]; /* n x f */
     double la[SS_CHUNK], lb[SS_CHUNK];                  /* lever arms */
     double redo[SS_CHUNK];                              /* nonzero: redo with the scalar law */
+    int32_t ia[SS_CHUNK], ib[SS_CHUNK], off[SS_CHUNK];  /* bodies, history slot */
+    int32_t was[SS_CHUNK];                              /* the slot's feature before this step */
+    int32_t sel[SS_CHUNK];                              /* the pair's place in the chunk */
 } ss_batch;
 
 SD_SIMD_CLONES
@@ -385,9 +388,11 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
     sd_hist *restrict hist = w->bb.hist;
     const sd_vec3 *restrict pos = w->b.pos, *restrict vel = w->b.vel, *restrict omega = w->b.omega;
     const double *restrict rad = w->b.radius;
-    int sel[SS_CHUNK], gen[SS_CHUNK];
+    int gen[SS_CHUNK];
     int m = 0, ng = 0;
-    /* 1. which pairs touch: no branch on the answer (it is close to a coin toss in a dense bed) */
+    /* 1. which pairs touch: no branch on the answer (it is close to a coin toss in a dense bed).
+     * Each sphere pair's geometry is written to the next free batch lane whether it touches
+     * or not; only a touching pair moves the lane on (what the law needs is read once) */
     for (int i = 0; i < n; i++) {
         const sd_pair *p = &pairs[ks[i]];
         if (p->kind != SD_PAIR_SS) {
@@ -401,15 +406,23 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
             gen[ng++] = i;
             continue;
         }
-        const int ia = p->a, ib = p->b;
-        const sd_vec3 d = v3_sub(pos[ia], pos[ib]);
-        const double rs = rad[ia] + rad[ib];
-        const int t = !(v3_norm2(d) >= rs * rs);
+        const int ia = p->a, ib = p->b, off = p->off;
+        const sd_vec3 pa = pos[ia], pb = pos[ib];
+        const double dx = pa.x - pb.x, dy = pa.y - pb.y, dz = pa.z - pb.z;
+        const double ra = rad[ia], rb = rad[ib], rs = ra + rb;
+        const int t = !(dx * dx + dy * dy + dz * dz >= rs * rs);
+        sd_hist *h = &hist[off];
+        const int was = h->feature;
         used[i] = t;
-        sel[m] = i;
+        q->dx[m] = dx, q->dy[m] = dy, q->dz[m] = dz;
+        q->ra[m] = ra, q->rb[m] = rb, q->sqm[m] = p->sqrt_m_eff;
+        q->ia[m] = ia, q->ib[m] = ib, q->off[m] = off, q->was[m] = was, q->sel[m] = i;
         m += t;
-        sd_hist *h = &hist[p->off];
-        if ((!t) & (h->feature != -1)) h->feature = -1; /* a contact that has just ended */
+        if (t) {
+            __builtin_prefetch(&vel[ib]);
+            __builtin_prefetch(&omega[ib]);
+        }
+        if ((!t) & (was != -1)) h->feature = -1; /* a contact that has just ended */
     }
     /* 2. the other shapes, through the manifold */
     for (int g = 0; g < ng; g++) {
@@ -417,15 +430,12 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
         const sd_pair *p = &pairs[ks[i]];
         used[i] = pair_force_general(w, law, p, &hist[p->off], &out[i]);
     }
-    /* 3. the touching spheres into the batch */
+    /* 3. the rest of what the law needs of the touching spheres */
     for (int j = 0; j < m; j++) {
-        const sd_pair *p = &pairs[ks[sel[j]]];
-        const int ia = p->a, ib = p->b;
-        const sd_hist *h = &hist[p->off];
-        const sd_vec3 pa = pos[ia], pb = pos[ib], va = vel[ia], vb = vel[ib], wa = omega[ia], wb = omega[ib];
-        const double keep = h->feature == 0 ? 1.0 : 0.0;
-        q->dx[j] = pa.x - pb.x, q->dy[j] = pa.y - pb.y, q->dz[j] = pa.z - pb.z;
-        q->ra[j] = rad[ia], q->rb[j] = rad[ib], q->sqm[j] = p->sqrt_m_eff;
+        const int ia = q->ia[j], ib = q->ib[j];
+        const sd_hist *h = &hist[q->off[j]];
+        const sd_vec3 va = vel[ia], vb = vel[ib], wa = omega[ia], wb = omega[ib];
+        const double keep = q->was[j] == 0 ? 1.0 : 0.0;
         q->vx[j] = va.x - vb.x, q->vy[j] = va.y - vb.y, q->vz[j] = va.z - vb.z;
         q->wax[j] = wa.x, q->way[j] = wa.y, q->waz[j] = wa.z;
         q->wbx[j] = wb.x, q->wby[j] = wb.y, q->wbz[j] = wb.z;
@@ -436,11 +446,10 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
     ss_batch_law(law, w->def.dt, q, m);
     /* 5. results and springs back */
     for (int j = 0; j < m; j++) {
-        const int i = sel[j];
-        const sd_pair *p = &pairs[ks[i]];
-        sd_hist *h = &hist[p->off];
+        const int i = q->sel[j];
+        sd_hist *h = &hist[q->off[j]];
         if (q->redo[j] != 0.0) {
-            ss_scalar(w, law, p, h, &out[i]);
+            ss_scalar(w, law, &pairs[ks[i]], h, &out[i]);
             continue;
         }
         h->feature = 0;
@@ -702,6 +711,29 @@ static void rebalance(double *f, double *tau, int T)
         tau[t] = 0.0;
 }
 
+/* The owners' times since the split was set differ by more than a few per cent (checked after
+ * some passes, so that one slow step does not move it): the split is redone with the same near
+ * list. On this 2-vCPU VM one CPU often runs this pass 20-30 % slower than the other for
+ * minutes (another tenant on its core's caches), and which one changes: a split set only at
+ * each new near list (every 10^2-10^4 steps) left the fast thread waiting at every step. */
+#define SD_BALANCE_PASSES 50
+static int uneven(sd_owned *o)
+{
+    if (++o->passes < SD_BALANCE_PASSES) return 0;
+    double lo = INFINITY, hi = 0.0;
+    for (int t = 0; t < o->T; t++) {
+        lo = o->tau[t] < lo ? o->tau[t] : lo;
+        hi = o->tau[t] > hi ? o->tau[t] : hi;
+    }
+    if (hi <= 1.03 * lo) { /* even enough: keep the split, time afresh */
+        for (int t = 0; t < o->T; t++)
+            o->tau[t] = 0.0;
+        o->passes = 0;
+        return 0;
+    }
+    return 1;
+}
+
 /* The body ranges, owner lists and cross pairs for T owners, from the current near list
  * (O(pairs) on all threads, at each change of the near list). */
 #ifdef _OPENMP
@@ -710,7 +742,8 @@ static sd_status owned_update(sd_world *w, int T)
     const int n = w->b.n, nbb = w->near_n;
     const int32_t *near = w->near;
     sd_owned *o = w->owned;
-    if (o && o->stamp == w->near_version && o->T == T && o->n == n && o->nbb == nbb && o->pairs == w->bb.p)
+    if (o && o->stamp == w->near_version && o->T == T && o->n == n && o->nbb == nbb && o->pairs == w->bb.p &&
+        !uneven(o))
         return SD_OK;
     if (!(o = owned_get(w))) return SD_ERR_NOMEM;
     if (o->T != T) { /* new: even shares */
@@ -721,6 +754,7 @@ static sd_status owned_update(sd_world *w, int T)
     } else {
         rebalance(o->fo, o->tau, T);
     }
+    o->passes = 0;
     /* split by pairs, not bodies: the pairs are generated in order of their lower body
      * index, so range t starts at the lower body of pair nbb fo[t] */
     o->B[0] = 0;

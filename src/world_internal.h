@@ -122,6 +122,7 @@ typedef struct {
      * the body-body pairs, and each owner's time since it was set */
     double fo[SD_MAX_OWNERS + 1];
     double tau[SD_MAX_OWNERS];
+    int passes; /* passes timed in tau */
     /* scratch of the parallel near-list filter: each thread's kept pairs at its chunk's
      * start, then packed into w->near */
     int32_t *tmp;
