@@ -379,10 +379,25 @@ static inline int log_pair_apart(const sd_bodies *b, const sd_pair *p)
     return 0;
 }
 
+static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
+{
+    if (sd_body_is_bed(b, i)) return; /* its load is never read: stays zero (bt_range adds nothing to a fixed body) */
+    if (as_b) {
+        b->force[i] = v3_sub(b->force[i], o->f_a);
+        b->torque[i] = v3_add(b->torque[i], o->t_b);
+    } else {
+        b->force[i] = v3_add(b->force[i], o->f_a);
+        b->torque[i] = v3_add(b->torque[i], o->t_a);
+    }
+}
+
 /* The pairs ks[0 .. n) (n <= SS_CHUNK): forces into out[i], contact points into used[i]. Each
- * pair's result depends on that pair alone, so any split into chunks gives the same bits. */
-static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int n, sd_pair_out *out, int *used,
-                     ss_batch *q)
+ * pair's result depends on that pair alone, so any split into chunks gives the same bits.
+ * With acc, a chunk of sphere pairs only adds its forces onto the bodies itself, pair by pair
+ * in chunk order as the caller would (returns 1; out[] is then not written): the caller passes
+ * it where nothing else of its own comes between these pairs. */
+static int bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int n, sd_pair_out *out, int *used,
+                    ss_batch *q, sd_bodies *acc)
 {
     const sd_pair *restrict pairs = w->bb.p;
     sd_hist *restrict hist = w->bb.hist;
@@ -445,6 +460,29 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
     /* 4. the law, vectorized */
     ss_batch_law(law, w->def.dt, q, m);
     /* 5. results and springs back */
+    if (acc && ng == 0) {
+        for (int j = 0; j < m; j++) {
+            const int i = q->sel[j];
+            const int ia = q->ia[j], ib = q->ib[j];
+            sd_hist *h = &hist[q->off[j]];
+            if (q->redo[j] != 0.0) {
+                ss_scalar(w, law, &pairs[ks[i]], h, &out[i]);
+                add_pair(acc, ia, 0, &out[i]);
+                add_pair(acc, ib, 1, &out[i]);
+                continue;
+            }
+            h->feature = 0;
+            h->shear = v3(q->sx[j], q->sy[j], q->sz[j]);
+            const double mla = -q->la[j], mlb = -q->lb[j];
+            sd_pair_out o;
+            o.f_a = v3(q->fx[j], q->fy[j], q->fz[j]);
+            o.t_a = v3(q->nfx[j] * mla, q->nfy[j] * mla, q->nfz[j] * mla);
+            o.t_b = v3(q->nfx[j] * mlb, q->nfy[j] * mlb, q->nfz[j] * mlb);
+            add_pair(acc, ia, 0, &o);
+            add_pair(acc, ib, 1, &o);
+        }
+        return 1;
+    }
     for (int j = 0; j < m; j++) {
         const int i = q->sel[j];
         sd_hist *h = &hist[q->off[j]];
@@ -459,6 +497,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
         out[i].t_a = v3(q->nfx[j] * mla, q->nfy[j] * mla, q->nfz[j] * mla);
         out[i].t_b = v3(q->nfx[j] * mlb, q->nfy[j] * mlb, q->nfz[j] * mlb);
     }
+    return 0;
 }
 
 /* per-thread scratch of the body-body pass */
@@ -469,18 +508,6 @@ typedef struct {
     int32_t ks[SS_CHUNK];
     int act[SS_CHUNK];
 } bb_scratch;
-
-static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
-{
-    if (sd_body_is_bed(b, i)) return; /* its load is never read: stays zero (bt_range adds nothing to a fixed body) */
-    if (as_b) {
-        b->force[i] = v3_sub(b->force[i], o->f_a);
-        b->torque[i] = v3_add(b->torque[i], o->t_b);
-    } else {
-        b->force[i] = v3_add(b->force[i], o->f_a);
-        b->torque[i] = v3_add(b->torque[i], o->t_a);
-    }
-}
 
 /* Body–triangle pairs of the bodies i0 .. i1-1: narrow phase, mesh dedup, law, into each
  * pair's slot (gathered per body in pair order by sd_contact_gather). */
@@ -629,7 +656,7 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
         const int n = nn - k0 < SS_CHUNK ? nn - k0 : SS_CHUNK;
         for (int i = 0; i < n; i++)
             x->ks[i] = w->near[k0 + i];
-        bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q);
+        const int done = bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q, b);
         /* the pairs in contact, listed without a branch on each */
         int na = 0;
         for (int i = 0; i < n; i++) {
@@ -637,6 +664,7 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
             na += x->used[i] > 0;
             count += x->used[i];
         }
+        if (done) continue;
         for (int j = 0; j < na; j++) {
             const int i = x->act[j];
             const sd_pair *p = &w->bb.p[x->ks[i]];
@@ -868,7 +896,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
         const int c0 = (int)((long)nc * tid / nthr), c1 = (int)((long)nc * (tid + 1) / nthr);
         for (int c = c0; c < c1; c += SS_CHUNK) {
             const int n = c1 - c < SS_CHUNK ? c1 - c : SS_CHUNK;
-            bb_chunk(w, law, &o->cross[c], n, x->out, x->used, &x->q);
+            bb_chunk(w, law, &o->cross[c], n, x->out, x->used, &x->q, NULL);
             for (int i = 0; i < n; i++) {
                 const int k = o->cross[c + i];
                 w->bb.out[k] = x->out[i];
@@ -888,7 +916,12 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 int n = 0;
                 for (int j = j0; j < j1; j++)
                     if (o->list[j] >= 0) x->ks[n++] = o->list[j];
-                bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q);
+                /* a chunk without cross pairs adds its own sphere pairs */
+                if (bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q, n == j1 - j0 ? b : NULL)) {
+                    for (int i = 0; i < n; i++)
+                        count += x->used[i];
+                    continue;
+                }
                 /* the entries in contact, in list order: act = (entry j) << 8 | (own result i) */
                 int na = 0, i = 0;
                 for (int j = j0; j < j1; j++) {
