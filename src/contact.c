@@ -511,6 +511,7 @@ typedef struct {
 
 /* Body–triangle pairs of the bodies i0 .. i1-1: narrow phase, mesh dedup, law, into each
  * pair's slot (gathered per body in pair order by sd_contact_gather). */
+#define BT_LOCAL 16
 static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
 {
     sd_bodies *b = &w->b;
@@ -520,16 +521,20 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
     for (int from = w->csr.bt_start[i0]; from < kend;) {
         const int i = w->bt.p[from].a;
         const int to = w->csr.bt_start[i + 1];
+        /* the body's manifolds on the stack when they fit (they stay in L1: the store's
+         * array is a quarter-kilobyte per pair, mostly written and read for "no contact") */
+        sd_manifold loc[BT_LOCAL];
+        sd_manifold *man = to - from <= BT_LOCAL ? loc : &w->bt_man[from];
         int multi = 0;
         for (int k = from; k < to; k++)
-            multi += narrow_bt(b, &w->w, &w->bt.p[k], &w->bt_man[k]) > 0;
-        if (multi > 1) sd_contact_mesh_dedup(&w->w, w->bt.p, w->bt_man, from, to);
+            multi += narrow_bt(b, &w->w, &w->bt.p[k], &man[k - from]) > 0;
+        if (multi > 1) sd_contact_mesh_dedup(&w->w, &w->bt.p[from], man, 0, to - from);
         /* each pair into its slot (the wall loads, sd_contact_gather) and onto its body after
          * the body-body sum, in pair order */
         sd_vec3 f = b->force[i], t = b->torque[i];
         for (int k = from; k < to; k++) {
             const sd_pair *p = &w->bt.p[k];
-            if (w->bt_man[k].n == 0) {
+            if (man[k - from].n == 0) {
                 /* no contact (most wall candidates): what apply_manifold leaves, empty springs;
                  * the slot's force is not read while the pair is inactive */
                 for (int s = 0; s < p->cap; s++)
@@ -537,7 +542,7 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
                 w->bt.active[k] = 0;
                 continue;
             }
-            int used = apply_manifold(w, law, &w->bt_man[k], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
+            int used = apply_manifold(w, law, &man[k - from], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
                                       &w->bt.out[k]);
             w->bt.active[k] = (uint8_t)(used > 0);
             count += used;
