@@ -393,9 +393,9 @@ static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
 
 /* The pairs ks[0 .. n) (n <= SS_CHUNK): forces into out[i], contact points into used[i]. Each
  * pair's result depends on that pair alone, so any split into chunks gives the same bits.
- * With acc, a chunk of sphere pairs only adds its forces onto the bodies itself, pair by pair
- * in chunk order as the caller would (returns 1; out[] is then not written): the caller passes
- * it where nothing else of its own comes between these pairs. */
+ * With acc, the chunk also adds each pair in contact onto its two bodies, in chunk order (the
+ * sphere pairs straight from the law's lanes, their out[] not written): the caller passes it
+ * where nothing of its own comes between these pairs, and gets 1. */
 static int bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int n, sd_pair_out *out, int *used,
                     ss_batch *q, sd_bodies *acc)
 {
@@ -460,9 +460,18 @@ static int bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int
     /* 4. the law, vectorized */
     ss_batch_law(law, w->def.dt, q, m);
     /* 5. results and springs back */
-    if (acc && ng == 0) {
+    if (acc) {
+        /* every pair in contact onto its two bodies in chunk order: the sphere pairs from the
+         * lanes (sel ascending), the other shapes' pairs (gen ascending) from out[] between */
+        int g = 0;
         for (int j = 0; j < m; j++) {
             const int i = q->sel[j];
+            for (; g < ng && gen[g] < i; g++)
+                if (used[gen[g]] > 0) {
+                    const sd_pair *p = &pairs[ks[gen[g]]];
+                    add_pair(acc, p->a, 0, &out[gen[g]]);
+                    add_pair(acc, p->b, 1, &out[gen[g]]);
+                }
             const int ia = q->ia[j], ib = q->ib[j];
             sd_hist *h = &hist[q->off[j]];
             if (q->redo[j] != 0.0) {
@@ -481,6 +490,12 @@ static int bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int
             add_pair(acc, ia, 0, &o);
             add_pair(acc, ib, 1, &o);
         }
+        for (; g < ng; g++)
+            if (used[gen[g]] > 0) {
+                const sd_pair *p = &pairs[ks[gen[g]]];
+                add_pair(acc, p->a, 0, &out[gen[g]]);
+                add_pair(acc, p->b, 1, &out[gen[g]]);
+            }
         return 1;
     }
     for (int j = 0; j < m; j++) {
@@ -659,23 +674,10 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
     const int nn = w->near_n;
     for (int k0 = 0; k0 < nn; k0 += SS_CHUNK) {
         const int n = nn - k0 < SS_CHUNK ? nn - k0 : SS_CHUNK;
+        /* the chunk adds its pairs onto the bodies itself, in pair order */
+        bb_chunk(w, law, &w->near[k0], n, x->out, x->used, &x->q, b);
         for (int i = 0; i < n; i++)
-            x->ks[i] = w->near[k0 + i];
-        const int done = bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q, b);
-        /* the pairs in contact, listed without a branch on each */
-        int na = 0;
-        for (int i = 0; i < n; i++) {
-            x->act[na] = i;
-            na += x->used[i] > 0;
             count += x->used[i];
-        }
-        if (done) continue;
-        for (int j = 0; j < na; j++) {
-            const int i = x->act[j];
-            const sd_pair *p = &w->bb.p[x->ks[i]];
-            add_pair(b, p->a, 0, &x->out[i]);
-            add_pair(b, p->b, 1, &x->out[i]);
-        }
     }
     return count;
 }
@@ -922,7 +924,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 int n = 0;
                 for (int j = j0; j < j1; j++)
                     if (o->list[j] >= 0) x->ks[n++] = o->list[j];
-                /* a chunk without cross pairs adds its own sphere pairs */
+                /* a chunk without cross pairs adds its pairs onto the bodies itself */
                 if (bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q, n == j1 - j0 ? b : NULL)) {
                     for (int i = 0; i < n; i++)
                         count += x->used[i];
