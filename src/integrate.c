@@ -10,6 +10,33 @@
 #include <omp.h>
 #endif
 
+/* A log's rotation and its rebuild bounds (out of line, so that the sphere loop keeps its
+ * running maxima in registers): returns the x of its downstream end. */
+static __attribute__((noinline)) double cyl_step(sd_bodies *b, int i, double dt, double lim2, int *moved, double *dc)
+{
+    sd_vec3 L = v3_madd(b->angmom[i], b->torque[i], dt);
+    b->angmom[i] = L;
+    sd_vec3 a = b->axis[i];
+    const sd_vec3 a_old = a;
+    double spin = (b->inv_i_ax[i] - b->inv_i_tr[i]) * v3_dot(L, a) * dt;
+    sd_quat q_body = quat_from_rotvec(v3(0.0, 0.0, spin));
+    sd_quat q_space = quat_from_rotvec(v3_scale(L, b->inv_i_tr[i] * dt));
+    sd_quat q = quat_normalize(quat_mul(q_space, quat_mul(b->quat[i], q_body)));
+    b->quat[i] = q;
+    a = quat_rotate(q, v3(0.0, 0.0, 1.0));
+    b->axis[i] = a;
+    /* ω = A I⁻¹ Aᵀ L for an axisymmetric inertia */
+    b->omega[i] = v3_madd(v3_scale(L, b->inv_i_tr[i]), a, (b->inv_i_ax[i] - b->inv_i_tr[i]) * v3_dot(L, a));
+    double d = sqrt(v3_norm2(v3_sub(b->pos[i], b->pos_ref[i]))) + b->hl[i] * sqrt(v3_norm2(v3_sub(a, b->axis_ref[i])));
+    *moved |= d * d > lim2;
+    /* how far its surface can have gone this step: the centre's move plus the tilt of the axis
+     * times the bounding radius (with room for chord against arc); the spin about the axis
+     * moves no surface */
+    const double step = sqrt(v3_norm2(b->vel[i])) * dt + 1.01 * b->bound_r[i] * sqrt(v3_norm2(v3_sub(a, a_old)));
+    *dc = step > *dc ? step : *dc;
+    return b->pos[i].x + sd_body_x_extent(b, i);
+}
+
 int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *dcyl, double *xfront)
 {
     sd_bodies *b = &w->b;
@@ -25,6 +52,7 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
         sd_vec3 acc = v3_madd(g, f, b->inv_mass[i]);
         b->vel[i] = v3_madd(b->vel[i], acc, dt);
         b->pos[i] = v3_madd(b->pos[i], b->vel[i], dt);
+        double x;
         if (b->shape[i] == SD_SHAPE_SPHERE) {
             b->omega[i] = v3_madd(b->omega[i], b->torque[i], dt * b->inv_i_ax[i]);
             /* a sphere's displacement since the rebuild is bounded by the summed largest
@@ -32,34 +60,11 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
              * the margin) */
             const double v2 = v3_norm2(b->vel[i]);
             vm = v2 > vm ? v2 : vm;
-            const double x = b->pos[i].x + b->radius[i];
-            xf = x > xf ? x : xf;
+            x = b->pos[i].x + b->radius[i];
         } else {
-            sd_vec3 L = v3_madd(b->angmom[i], b->torque[i], dt);
-            b->angmom[i] = L;
-            sd_vec3 a = b->axis[i];
-            const sd_vec3 a_old = a;
-            double spin = (b->inv_i_ax[i] - b->inv_i_tr[i]) * v3_dot(L, a) * dt;
-            sd_quat q_body = quat_from_rotvec(v3(0.0, 0.0, spin));
-            sd_quat q_space = quat_from_rotvec(v3_scale(L, b->inv_i_tr[i] * dt));
-            sd_quat q = quat_normalize(quat_mul(q_space, quat_mul(b->quat[i], q_body)));
-            b->quat[i] = q;
-            a = quat_rotate(q, v3(0.0, 0.0, 1.0));
-            b->axis[i] = a;
-            /* ω = A I⁻¹ Aᵀ L for an axisymmetric inertia */
-            b->omega[i] = v3_madd(v3_scale(L, b->inv_i_tr[i]), a, (b->inv_i_ax[i] - b->inv_i_tr[i]) * v3_dot(L, a));
-            double d =
-                sqrt(v3_norm2(v3_sub(b->pos[i], b->pos_ref[i]))) + b->hl[i] * sqrt(v3_norm2(v3_sub(a, b->axis_ref[i])));
-            moved |= d * d > lim2;
-            /* how far its surface can have gone this step: the centre's move plus the tilt
-             * of the axis times the bounding radius (with room for chord against arc); the
-             * spin about the axis moves no surface */
-            const double step =
-                sqrt(v3_norm2(b->vel[i])) * dt + 1.01 * b->bound_r[i] * sqrt(v3_norm2(v3_sub(a, a_old)));
-            dc = step > dc ? step : dc;
-            const double x = b->pos[i].x + sd_body_x_extent(b, i);
-            xf = x > xf ? x : xf;
+            x = cyl_step(b, i, dt, lim2, &moved, &dc);
         }
+        xf = x > xf ? x : xf;
     }
     *v2max = vm;
     *dcyl = dc;
