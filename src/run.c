@@ -134,15 +134,20 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
     const int capture = fc->capture;
     fluid_batch q;
     q.m = 0;
+    /* the store's arrays held in locals: the batch's flush is a call, after which gcc would
+     * load each array's address again for every body */
+    const sd_vec3 *restrict pos = b->pos, *restrict vel = b->vel;
+    const double *restrict rad = b->radius;
     for (int k = k0; k < k1; k++) {
         const int i = mov[k];
         if (b->shape[i] == SD_SHAPE_SPHERE) {
             const int j = q.m++;
+            const sd_vec3 p = pos[i], v = vel[i];
             q.idx[j] = i;
-            q.px[j] = b->pos[i].x, q.py[j] = b->pos[i].y, q.pz[j] = b->pos[i].z;
-            q.vx[j] = b->vel[i].x, q.vy[j] = b->vel[i].y, q.vz[j] = b->vel[i].z;
-            q.r[j] = b->radius[i];
-            q.cap[j] = (capture && b->pos[i].x < xd) ? 1.0 : 0.0;
+            q.px[j] = p.x, q.py[j] = p.y, q.pz[j] = p.z;
+            q.vx[j] = v.x, q.vy[j] = v.y, q.vz[j] = v.z;
+            q.r[j] = rad[i];
+            q.cap[j] = (capture && p.x < xd) ? 1.0 : 0.0;
             if (q.m == FLUID_BATCH) fluid_flush(&q, fp, h_d, b);
             continue;
         }
