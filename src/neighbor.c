@@ -430,9 +430,13 @@ typedef struct {
     int32_t a, b;
     int kind;
 } cand;
+/* One chunk's candidates. Padded to a cache line: the scan's threads fill neighbouring
+ * chunks' buffers at once, and with four to a line each push of one thread (n, cap) waited
+ * for the line the other had just written: a tenth of the scan's samples. */
 typedef struct {
     cand *c;
     int n, cap;
+    char pad[64 - sizeof(cand *) - 2 * sizeof(int)];
 } cand_buf;
 
 /* The moving bodies of each cell of the body grid, ascending like the grid's own lists: all
