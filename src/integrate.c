@@ -37,6 +37,8 @@ static __attribute__((noinline)) double cyl_step(sd_bodies *b, int i, double dt,
     return b->pos[i].x + sd_body_x_extent(b, i);
 }
 
+#define SD_EXT_BLOCK 128
+
 int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *dcyl, double *xfront)
 {
     sd_bodies *b = &w->b;
@@ -45,26 +47,30 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
     double vm = *v2max, dc = *dcyl, xf = *xfront;
-    if (w->ext_fn) w->ext_fn(w->ext_ctx, w, mov, k0, k1);
-    for (int k = k0; k < k1; k++) {
-        const int i = mov[k];
-        sd_vec3 f = v3_add(b->force[i], b->ext_force[i]);
-        sd_vec3 acc = v3_madd(g, f, b->inv_mass[i]);
-        b->vel[i] = v3_madd(b->vel[i], acc, dt);
-        b->pos[i] = v3_madd(b->pos[i], b->vel[i], dt);
-        double x;
-        if (b->shape[i] == SD_SHAPE_SPHERE) {
-            b->omega[i] = v3_madd(b->omega[i], b->torque[i], dt * b->inv_i_ax[i]);
-            /* a sphere's displacement since the rebuild is bounded by the summed largest
-             * |v| dt (sd_world_after_moves checks it exactly only when that bound nears half
-             * the margin) */
-            const double v2 = v3_norm2(b->vel[i]);
-            vm = v2 > vm ? v2 : vm;
-            x = b->pos[i].x + b->radius[i];
-        } else {
-            x = cyl_step(b, i, dt, lim2, &moved, &dc);
+    for (int kb = k0; kb < k1; kb += SD_EXT_BLOCK) {
+        const int ke = k1 - kb < SD_EXT_BLOCK ? k1 : kb + SD_EXT_BLOCK;
+        /* the external forces of a block just before it moves: its bodies are still in L1 */
+        if (w->ext_fn) w->ext_fn(w->ext_ctx, w, mov, kb, ke);
+        for (int k = kb; k < ke; k++) {
+            const int i = mov[k];
+            sd_vec3 f = v3_add(b->force[i], b->ext_force[i]);
+            sd_vec3 acc = v3_madd(g, f, b->inv_mass[i]);
+            b->vel[i] = v3_madd(b->vel[i], acc, dt);
+            b->pos[i] = v3_madd(b->pos[i], b->vel[i], dt);
+            double x;
+            if (b->shape[i] == SD_SHAPE_SPHERE) {
+                b->omega[i] = v3_madd(b->omega[i], b->torque[i], dt * b->inv_i_ax[i]);
+                /* a sphere's displacement since the rebuild is bounded by the summed largest
+                 * |v| dt (sd_world_after_moves checks it exactly only when that bound nears half
+                 * the margin) */
+                const double v2 = v3_norm2(b->vel[i]);
+                vm = v2 > vm ? v2 : vm;
+                x = b->pos[i].x + b->radius[i];
+            } else {
+                x = cyl_step(b, i, dt, lim2, &moved, &dc);
+            }
+            xf = x > xf ? x : xf;
         }
-        xf = x > xf ? x : xf;
     }
     *v2max = vm;
     *dcyl = dc;
