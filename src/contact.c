@@ -391,13 +391,20 @@ static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
     }
 }
 
+/* A pair's result onto both its bodies, A then B (the order every sum of this file keeps). */
+static inline void add_both(sd_bodies *b, const sd_pair *p, const sd_pair_out *o)
+{
+    add_pair(b, p->a, 0, o);
+    add_pair(b, p->b, 1, o);
+}
+
 /* The pairs ks[0 .. n) (n <= SS_CHUNK): forces into out[i], contact points into used[i]. Each
  * pair's result depends on that pair alone, so any split into chunks gives the same bits.
  * With acc, the chunk also adds each pair in contact onto its two bodies, in chunk order (the
  * sphere pairs straight from the law's lanes, their out[] not written): the caller passes it
- * where nothing of its own comes between these pairs, and gets 1. */
-static int bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int n, sd_pair_out *out, int *used,
-                    ss_batch *q, sd_bodies *acc)
+ * where nothing of its own comes between these pairs. */
+static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int n, sd_pair_out *out, int *used,
+                     ss_batch *q, sd_bodies *acc)
 {
     const sd_pair *restrict pairs = w->bb.p;
     sd_hist *restrict hist = w->bb.hist;
@@ -464,14 +471,11 @@ static int bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int
         /* every pair in contact onto its two bodies in chunk order: the sphere pairs from the
          * lanes (sel ascending), the other shapes' pairs (gen ascending) from out[] between */
         int g = 0;
-        for (int j = 0; j < m; j++) {
-            const int i = q->sel[j];
+        for (int j = 0; j <= m; j++) {
+            const int i = j < m ? q->sel[j] : n;
             for (; g < ng && gen[g] < i; g++)
-                if (used[gen[g]] > 0) {
-                    const sd_pair *p = &pairs[ks[gen[g]]];
-                    add_pair(acc, p->a, 0, &out[gen[g]]);
-                    add_pair(acc, p->b, 1, &out[gen[g]]);
-                }
+                if (used[gen[g]] > 0) add_both(acc, &pairs[ks[gen[g]]], &out[gen[g]]);
+            if (j == m) break;
             const int ia = q->ia[j], ib = q->ib[j];
             sd_hist *h = &hist[q->off[j]];
             if (q->redo[j] != 0.0) {
@@ -490,13 +494,7 @@ static int bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int
             add_pair(acc, ia, 0, &o);
             add_pair(acc, ib, 1, &o);
         }
-        for (; g < ng; g++)
-            if (used[gen[g]] > 0) {
-                const sd_pair *p = &pairs[ks[gen[g]]];
-                add_pair(acc, p->a, 0, &out[gen[g]]);
-                add_pair(acc, p->b, 1, &out[gen[g]]);
-            }
-        return 1;
+        return;
     }
     for (int j = 0; j < m; j++) {
         const int i = q->sel[j];
@@ -512,7 +510,6 @@ static int bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int
         out[i].t_a = v3(q->nfx[j] * mla, q->nfy[j] * mla, q->nfz[j] * mla);
         out[i].t_b = v3(q->nfx[j] * mlb, q->nfy[j] * mlb, q->nfz[j] * mlb);
     }
-    return 0;
 }
 
 /* per-thread scratch of the body-body pass */
@@ -524,9 +521,10 @@ typedef struct {
     int act[SS_CHUNK];
 } bb_scratch;
 
+#define BT_LOCAL 16 /* wall candidates of one body whose manifolds bt_range keeps on the stack */
+
 /* Body–triangle pairs of the bodies i0 .. i1-1: narrow phase, mesh dedup, law, into each
  * pair's slot (gathered per body in pair order by sd_contact_gather). */
-#define BT_LOCAL 16
 static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
 {
     sd_bodies *b = &w->b;
@@ -925,7 +923,9 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 for (int j = j0; j < j1; j++)
                     if (o->list[j] >= 0) x->ks[n++] = o->list[j];
                 /* a chunk without cross pairs adds its pairs onto the bodies itself */
-                if (bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q, n == j1 - j0 ? b : NULL)) {
+                const int direct = n == j1 - j0;
+                bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q, direct ? b : NULL);
+                if (direct) {
                     for (int i = 0; i < n; i++)
                         count += x->used[i];
                     continue;
@@ -944,9 +944,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 for (int a = 0; a < na; a++) {
                     const int k = o->list[j0 + (x->act[a] >> 8)];
                     if (k >= 0) {
-                        const sd_pair_out *out = &x->out[x->act[a] & 255];
-                        add_pair(b, w->bb.p[k].a, 0, out);
-                        add_pair(b, w->bb.p[k].b, 1, out);
+                        add_both(b, &w->bb.p[k], &x->out[x->act[a] & 255]);
                     } else {
                         const sd_pair *p = &w->bb.p[~k];
                         const int own_a = p->a >= i0 && p->a < i1;
