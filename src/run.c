@@ -122,8 +122,8 @@ static void fluid_flush(fluid_batch *q, const sd_fluid_params *fp, double h_d, s
 }
 
 /* The fluid forces on the moving bodies mov[k0 .. k1): called by the world's step for each
- * thread's bodies just before it moves them (sd_world.ext_fn), so their data are read once,
- * in that core's cache. Spheres in batches (sd_fluid_sphere_batch: the same bits, vectorized),
+ * block of up to 128 of a thread's bodies just before it moves them (sd_world.ext_fn), so
+ * their data are still in that core's L1 when they move. Spheres in batches (sd_fluid_sphere_batch: the same bits, vectorized),
  * logs one by one. */
 static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int k1)
 {

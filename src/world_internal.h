@@ -130,7 +130,7 @@ typedef struct {
 } sd_owned;
 
 /* External forces of a step on the moving bodies mov[k0 .. k1) (into ext_force), called just
- * before they move, by the thread that moves them. */
+ * before they move, by the thread that moves them, a block of up to 128 bodies at a time. */
 typedef void (*sd_ext_force_fn)(void *ctx, struct sd_world *w, const int32_t *mov, int k0, int k1);
 
 struct sd_world {
