@@ -851,6 +851,8 @@ static sd_status owned_update(sd_world *w, int T)
             }
             o->ncross = xc;
             nomem = sd_grow((void **)&o->cross, &o->cap, xc > 0 ? xc : 1, sizeof(int32_t)) ||
+                    sd_grow((void **)&o->xout, &o->xout_cap, xc > 0 ? xc : 1, sizeof(sd_pair_out)) ||
+                    sd_grow((void **)&o->xact, &o->xact_cap, xc > 0 ? xc : 1, sizeof(uint8_t)) ||
                     sd_grow((void **)&o->list, &o->list_cap, at > 0 ? at : 1, sizeof(int32_t));
         }
         if (!nomem) {
@@ -863,9 +865,9 @@ static sd_status owned_update(sd_world *w, int T)
                     o->list[mine[ta]++] = k;
                     continue;
                 }
+                o->list[mine[ta]++] = ~xc;
+                o->list[mine[tb]++] = ~xc;
                 o->cross[xc++] = k;
-                o->list[mine[ta]++] = ~k;
-                o->list[mine[tb]++] = ~k;
             }
         }
     }
@@ -903,10 +905,11 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
         for (int c = 0; c < nc; c += SS_CHUNK) {
             const int n = nc - c < SS_CHUNK ? nc - c : SS_CHUNK;
             bb_chunk(w, law, &o->cross[c], n, x->out, x->used, &x->q, NULL);
+            /* into the cross pairs' own arrays, in cross order: the lines each owner then
+             * reads from the other's cache are packed, not one or two per pair of the store */
             for (int i = 0; i < n; i++) {
-                const int k = o->cross[c + i];
-                w->bb.out[k] = x->out[i];
-                w->bb.active[k] = (uint8_t)(x->used[i] > 0);
+                o->xout[c + i] = x->out[i];
+                o->xact[c + i] = (uint8_t)(x->used[i] > 0);
                 count += x->used[i];
             }
         }
@@ -938,7 +941,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     const int u = own ? x->used[i] : 0;
                     count += u;
                     x->act[na] = (j - j0) << 8 | i;
-                    na += own ? u > 0 : w->bb.active[~k];
+                    na += own ? u > 0 : o->xact[~k];
                     i += own;
                 }
                 for (int a = 0; a < na; a++) {
@@ -946,9 +949,9 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     if (k >= 0) {
                         add_both(b, &w->bb.p[k], &x->out[x->act[a] & 255]);
                     } else {
-                        const sd_pair *p = &w->bb.p[~k];
+                        const sd_pair *p = &w->bb.p[o->cross[~k]];
                         const int own_a = p->a >= i0 && p->a < i1;
-                        add_pair(b, own_a ? p->a : p->b, !own_a, &w->bb.out[~k]);
+                        add_pair(b, own_a ? p->a : p->b, !own_a, &o->xout[~k]);
                     }
                 }
             }

@@ -286,9 +286,11 @@ static int32_t *old_first_index(const sd_world *w)
 static sd_status restore_history(sd_world *w, sd_pairlist *l, const int32_t *first)
 {
     if (sd_grow((void **)&l->hist, &l->hcap, l->nh + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
-    if (sd_grow((void **)&l->out, &l->out_cap, l->n + 1, sizeof(sd_pair_out))) return SD_ERR_NOMEM;
-    if (sd_grow((void **)&l->active, &l->active_cap, l->n + 1, 1)) return SD_ERR_NOMEM;
-    memset(l->active, 0, (size_t)l->n + 1);
+    if (l == &w->bt) { /* the wall pairs' results (sd_contact_gather) */
+        if (sd_grow((void **)&l->out, &l->out_cap, l->n + 1, sizeof(sd_pair_out))) return SD_ERR_NOMEM;
+        if (sd_grow((void **)&l->active, &l->active_cap, l->n + 1, 1)) return SD_ERR_NOMEM;
+        memset(l->active, 0, (size_t)l->n + 1);
+    }
     /* each pair fills its own slots */
 #pragma omp parallel for schedule(static) if (l->n > w->def.parallel_min)
     for (int k = 0; k < l->n; k++) {

@@ -80,6 +80,8 @@ void sd_world_destroy(sd_world *w)
     free(w->bt_man);
     if (w->owned) {
         free(w->owned->cross);
+        free(w->owned->xout);
+        free(w->owned->xact);
         free(w->owned->list);
         free(w->owned->tmp);
     }

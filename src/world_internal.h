@@ -79,8 +79,9 @@ typedef struct {
 typedef struct {
     int n, cap;
     sd_pair *p;
-    sd_pair_out *out;
-    uint8_t *active; /* 1 when the pair touched in the last step (out[] valid) */
+    sd_pair_out *out; /* the body–triangle list only (the wall loads); the body–body pass
+                       * keeps what it must share between threads in sd_owned */
+    uint8_t *active;  /* 1 when the pair touched in the last step (out[] valid) */
     int out_cap, active_cap;
     int nh, hcap;
     sd_hist *hist;
@@ -113,8 +114,11 @@ typedef struct {
     int B[SD_MAX_OWNERS + 1]; /* thread t owns bodies B[t] .. B[t+1]-1 */
     int32_t *cross;           /* pairs whose bodies have different owners */
     int ncross, cap;
+    sd_pair_out *xout; /* cross pair c's result (pass 1), read by both its owners (pass 2) */
+    uint8_t *xact;     /* 1 when cross pair c touched in this step */
+    int xout_cap, xact_cap;
     /* owner t's pairs, ascending: list[start[t] .. start[t+1]-1]; k for a pair it owns both
-     * sides of, ~k (negative) for a cross pair touching it */
+     * sides of, ~c (negative) for cross pair c (cross[c]) touching it */
     int32_t *list;
     int start[SD_MAX_OWNERS + 1];
     int list_cap;
