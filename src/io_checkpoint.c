@@ -576,11 +576,14 @@ static sd_status read_pairs(const rd_ctx *r, cursor *c, sd_world *w, sd_pairlist
     int nh = get_count(c, 0);
     if (c->bad) return SD_OK;
     if (sd_grow((void **)&l->p, &l->cap, n + 1, sizeof(sd_pair)) ||
-        sd_grow((void **)&l->out, &l->out_cap, n + 1, sizeof(sd_pair_out)) ||
-        sd_grow((void **)&l->active, &l->active_cap, n + 1, 1) ||
         sd_grow((void **)&l->hist, &l->hcap, nh + 1, sizeof(sd_hist)))
         return SD_ERR_NOMEM;
-    memset(l->active, 0, (size_t)n + 1); /* out[] and active[] are rewritten by the next force pass */
+    if (bt) { /* the wall pairs' results, rewritten by the next force pass (as restore_history) */
+        if (sd_grow((void **)&l->out, &l->out_cap, n + 1, sizeof(sd_pair_out)) ||
+            sd_grow((void **)&l->active, &l->active_cap, n + 1, 1))
+            return SD_ERR_NOMEM;
+        memset(l->active, 0, (size_t)n + 1);
+    }
     int nb = w->b.n, nt = w->w.n;
     int next_off = 0; /* the slots of consecutive pairs follow each other (push_pair) */
     for (int k = 0; k < n; k++) {
