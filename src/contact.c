@@ -46,7 +46,7 @@ static int narrow_bt(const sd_bodies *b, const sd_walls *wl, const sd_pair *p, s
         m->n = 0;
         return 0;
     }
-    if (p->kind == SD_PAIR_ST) return sd_geom_sphere_tri(b->pos[p->a], b->radius[p->a], t, m);
+    if (p->kind == SD_PAIR_ST) return sd_geom_sphere_tri_e(b->pos[p->a], b->radius[p->a], t, &wl->edges[p->b], m);
     sd_cyl c = sd_body_cyl(b, p->a);
     return sd_geom_cyl_tri(&c, t, m);
 }
@@ -555,13 +555,17 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
                 w->bt.active[k] = 0;
                 continue;
             }
+            /* the result summed from registers: read back from the slot, each 16-byte load
+             * waited for the two 8-byte stores it spans (no store forwarding) */
+            sd_pair_out o;
             int used = apply_manifold(w, law, &man[k - from], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
-                                      &w->bt.out[k]);
+                                      &o);
+            w->bt.out[k] = o;
             w->bt.active[k] = (uint8_t)(used > 0);
             count += used;
             if (used > 0) {
-                f = v3_add(f, w->bt.out[k].f_a);
-                t = v3_add(t, w->bt.out[k].t_a);
+                f = v3_add(f, o.f_a);
+                t = v3_add(t, o.t_a);
             }
         }
         b->force[i] = f;

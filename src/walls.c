@@ -22,6 +22,7 @@ sd_status sd_walls_reserve(sd_walls *w, int cap)
     SD_GROW(edge_id)
     SD_GROW(vert_id)
     SD_GROW(force)
+    SD_GROW(edges)
 #undef SD_GROW
     p = realloc(w->edge_vert, (size_t)nc * 3 * sizeof(*w->edge_vert));
     if (!p) return SD_ERR_NOMEM;
@@ -40,6 +41,7 @@ void sd_walls_free(sd_walls *w)
     free(w->edge_vert);
     free(w->edge_flat);
     free(w->force);
+    free(w->edges);
     memset(w, 0, sizeof(*w));
 }
 
@@ -82,6 +84,8 @@ sd_status sd_walls_weld(sd_walls *w)
         return SD_ERR_NOMEM;
     }
     const double q = 1e6;
+    for (int t = 0; t < w->n; t++)
+        sd_tri_edges_init(&w->edges[t], &w->tri[t]);
     for (int t = 0; t < w->n; t++)
         for (int k = 0; k < 3; k++) {
             sd_vec3 v = w->tri[t].v[k];

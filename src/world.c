@@ -471,7 +471,7 @@ double sd_world_spring_energy(const sd_world *w)
             m->n = 0;
             if (!w->w.active[p->b]) continue;
             if (p->kind == SD_PAIR_ST)
-                sd_geom_sphere_tri(b->pos[p->a], b->radius[p->a], &w->w.tri[p->b], m);
+                sd_geom_sphere_tri_e(b->pos[p->a], b->radius[p->a], &w->w.tri[p->b], &w->w.edges[p->b], m);
             else {
                 sd_cyl c = sd_body_cyl(b, p->a);
                 sd_geom_cyl_tri(&c, &w->w.tri[p->b], m);

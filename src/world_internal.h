@@ -47,6 +47,7 @@ typedef struct {
     int32_t (*vert_id)[3];
     int32_t (*edge_vert)[2]; /* per edge id: its two vertex ids (sized n_edges) */
     uint8_t *edge_flat;      /* per edge id: shared by two coplanar triangles (a seam) */
+    sd_tri_edges *edges;     /* per triangle: its edge lines (sd_walls_weld) */
     int n_edges, n_verts;
     sd_vec3 *force; /* contact force on each triangle in the last step */
     int dirty;      /* welding and grid need rebuilding */

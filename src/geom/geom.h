@@ -57,6 +57,17 @@ static inline void sd_tri_init(sd_tri *t, sd_vec3 a, sd_vec3 b, sd_vec3 c)
     t->n = v3_normalize(v3_cross(v3_sub(b, a), v3_sub(c, a)));
 }
 
+/* A triangle's edge lines in its plane: m[k] is the unit normal of edge k (from v[k] to
+ * v[(k+1) % 3]) lying in the plane and pointing into the triangle, h[k] = m[k]·v[k], so that
+ * m[k]·p − h[k] is the distance of p's projection on the plane from that line, positive on
+ * the triangle's side. Derived from the vertices (sd_tri_edges_init), kept beside them. */
+typedef struct {
+    sd_vec3 m[3];
+    double h[3];
+} sd_tri_edges;
+
+void sd_tri_edges_init(sd_tri_edges *e, const sd_tri *t);
+
 /* Closest point on triangle t to p; *feature receives the triangle feature code of the
  * region it lies in (face, edge or vertex). */
 sd_vec3 sd_geom_closest_on_tri(const sd_tri *t, sd_vec3 p, int *feature);
@@ -84,6 +95,11 @@ static inline int sd_cyl_cyl_apart(const sd_cyl *a, const sd_cyl *b)
 int sd_geom_sphere_sphere(sd_vec3 ca, double ra, sd_vec3 cb, double rb, sd_manifold *m);
 /* feature = triangle feature code of the closest point. */
 int sd_geom_sphere_tri(sd_vec3 c, double r, const sd_tri *t, sd_manifold *m);
+/* The same contact with the triangle's edge lines at hand (what the contact pass calls): a
+ * sphere whose projection lies inside the triangle, clear of every edge, touches the face and
+ * one farther than r from the triangle's half-plane beyond an edge touches nothing, both
+ * found from three dot products; the rest go through sd_geom_sphere_tri. */
+int sd_geom_sphere_tri_e(sd_vec3 c, double r, const sd_tri *t, const sd_tri_edges *e, sd_manifold *m);
 int sd_geom_sphere_cyl(sd_vec3 c, double r, const sd_cyl *b, sd_manifold *m);
 int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m);
 /* feature = (cylinder feature << SD_TRI_FEATURE_BITS) | triangle feature code. */
