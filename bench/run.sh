@@ -24,6 +24,10 @@ python3 "$ref/gen_particles.py" spec "$work/init.data" 12345 >/dev/null
     -var nsettle 60000 -var ndense 0 -var nflow 0 -log settle.log >/dev/null)
 cp "$work/settled_lammps.data" "$work/settled.data"
 
+# one thread / one rank: both codes pinned to the same CPU (this VM's two vCPUs differ in speed
+# for minutes at a time, docs/performance.md §2, and a ratio across them measures that too)
+pin="taskset -c 0"
+command -v taskset >/dev/null || pin=""
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
 # LAMMPS "Loop time of T on P procs for N steps with A atoms" for the dense (3rd) and flow (4th) runs
 lammps_rates() {
@@ -37,7 +41,7 @@ for p in 1 2; do
     # two-thread sabodem run measured 5-10 % slower than after 20 s of rest (this VM)
     sleep 3
     if [ "$p" -eq 1 ]; then
-      (cd "$work" && OMP_NUM_THREADS=1 lmp -in "$OLDPWD/$ref/flume.in" -var data settled.data -var ndrop 0 -var nsettle 0 \
+      (cd "$work" && OMP_NUM_THREADS=1 $pin lmp -in "$OLDPWD/$ref/flume.in" -var data settled.data -var ndrop 0 -var nsettle 0 \
           -var ndense "$NDENSE" -var nflow "$NFLOW" -log run.log >/dev/null)
     else
       (cd "$work" && OMP_NUM_THREADS=1 mpirun --allow-run-as-root -np 2 --bind-to core lmp -in "$OLDPWD/$ref/flume.in" \
@@ -47,7 +51,7 @@ for p in 1 2; do
     # the same neighbour policy as flume.in (rebuild when something moved half the skin); the
     # paper's extra rebuild every t_reset = 1 ms (SPEC §4) is timed separately below
     sleep 3
-    ./build-bench/bench_flume "$work/settled.data" 0 0 "$NDENSE" "$NFLOW" --threads "$p" --t-reset 1e9 > "$work/sab.txt"
+    $([ "$p" -eq 1 ] && echo "$pin") ./build-bench/bench_flume "$work/settled.data" 0 0 "$NDENSE" "$NFLOW" --threads "$p" --t-reset 1e9 > "$work/sab.txt"
     awk '/^PHASE dense/ {d=$9} /^PHASE flow/ {f=$9} END {print d, f}' "$work/sab.txt" >> "$work/s$p"
   done
   ld=$(awk '{print $1}' "$work/l$p" | median); lf=$(awk '{print $2}' "$work/l$p" | median)
