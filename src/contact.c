@@ -558,8 +558,8 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
             /* the result summed from registers: read back from the slot, each 16-byte load
              * waited for the two 8-byte stores it spans (no store forwarding) */
             sd_pair_out o;
-            int used = apply_manifold(w, law, &man[k - from], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
-                                      &o);
+            int used =
+                apply_manifold(w, law, &man[k - from], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap, &o);
             w->bt.out[k] = o;
             w->bt.active[k] = (uint8_t)(used > 0);
             count += used;

@@ -21,7 +21,8 @@
 #if defined(__x86_64__) || defined(__aarch64__)
 _Static_assert(sizeof(struct sd_world) == 1040, "struct sd_world changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_world_def) == 104, "sd_world_def changed: update io_checkpoint.c");
-_Static_assert(sizeof(sd_walls) == 96, "sd_walls changed: update io_checkpoint.c"); /* edge ids, seams and edge lines: derived by sd_walls_weld on load */
+/* sd_walls: its edge ids, seams and edge lines are derived (sd_walls_weld, again on load) */
+_Static_assert(sizeof(sd_walls) == 96, "sd_walls changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_pairlist) == 56, "sd_pairlist changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_pair) == 24, "sd_pair changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_hist) == 32, "sd_hist changed: update io_checkpoint.c");
