@@ -28,6 +28,7 @@ cp "$work/settled_lammps.data" "$work/settled.data"
 # for minutes at a time, docs/performance.md §2, and a ratio across them measures that too)
 pin="taskset -c 0"
 command -v taskset >/dev/null || pin=""
+bind="env OMP_PROC_BIND=true OMP_PLACES=cores"
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
 # LAMMPS "Loop time of T on P procs for N steps with A atoms" for the dense (3rd) and flow (4th) runs
 lammps_rates() {
@@ -51,7 +52,9 @@ for p in 1 2; do
     # the same neighbour policy as flume.in (rebuild when something moved half the skin); the
     # paper's extra rebuild every t_reset = 1 ms (SPEC §4) is timed separately below
     sleep 3
-    $([ "$p" -eq 1 ] && echo "$pin") ./build-bench/bench_flume "$work/settled.data" 0 0 "$NDENSE" "$NFLOW" --threads "$p" --t-reset 1e9 > "$work/sab.txt"
+    # two threads pinned one per core (OpenMP's OMP_PROC_BIND), as mpirun --bind-to core pins
+    # the two LAMMPS ranks
+    $([ "$p" -eq 1 ] && echo "$pin" || echo "$bind") ./build-bench/bench_flume "$work/settled.data" 0 0 "$NDENSE" "$NFLOW" --threads "$p" --t-reset 1e9 > "$work/sab.txt"
     awk '/^PHASE dense/ {d=$9} /^PHASE flow/ {f=$9} END {print d, f}' "$work/sab.txt" >> "$work/s$p"
   done
   ld=$(awk '{print $1}' "$work/l$p" | median); lf=$(awk '{print $2}' "$work/l$p" | median)
@@ -65,12 +68,12 @@ cat "$work/sab.txt" >> "$out/side_by_side.txt"
 for p in 1 2; do
   : > "$work/t$p"
   for r in $(seq "$REPEAT"); do
-    ./build-bench/bench_flume "$work/settled.data" 0 0 "$NDENSE" "$NFLOW" --threads "$p" > "$work/sab.txt"
+    $([ "$p" -eq 1 ] && echo "$pin" || echo "$bind") ./build-bench/bench_flume "$work/settled.data" 0 0 "$NDENSE" "$NFLOW" --threads "$p" > "$work/sab.txt"
     awk '/^PHASE dense/ {d=$9} /^PHASE flow/ {f=$9} END {print d, f}' "$work/sab.txt" >> "$work/t$p"
   done
   printf "sabodem with t_reset = 1 ms, %d thread(s), median of %d: dense %.3e flow %.3e (particle-steps/s)\n" "$p" "$REPEAT" \
     "$(awk '{print $1}' "$work/t$p" | median)" "$(awk '{print $2}' "$work/t$p" | median)" | tee -a "$out/side_by_side.txt"
 done
 # cost per particle-step against N: the same settled bed tiled to 1e3 .. 1e6 spheres
-./build-bench/bench_scale "$work/settled.data" 2000 --big --threads 1 | tee "$out/scaling.txt"
-./build-bench/bench_scale "$work/settled.data" 2000 --big --threads 2 | tee -a "$out/scaling.txt"
+$pin ./build-bench/bench_scale "$work/settled.data" 2000 --big --threads 1 | tee "$out/scaling.txt"
+$bind ./build-bench/bench_scale "$work/settled.data" 2000 --big --threads 2 | tee -a "$out/scaling.txt"
