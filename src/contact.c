@@ -115,11 +115,74 @@ typedef struct {
     int32_t sel[SS_CHUNK];                              /* the pair's place in the chunk */
 } ss_batch;
 
+/* The constants of sd_contact_law for one pass of the lanes below. */
+typedef struct {
+    double k_n, c_n, c_s, tan_phi, coh, mks_dt;
+} lane_law;
+
+static inline lane_law lane_law_make(const sd_law *law, double dt)
+{
+    return (lane_law){law->k_n, law->c_n_factor, law->c_s_factor, law->tan_phi, law->cohesion, -law->k_s * dt};
+}
+
+/* sd_contact_law for one lane, operation for operation, with both sides of every branch
+ * computed and one kept (so that the loops that call it vectorize): unit normal n, overlap ov,
+ * relative velocity v at the contact, sqrt of the effective mass sqm, the stored spring s (in,
+ * then out), the force f on A. Returns nonzero when the spring tilted past the small-angle
+ * rule and the lane must be redone by the scalar law (rare: a normal turning fast). */
+static inline __attribute__((always_inline)) double law_lane(const lane_law *L, double nx, double ny, double nz,
+                                                             double ov, double vx, double vy, double vz, double sqm,
+                                                             double *sx, double *sy, double *sz, double *fx,
+                                                             double *fy, double *fz)
+{
+    const double vn = vx * nx + vy * ny + vz * nz;
+    double pn = L->k_n * ov - L->c_n * sqm * vn;
+    pn = pn < 0.0 ? 0.0 : pn;
+    const double tx = vx + -vn * nx, ty = vy + -vn * ny, tz = vz + -vn * nz;
+    const double s0x = *sx, s0y = *sy, s0z = *sz;
+    const double s2 = s0x * s0x + s0y * s0y + s0z * s0z;
+    const double sn = s0x * nx + s0y * ny + s0z * nz;
+    const double px = s0x + -sn * nx, py = s0y + -sn * ny, pz = s0z + -sn * nz;
+    const double r2 = s2 - sn * sn;
+    const double x = sn * sn / r2;
+    const double poly = 1.0 + 0.5 * x - 0.375 * x * x;
+    const int has = s2 > 0.0;
+    const double redo = sn * sn < 1e-4 * s2 ? 0.0 : (has ? 1.0 : 0.0);
+    double ux = has ? px * poly : s0x, uy = has ? py * poly : s0y, uz = has ? pz * poly : s0z;
+    ux = ux + L->mks_dt * tx;
+    uy = uy + L->mks_dt * ty;
+    uz = uz + L->mks_dt * tz;
+    const double limit = L->coh + pn * L->tan_phi, lim2 = limit * limit;
+    const double smag2 = ux * ux + uy * uy + uz * uz;
+    const int slide = smag2 > lim2;
+    const double mcs = -L->c_s * sqm;
+    double gx = ux + mcs * tx, gy = uy + mcs * ty, gz = uz + mcs * tz;
+    const double fmag2 = gx * gx + gy * gy + gz * gz;
+    const int over = fmag2 > lim2;
+    /* one square root and one division for whichever of the two limits applies */
+    const double cut = limit / sqrt(slide ? smag2 : fmag2);
+    gx = over ? gx * cut : gx;
+    gy = over ? gy * cut : gy;
+    gz = over ? gz * cut : gz;
+    ux = slide ? ux * cut : ux;
+    uy = slide ? uy * cut : uy;
+    uz = slide ? uz * cut : uz;
+    gx = slide ? ux : gx;
+    gy = slide ? uy : gy;
+    gz = slide ? uz : gz;
+    *sx = ux;
+    *sy = uy;
+    *sz = uz;
+    *fx = gx + pn * nx;
+    *fy = gy + pn * ny;
+    *fz = gz + pn * nz;
+    return redo;
+}
+
 SD_SIMD_CLONES
 static void ss_batch_law(const sd_law *law, double dt, ss_batch *restrict q, int m)
 {
-    const double k_n = law->k_n, c_n = law->c_n_factor, c_s = law->c_s_factor, tan_phi = law->tan_phi,
-                 coh = law->cohesion, mks_dt = -law->k_s * dt;
+    const lane_law L = lane_law_make(law, dt);
     for (int j = 0; j < m; j++) {
         const double dx = q->dx[j], dy = q->dy[j], dz = q->dz[j];
         const double d2 = dx * dx + dy * dy + dz * dz;
@@ -133,49 +196,11 @@ static void ss_batch_law(const sd_law *law, double dt, ss_batch *restrict q, int
                      wz = q->waz[j] * la + lb * q->wbz[j];
         const double vx = q->vx[j] - (wy * nz - wz * ny), vy = q->vy[j] - (wz * nx - wx * nz),
                      vz = q->vz[j] - (wx * ny - wy * nx);
-        /* sd_contact_law */
-        const double sqm = q->sqm[j];
-        const double vn = vx * nx + vy * ny + vz * nz;
-        double pn = k_n * ov - c_n * sqm * vn;
-        pn = pn < 0.0 ? 0.0 : pn;
-        const double tx = vx + -vn * nx, ty = vy + -vn * ny, tz = vz + -vn * nz;
-        const double s0x = q->sx[j], s0y = q->sy[j], s0z = q->sz[j];
-        const double s2 = s0x * s0x + s0y * s0y + s0z * s0z;
-        const double sn = s0x * nx + s0y * ny + s0z * nz;
-        const double px = s0x + -sn * nx, py = s0y + -sn * ny, pz = s0z + -sn * nz;
-        const double r2 = s2 - sn * sn;
-        const double x = sn * sn / r2;
-        const double poly = 1.0 + 0.5 * x - 0.375 * x * x;
-        const int has = s2 > 0.0;
-        /* a tilt of the spring past the small-angle rule (rare: a normal turning fast) is
-         * redone by the scalar law after the loop */
-        q->redo[j] = sn * sn < 1e-4 * s2 ? 0.0 : (has ? 1.0 : 0.0);
-        double ux = has ? px * poly : s0x, uy = has ? py * poly : s0y, uz = has ? pz * poly : s0z;
-        ux = ux + mks_dt * tx;
-        uy = uy + mks_dt * ty;
-        uz = uz + mks_dt * tz;
-        const double limit = coh + pn * tan_phi, lim2 = limit * limit;
-        const double smag2 = ux * ux + uy * uy + uz * uz;
-        const int slide = smag2 > lim2;
-        const double mcs = -c_s * sqm;
-        double gx = ux + mcs * tx, gy = uy + mcs * ty, gz = uz + mcs * tz;
-        const double fmag2 = gx * gx + gy * gy + gz * gz;
-        const int over = fmag2 > lim2;
-        /* one square root and one division for whichever of the two limits applies */
-        const double cut = limit / sqrt(slide ? smag2 : fmag2);
-        gx = over ? gx * cut : gx;
-        gy = over ? gy * cut : gy;
-        gz = over ? gz * cut : gz;
-        ux = slide ? ux * cut : ux;
-        uy = slide ? uy * cut : uy;
-        uz = slide ? uz * cut : uz;
-        gx = slide ? ux : gx;
-        gy = slide ? uy : gy;
-        gz = slide ? uz : gz;
-        q->sx[j] = ux;
-        q->sy[j] = uy;
-        q->sz[j] = uz;
-        const double fx = gx + pn * nx, fy = gy + pn * ny, fz = gz + pn * nz;
+        double sx = q->sx[j], sy = q->sy[j], sz = q->sz[j], fx, fy, fz;
+        q->redo[j] = law_lane(&L, nx, ny, nz, ov, vx, vy, vz, q->sqm[j], &sx, &sy, &sz, &fx, &fy, &fz);
+        q->sx[j] = sx;
+        q->sy[j] = sy;
+        q->sz[j] = sz;
         q->fx[j] = fx;
         q->fy[j] = fy;
         q->fz[j] = fz;
@@ -512,6 +537,52 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
     }
 }
 
+
+#define BT_LOCAL 16 /* wall candidates of one body whose manifolds bt_range keeps on the stack */
+
+/* Sphere–wall contacts on a face, in batches like the sphere pairs: a sphere whose wall
+ * candidates give one face contact and nothing near an edge (nearly every sphere on a floor or
+ * a side wall) skips the manifold and the mesh dedup, and its contact goes through the law in
+ * lanes. The arithmetic is apply_manifold's for a one-point manifold, operation for operation
+ * (same bits). */
+#define BT_CHUNK 64
+typedef struct {
+    double nx[BT_CHUNK], ny[BT_CHUNK], nz[BT_CHUNK], ov[BT_CHUNK]; /* normal on the sphere, overlap */
+    double rx[BT_CHUNK], ry[BT_CHUNK], rz[BT_CHUNK];               /* contact point - centre */
+    double vx[BT_CHUNK], vy[BT_CHUNK], vz[BT_CHUNK];               /* the sphere's velocity */
+    double wx[BT_CHUNK], wy[BT_CHUNK], wz[BT_CHUNK];               /* its spin */
+    double sqm[BT_CHUNK];
+    double sx[BT_CHUNK], sy[BT_CHUNK], sz[BT_CHUNK]; /* spring in, then out */
+    double fx[BT_CHUNK], fy[BT_CHUNK], fz[BT_CHUNK]; /* force on the sphere */
+    double tx[BT_CHUNK], ty[BT_CHUNK], tz[BT_CHUNK]; /* torque on it */
+    double redo[BT_CHUNK];
+    int32_t k[BT_CHUNK]; /* the pair */
+} bt_batch;
+
+SD_SIMD_CLONES
+static void bt_batch_law(const sd_law *law, double dt, bt_batch *restrict q, int m)
+{
+    const lane_law L = lane_law_make(law, dt);
+    for (int j = 0; j < m; j++) {
+        const double nx = q->nx[j], ny = q->ny[j], nz = q->nz[j], rx = q->rx[j], ry = q->ry[j], rz = q->rz[j];
+        /* v + w x r (the wall is still: v - 0 is v) */
+        const double vx = q->vx[j] + (q->wy[j] * rz - q->wz[j] * ry), vy = q->vy[j] + (q->wz[j] * rx - q->wx[j] * rz),
+                     vz = q->vz[j] + (q->wx[j] * ry - q->wy[j] * rx);
+        double sx = q->sx[j], sy = q->sy[j], sz = q->sz[j], fx, fy, fz;
+        q->redo[j] = law_lane(&L, nx, ny, nz, q->ov[j], vx, vy, vz, q->sqm[j], &sx, &sy, &sz, &fx, &fy, &fz);
+        q->sx[j] = sx;
+        q->sy[j] = sy;
+        q->sz[j] = sz;
+        /* apply_manifold's sums, from zero */
+        q->fx[j] = 0.0 + fx;
+        q->fy[j] = 0.0 + fy;
+        q->fz[j] = 0.0 + fz;
+        q->tx[j] = 0.0 + (ry * fz - rz * fy);
+        q->ty[j] = 0.0 + (rz * fx - rx * fz);
+        q->tz[j] = 0.0 + (rx * fy - ry * fx);
+    }
+}
+
 /* per-thread scratch of the body-body pass */
 typedef struct {
     ss_batch q;
@@ -519,21 +590,124 @@ typedef struct {
     int used[SS_CHUNK];
     int32_t ks[SS_CHUNK];
     int act[SS_CHUNK];
+    bt_batch wq;
 } bb_scratch;
 
-#define BT_LOCAL 16 /* wall candidates of one body whose manifolds bt_range keeps on the stack */
+/* The batch's lanes through the law, then each into its pair's slot and onto its sphere (the
+ * sphere's only contact with the walls: nothing else is summed onto it in bt_range). */
+static void bt_flush(sd_world *w, const sd_law *law, bt_batch *q, int m)
+{
+    sd_bodies *b = &w->b;
+    bt_batch_law(law, w->def.dt, q, m);
+    for (int j = 0; j < m; j++) {
+        const int k = q->k[j];
+        const sd_pair *p = &w->bt.p[k];
+        sd_hist *h = &w->bt.hist[p->off];
+        sd_pair_out o;
+        if (q->redo[j] != 0.0) {
+            /* the scalar law from the slot's spring, not yet overwritten */
+            const sd_vec3 n = v3(q->nx[j], q->ny[j], q->nz[j]), r = v3(q->rx[j], q->ry[j], q->rz[j]);
+            const sd_vec3 v = v3_add(v3(q->vx[j], q->vy[j], q->vz[j]), v3_cross(v3(q->wx[j], q->wy[j], q->wz[j]), r));
+            sd_vec3 shear = h->feature == SD_TRI_FACE ? h->shear : v3(0, 0, 0), f;
+            sd_contact_law(law, q->sqm[j], n, q->ov[j], v, w->def.dt, &shear, &f);
+            h->shear = shear;
+            o.f_a = v3_add(v3(0, 0, 0), f);
+            o.t_a = v3_add(v3(0, 0, 0), v3_cross(r, f));
+        } else {
+            h->shear = v3(q->sx[j], q->sy[j], q->sz[j]);
+            o.f_a = v3(q->fx[j], q->fy[j], q->fz[j]);
+            o.t_a = v3(q->tx[j], q->ty[j], q->tz[j]);
+        }
+        h->feature = SD_TRI_FACE;
+        for (int s = 1; s < p->cap; s++)
+            h[s].feature = -1;
+        o.t_b = v3(0, 0, 0);
+        w->bt.out[k] = o;
+        w->bt.active[k] = 1;
+        const int i = p->a;
+        b->force[i] = v3_add(b->force[i], o.f_a);
+        b->torque[i] = v3_add(b->torque[i], o.t_a);
+    }
+}
+
+/* A sphere's wall candidates from .. to-1 when they give one face contact at most and nothing
+ * near an edge: the contact (if any) into the batch's next lane, the other pairs emptied.
+ * Returns 0 (and touches nothing) when the general path must decide. */
+static int bt_sphere_face(sd_world *w, int i, int from, int to, bt_batch *q, int *m)
+{
+    const sd_bodies *b = &w->b;
+    const sd_walls *wl = &w->w;
+    const sd_vec3 c = b->pos[i];
+    const double r = b->radius[i];
+    int hit = -1;
+    double s_hit = 0.0;
+    for (int k = from; k < to; k++) {
+        const int t = w->bt.p[k].b;
+        if (!wl->active[t]) continue;
+        double s;
+        const int kind = sd_sphere_tri_class(c, r, &wl->tri[t], &wl->edges[t], &s);
+        if (kind == 2 || (kind == 1 && hit >= 0)) return 0;
+        if (kind == 1) {
+            hit = k;
+            s_hit = s;
+        }
+    }
+    for (int k = from; k < to; k++) {
+        if (k == hit) continue;
+        const sd_pair *p = &w->bt.p[k];
+        for (int s = 0; s < p->cap; s++)
+            w->bt.hist[p->off + s].feature = -1;
+        w->bt.active[k] = 0;
+    }
+    if (hit < 0) return 1;
+    const sd_pair *p = &w->bt.p[hit];
+    const sd_hist *h = &w->bt.hist[p->off];
+    sd_vec3 n, pt;
+    double ov;
+    sd_sphere_tri_face(c, r, &wl->tri[p->b], s_hit, &n, &ov, &pt);
+    /* the spring of the same feature (a face: the first slot holding it) or a new one */
+    sd_vec3 shear = v3(0, 0, 0);
+    for (int s = 0; s < p->cap && s < SD_MANIFOLD_MAX; s++)
+        if (h[s].feature == SD_TRI_FACE) {
+            shear = h[s].shear;
+            break;
+        }
+    const sd_vec3 ra = v3_sub(pt, c), v = b->vel[i], om = b->omega[i];
+    const int j = (*m)++;
+    q->nx[j] = n.x, q->ny[j] = n.y, q->nz[j] = n.z, q->ov[j] = ov;
+    q->rx[j] = ra.x, q->ry[j] = ra.y, q->rz[j] = ra.z;
+    q->vx[j] = v.x, q->vy[j] = v.y, q->vz[j] = v.z;
+    q->wx[j] = om.x, q->wy[j] = om.y, q->wz[j] = om.z;
+    q->sqm[j] = p->sqrt_m_eff;
+    q->sx[j] = shear.x, q->sy[j] = shear.y, q->sz[j] = shear.z;
+    q->k[j] = hit;
+    return 1;
+}
 
 /* Body–triangle pairs of the bodies i0 .. i1-1: narrow phase, mesh dedup, law, into each
  * pair's slot (gathered per body in pair order by sd_contact_gather). */
-static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
+static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q)
 {
     sd_bodies *b = &w->b;
     long count = 0;
+    int m = 0;
     /* the pairs are grouped by body: walk the pairs, not the bodies (most have none) */
     const int kend = w->csr.bt_start[i1];
     for (int from = w->csr.bt_start[i0]; from < kend;) {
         const int i = w->bt.p[from].a;
         const int to = w->csr.bt_start[i + 1];
+        if (b->shape[i] == SD_SHAPE_SPHERE) {
+            const int m0 = m;
+            if (bt_sphere_face(w, i, from, to, q, &m)) {
+                count += m - m0;
+                if (m == BT_CHUNK) {
+                    bt_flush(w, law, q, m);
+                    m = 0;
+                }
+                from = to;
+                continue;
+            }
+        }
         /* the body's manifolds on the stack when they fit (they stay in L1: the store's
          * array is a quarter-kilobyte per pair, mostly written and read for "no contact") */
         sd_manifold loc[BT_LOCAL];
@@ -572,6 +746,7 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1)
         b->torque[i] = t;
         from = to;
     }
+    if (m > 0) bt_flush(w, law, q, m);
     return count;
 }
 
@@ -960,7 +1135,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 }
             }
             /* its bodies' wall pairs, then its moving bodies */
-            count += bt_range(w, law, i0, i1f > i0 ? i1f : i0);
+            count += bt_range(w, law, i0, i1f > i0 ? i1f : i0, &x->wq);
             if (moved_out)
                 moved |= sd_integrate_list(w, w->mov, sd_mov_lower(w->mov, w->mov_n, i0),
                                            sd_mov_lower(w->mov, w->mov_n, i1), &v2, &dc, &xf);
@@ -1018,7 +1193,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
 #endif
     {
         count = bb_serial_pass(w, &law, w->bb_scratch);
-        count += bt_range(w, &law, 0, w->b.n);
+        count += bt_range(w, &law, 0, w->b.n, &((bb_scratch *)w->bb_scratch)[0].wq);
     }
     w->contacts = count;
     w->wall_force_stale = 1;

@@ -100,6 +100,39 @@ int sd_geom_sphere_tri(sd_vec3 c, double r, const sd_tri *t, sd_manifold *m);
  * one farther than r from the triangle's half-plane beyond an edge touches nothing, both
  * found from three dot products; the rest go through sd_geom_sphere_tri. */
 int sd_geom_sphere_tri_e(sd_vec3 c, double r, const sd_tri *t, const sd_tri_edges *e, sd_manifold *m);
+
+/* A projection this far inside every edge line is in the face region of the closest-point
+ * search as well (its barycentric tests carry rounding of ~1e-16 L^2 for a triangle of size
+ * L: 1e-13 m for L = 4 m), so the two agree on the feature. */
+#define SD_TRI_FACE_CLEAR 1e-9
+
+/* The first part of sd_geom_sphere_tri_e: 0 when the sphere (centre c, radius r) cannot touch
+ * the triangle, 1 for a contact with the face, 2 when it is near an edge or a vertex (the
+ * closest-point search decides). *s: the centre's signed distance from the plane. */
+static inline int sd_sphere_tri_class(sd_vec3 c, double r, const sd_tri *t, const sd_tri_edges *e, double *s_out)
+{
+    const double s = v3_dot(v3_sub(c, t->v[0]), t->n);
+    *s_out = s;
+    if (fabs(s) >= r) return 0;
+    const double e0 = v3_dot(e->m[0], c) - e->h[0], e1 = v3_dot(e->m[1], c) - e->h[1],
+                 e2 = v3_dot(e->m[2], c) - e->h[2];
+    const double e01 = e0 < e1 ? e0 : e1, emin = e01 < e2 ? e01 : e2;
+    if (emin > SD_TRI_FACE_CLEAR) return 1;
+    /* the triangle lies in the half-plane emin >= 0 of its plane: nothing of it is nearer
+     * than sqrt(s^2 + emin^2) */
+    if (emin < 0.0 && s * s + emin * emin >= r * r) return 0;
+    return 2;
+}
+
+/* A face contact (class 1 above): the normal is the plane's, towards the centre; the point is
+ * the projection of the centre moved half the overlap back along it. */
+static inline void sd_sphere_tri_face(sd_vec3 c, double r, const sd_tri *t, double s, sd_vec3 *n, double *ov,
+                                      sd_vec3 *point)
+{
+    *n = s >= 0.0 ? t->n : v3_neg(t->n);
+    *ov = r - fabs(s);
+    *point = v3_madd(v3_madd(c, t->n, -s), *n, -0.5 * *ov);
+}
 int sd_geom_sphere_cyl(sd_vec3 c, double r, const sd_cyl *b, sd_manifold *m);
 int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m);
 /* feature = (cylinder feature << SD_TRI_FEATURE_BITS) | triangle feature code. */

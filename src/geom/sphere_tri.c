@@ -79,32 +79,15 @@ void sd_tri_edges_init(sd_tri_edges *e, const sd_tri *t)
     }
 }
 
-/* A projection this far inside every edge line is in the face region of the closest-point
- * search as well (its barycentric tests carry rounding of ~1e-16 L^2 for a triangle of size
- * L: 1e-13 m for L = 4 m), so the two agree on the feature. */
-#define SD_TRI_FACE_CLEAR 1e-9
-
 int sd_geom_sphere_tri_e(sd_vec3 c, double r, const sd_tri *t, const sd_tri_edges *e, sd_manifold *m)
 {
     m->n = 0;
-    const double s = v3_dot(v3_sub(c, t->v[0]), t->n);
-    if (fabs(s) >= r) return 0;
-    const double e0 = v3_dot(e->m[0], c) - e->h[0], e1 = v3_dot(e->m[1], c) - e->h[1],
-                 e2 = v3_dot(e->m[2], c) - e->h[2];
-    const double e01 = e0 < e1 ? e0 : e1, emin = e01 < e2 ? e01 : e2;
-    if (emin > SD_TRI_FACE_CLEAR) {
-        /* the face: the closest point is the projection, the normal the plane's */
-        const sd_vec3 n = s >= 0.0 ? t->n : v3_neg(t->n);
-        const double ov = r - fabs(s);
-        m->normal[0] = n;
-        m->overlap[0] = ov;
-        m->point[0] = v3_madd(v3_madd(c, t->n, -s), n, -0.5 * ov);
-        m->feature[0] = SD_TRI_FACE;
-        m->n = 1;
-        return 1;
-    }
-    /* the triangle lies in the half-plane emin >= 0 of its plane: nothing of it is nearer
-     * than sqrt(s^2 + emin^2) */
-    if (emin < 0.0 && s * s + emin * emin >= r * r) return 0;
-    return sd_geom_sphere_tri(c, r, t, m);
+    double s;
+    const int kind = sd_sphere_tri_class(c, r, t, e, &s);
+    if (kind == 0) return 0;
+    if (kind == 2) return sd_geom_sphere_tri(c, r, t, m);
+    sd_sphere_tri_face(c, r, t, s, &m->normal[0], &m->overlap[0], &m->point[0]);
+    m->feature[0] = SD_TRI_FACE;
+    m->n = 1;
+    return 1;
 }
