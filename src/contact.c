@@ -423,6 +423,16 @@ static inline void add_both(sd_bodies *b, const sd_pair *p, const sd_pair_out *o
     add_pair(b, p->b, 1, o);
 }
 
+/* x, or +0.0 where mask is 0 (mask all ones or all zeros) */
+static inline double bits_and(double x, uint64_t mask)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    u &= mask;
+    memcpy(&x, &u, sizeof u);
+    return x;
+}
+
 /* The pairs ks[0 .. n) (n <= SS_CHUNK): forces into out[i], contact points into used[i]. Each
  * pair's result depends on that pair alone, so any split into chunks gives the same bits.
  * With acc, the chunk also adds each pair in contact onto its two bodies, in chunk order (the
@@ -481,12 +491,13 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
         const int ia = q->ia[j], ib = q->ib[j];
         const sd_hist *h = &hist[q->off[j]];
         const sd_vec3 va = vel[ia], vb = vel[ib], wa = omega[ia], wb = omega[ib];
-        const double keep = q->was[j] == 0 ? 1.0 : 0.0;
         q->vx[j] = va.x - vb.x, q->vy[j] = va.y - vb.y, q->vz[j] = va.z - vb.z;
         q->wax[j] = wa.x, q->way[j] = wa.y, q->waz[j] = wa.z;
         q->wbx[j] = wb.x, q->wby[j] = wb.y, q->wbz[j] = wb.z;
-        /* a new contact starts from zero (the stored spring is finite: keep * s is exact) */
-        q->sx[j] = keep ? h->shear.x : 0.0, q->sy[j] = keep ? h->shear.y : 0.0, q->sz[j] = keep ? h->shear.z : 0.0;
+        /* a new contact starts from zero: the stored spring's bits masked, with no branch on
+         * it (a select compiled into one; new contacts come at random in a flow) */
+        const uint64_t keep = -(uint64_t)(q->was[j] == 0);
+        q->sx[j] = bits_and(h->shear.x, keep), q->sy[j] = bits_and(h->shear.y, keep), q->sz[j] = bits_and(h->shear.z, keep);
     }
     /* 4. the law, vectorized */
     ss_batch_law(law, w->def.dt, q, m);
@@ -764,7 +775,7 @@ static int near_filter(sd_world *w, double skin, int k0, int k1, int32_t *out)
         if (p->kind == SD_PAIR_SS) {
             const double reach = rad[p->a] + rad[p->b] + skin;
             keep = v3_norm2(v3_sub(pos[p->a], pos[p->b])) <= reach * reach;
-            if (!keep) hist[p->off].feature = -1;
+            hist[p->off].feature |= keep - 1; /* -1 when left out: no branch on keep */
         } else {
             /* a log lies within its radius of its axis segment: a sphere (or the other log's
              * bounding sphere) farther than the radii and the skin from it cannot touch */
