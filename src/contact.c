@@ -132,8 +132,8 @@ static inline lane_law lane_law_make(const sd_law *law, double dt)
  * rule and the lane must be redone by the scalar law (rare: a normal turning fast). */
 static inline __attribute__((always_inline)) double law_lane(const lane_law *L, double nx, double ny, double nz,
                                                              double ov, double vx, double vy, double vz, double sqm,
-                                                             double *sx, double *sy, double *sz, double *fx,
-                                                             double *fy, double *fz)
+                                                             double *sx, double *sy, double *sz, double *fx, double *fy,
+                                                             double *fz)
 {
     const double vn = vx * nx + vy * ny + vz * nz;
     double pn = L->k_n * ov - L->c_n * sqm * vn;
@@ -497,7 +497,8 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
         /* a new contact starts from zero: the stored spring's bits masked, with no branch on
          * it (a select compiled into one; new contacts come at random in a flow) */
         const uint64_t keep = -(uint64_t)(q->was[j] == 0);
-        q->sx[j] = bits_and(h->shear.x, keep), q->sy[j] = bits_and(h->shear.y, keep), q->sz[j] = bits_and(h->shear.z, keep);
+        q->sx[j] = bits_and(h->shear.x, keep), q->sy[j] = bits_and(h->shear.y, keep),
+        q->sz[j] = bits_and(h->shear.z, keep);
     }
     /* 4. the law, vectorized */
     ss_batch_law(law, w->def.dt, q, m);
@@ -546,7 +547,6 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
         out[i].t_b = v3(q->nfx[j] * mlb, q->nfy[j] * mlb, q->nfz[j] * mlb);
     }
 }
-
 
 #define BT_LOCAL 16 /* wall candidates of one body whose manifolds bt_range keeps on the stack */
 
