@@ -9,6 +9,12 @@
 #include "core/simd.h"
 #include "world_internal.h"
 
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(SD_NO_CLONES)
+#include <immintrin.h>
+#include <stddef.h>
+#define SD_FILTER512 1
+#endif
+
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -99,9 +105,12 @@ static int apply_manifold(const sd_world *w, const sd_law *law, const sd_manifol
  * pair order. The arithmetic is that of sd_contact_law, operation for operation (both sides of
  * every branch are computed and one is kept), so it gives the same bits as the scalar law. */
 #define SS_CHUNK 128 /* at most 256: the owned pass packs an index in 8 bits */
+#define SS_PAD 8
 
 typedef struct {
-    double dx[SS_CHUNK], dy[SS_CHUNK], dz[SS_CHUNK], ra[SS_CHUNK], rb[SS_CHUNK], sqm[SS_CHUNK];
+    /* (the filter's lanes padded by SS_PAD: its AVX-512 form stores 8 lanes at a time) */
+    double dx[SS_CHUNK + SS_PAD], dy[SS_CHUNK + SS_PAD], dz[SS_CHUNK + SS_PAD], ra[SS_CHUNK + SS_PAD],
+        rb[SS_CHUNK + SS_PAD], sqm[SS_CHUNK + SS_PAD];
     double vx[SS_CHUNK], vy[SS_CHUNK], vz[SS_CHUNK];    /* v_a - v_b */
     double wax[SS_CHUNK], way[SS_CHUNK], waz[SS_CHUNK]; /* omega_a */
     double wbx[SS_CHUNK], wby[SS_CHUNK], wbz[SS_CHUNK]; /* omega_b */
@@ -110,9 +119,9 @@ typedef struct {
     double nfx[SS_CHUNK], nfy[SS_CHUNK], nfz[SS_CHUNK]; /* n x f */
     double la[SS_CHUNK], lb[SS_CHUNK];                  /* lever arms */
     double redo[SS_CHUNK];                              /* nonzero: redo with the scalar law */
-    int32_t ia[SS_CHUNK], ib[SS_CHUNK], off[SS_CHUNK];  /* bodies, history slot */
-    int32_t was[SS_CHUNK];                              /* the slot's feature before this step */
-    int32_t sel[SS_CHUNK];                              /* the pair's place in the chunk */
+    int32_t ia[SS_CHUNK + SS_PAD], ib[SS_CHUNK + SS_PAD], off[SS_CHUNK + SS_PAD]; /* bodies, history slot */
+    int32_t was[SS_CHUNK + SS_PAD]; /* the slot's feature before this step */
+    int32_t sel[SS_CHUNK + SS_PAD]; /* the pair's place in the chunk */
 } ss_batch;
 
 /* The constants of sd_contact_law for one pass of the lanes below. */
@@ -433,6 +442,110 @@ static inline double bits_and(double x, uint64_t mask)
     return x;
 }
 
+#ifdef SD_FILTER512
+/* Whether this CPU runs the AVX-512 filter below, decided once at load (before any thread):
+ * SD_NO_AVX512=1 in the environment keeps the scalar loop (the tests run both). */
+static int filter512_on;
+__attribute__((constructor)) static void filter512_init(void)
+{
+    const char *e = getenv("SD_NO_AVX512");
+    filter512_on =
+        !(e && *e && strcmp(e, "0") != 0) && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+}
+
+int sd_contact_filter512(int on)
+{
+    const int was = filter512_on;
+    filter512_on = on && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+    return was;
+}
+
+/* Step 1 of bb_chunk (the touch filter) for 8 pairs at a time, in AVX-512: the pair records,
+ * both centres and radii and the spring's feature gathered into lanes, the touch test with the
+ * scalar loop's operations in its order (same bits), the touching sphere pairs packed into the
+ * batch by compress and stored 8 lanes wide (the arrays are padded by SS_PAD). A pair of
+ * another kind (a log's) in a group takes the scalar loop's path for it, in pair order. Runs
+ * while 8 pairs remain and returns where it stopped. */
+__attribute__((target("avx512f,avx512vl,popcnt"))) static int
+ss_filter512(const sd_world *w, const int32_t *ks, int i, int n, int *used, ss_batch *q, int *mp, int *gen, int *ngp)
+{
+    const sd_pair *pairs = w->bb.p;
+    sd_hist *hist = w->bb.hist;
+    const double *pos = &w->b.pos[0].x, *rad = w->b.radius;
+    int m = *mp, ng = *ngp;
+    const char *pr = (const char *)pairs;
+    const __m256i one = _mm256_set1_epi32(1), none = _mm256_set1_epi32(-1), hi16 = _mm256_set1_epi32((int)0xFFFF0000u),
+                  lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    for (; i + 8 <= n; i += 8) {
+        const __m256i k = _mm256_loadu_si256((const __m256i *)(ks + i));
+        const __m256i k3 = _mm256_add_epi32(k, _mm256_add_epi32(k, k)); /* 24-byte records, scale 8 */
+        /* cap (low half) and kind (high half) of each record: kind SD_PAIR_SS is 0 */
+        const __m256i ck = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, cap)), k3, 8);
+        const __mmask8 other = _mm256_test_epi32_mask(ck, hi16), ss = (__mmask8)~other;
+        const __m256i a = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, a)), k3, 8);
+        const __m256i b = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, b)), k3, 8);
+        const __m256i off = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, off)), k3, 8);
+        const __m512d sqm = _mm512_i32gather_pd(k3, pr + offsetof(sd_pair, sqrt_m_eff), 8);
+        const __m256i a3 = _mm256_add_epi32(a, _mm256_add_epi32(a, a)),
+                      b3 = _mm256_add_epi32(b, _mm256_add_epi32(b, b));
+        const __m512d dx = _mm512_sub_pd(_mm512_i32gather_pd(a3, pos, 8), _mm512_i32gather_pd(b3, pos, 8));
+        const __m512d dy = _mm512_sub_pd(_mm512_i32gather_pd(a3, pos + 1, 8), _mm512_i32gather_pd(b3, pos + 1, 8));
+        const __m512d dz = _mm512_sub_pd(_mm512_i32gather_pd(a3, pos + 2, 8), _mm512_i32gather_pd(b3, pos + 2, 8));
+        const __m512d ra = _mm512_i32gather_pd(a, rad, 8), rb = _mm512_i32gather_pd(b, rad, 8);
+        const __m512d rs = _mm512_add_pd(ra, rb);
+        const __m512d d2 =
+            _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz));
+        /* t = !(d2 >= rs^2), as the scalar loop (true for an unordered pair too); sphere pairs only */
+        const __mmask8 t = (__mmask8)(_mm512_cmp_pd_mask(d2, _mm512_mul_pd(rs, rs), _CMP_NGE_UQ) & ss);
+        /* the spring's feature (slot off, 32-byte slots: index 4 off, scale 8) */
+        const __m256i was = _mm256_i32gather_epi32((const int *)((const char *)hist + offsetof(sd_hist, feature)),
+                                                   _mm256_slli_epi32(off, 2), 8);
+        _mm256_mask_storeu_epi32(used + i, ss, _mm256_maskz_mov_epi32(t, one));
+        /* was | (t - 1): stored only where it changes (a contact that has just ended) */
+        __mmask8 gone = (__mmask8)(~t & ss & _mm256_cmpneq_epi32_mask(was, none));
+        if (gone) {
+            int32_t o[8];
+            _mm256_storeu_si256((__m256i *)o, off);
+            for (; gone; gone &= (__mmask8)(gone - 1))
+                hist[o[__builtin_ctz(gone)]].feature = -1;
+        }
+        _mm512_storeu_pd(q->dx + m, _mm512_maskz_compress_pd(t, dx));
+        _mm512_storeu_pd(q->dy + m, _mm512_maskz_compress_pd(t, dy));
+        _mm512_storeu_pd(q->dz + m, _mm512_maskz_compress_pd(t, dz));
+        _mm512_storeu_pd(q->ra + m, _mm512_maskz_compress_pd(t, ra));
+        _mm512_storeu_pd(q->rb + m, _mm512_maskz_compress_pd(t, rb));
+        _mm512_storeu_pd(q->sqm + m, _mm512_maskz_compress_pd(t, sqm));
+        _mm256_storeu_si256((__m256i *)(q->ia + m), _mm256_maskz_compress_epi32(t, a));
+        _mm256_storeu_si256((__m256i *)(q->ib + m), _mm256_maskz_compress_epi32(t, b));
+        _mm256_storeu_si256((__m256i *)(q->off + m), _mm256_maskz_compress_epi32(t, off));
+        _mm256_storeu_si256((__m256i *)(q->was + m), _mm256_maskz_compress_epi32(t, was));
+        _mm256_storeu_si256((__m256i *)(q->sel + m),
+                            _mm256_maskz_compress_epi32(t, _mm256_add_epi32(_mm256_set1_epi32(i), lane)));
+        m += __builtin_popcount(t);
+        /* the log pairs of the group, as the scalar loop takes them */
+        for (__mmask8 o = other; o; o &= (__mmask8)(o - 1)) {
+            const int j = i + __builtin_ctz(o);
+            const sd_pair *p = &pairs[ks[j]];
+            if (log_pair_apart(&w->b, p)) {
+                used[j] = 0;
+                for (int s = 0; s < p->cap; s++)
+                    hist[p->off + s].feature = -1;
+            } else
+                gen[ng++] = j;
+        }
+    }
+    *mp = m;
+    *ngp = ng;
+    return i;
+}
+#else
+int sd_contact_filter512(int on)
+{
+    (void)on;
+    return 0;
+}
+#endif
+
 /* The pairs ks[0 .. n) (n <= SS_CHUNK): forces into out[i], contact points into used[i]. Each
  * pair's result depends on that pair alone, so any split into chunks gives the same bits.
  * With acc, the chunk also adds each pair in contact onto its two bodies, in chunk order (the
@@ -450,35 +563,42 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
     /* 1. which pairs touch: no branch on the answer (it is close to a coin toss in a dense bed).
      * Each sphere pair's geometry is written to the next free batch lane whether it touches
      * or not; only a touching pair moves the lane on (what the law needs is read once) */
-    for (int i = 0; i < n; i++) {
-        const sd_pair *p = &pairs[ks[i]];
-        if (p->kind != SD_PAIR_SS) {
-            if (log_pair_apart(&w->b, p)) {
-                /* what the manifold path gives for no contact: empty slots, no force */
-                used[i] = 0;
-                for (int s = 0; s < p->cap; s++)
-                    hist[p->off + s].feature = -1;
+    {
+        /* (8 pairs at a time in AVX-512 where the CPU has it; the rest, or all, here) */
+        int i = 0;
+#ifdef SD_FILTER512
+        if (filter512_on) i = ss_filter512(w, ks, 0, n, used, q, &m, gen, &ng);
+#endif
+        for (; i < n; i++) {
+            const sd_pair *p = &pairs[ks[i]];
+            if (p->kind != SD_PAIR_SS) {
+                if (log_pair_apart(&w->b, p)) {
+                    /* what the manifold path gives for no contact: empty slots, no force */
+                    used[i] = 0;
+                    for (int s = 0; s < p->cap; s++)
+                        hist[p->off + s].feature = -1;
+                    continue;
+                }
+                gen[ng++] = i;
                 continue;
             }
-            gen[ng++] = i;
-            continue;
+            const int ia = p->a, ib = p->b, off = p->off;
+            const sd_vec3 pa = pos[ia], pb = pos[ib];
+            const double dx = pa.x - pb.x, dy = pa.y - pb.y, dz = pa.z - pb.z;
+            const double ra = rad[ia], rb = rad[ib], rs = ra + rb;
+            const int t = !(dx * dx + dy * dy + dz * dz >= rs * rs);
+            sd_hist *h = &hist[off];
+            const int was = h->feature;
+            used[i] = t;
+            q->dx[m] = dx, q->dy[m] = dy, q->dz[m] = dz;
+            q->ra[m] = ra, q->rb[m] = rb, q->sqm[m] = p->sqrt_m_eff;
+            q->ia[m] = ia, q->ib[m] = ib, q->off[m] = off, q->was[m] = was, q->sel[m] = i;
+            m += t;
+            /* a contact that has just ended loses its spring: stored whatever t is, with no
+             * branch on it (gcc turned a conditional store into a branch on t, mispredicted for
+             * half the pairs of a flowing sheet: half the filter's time) */
+            h->feature = was | (t - 1);
         }
-        const int ia = p->a, ib = p->b, off = p->off;
-        const sd_vec3 pa = pos[ia], pb = pos[ib];
-        const double dx = pa.x - pb.x, dy = pa.y - pb.y, dz = pa.z - pb.z;
-        const double ra = rad[ia], rb = rad[ib], rs = ra + rb;
-        const int t = !(dx * dx + dy * dy + dz * dz >= rs * rs);
-        sd_hist *h = &hist[off];
-        const int was = h->feature;
-        used[i] = t;
-        q->dx[m] = dx, q->dy[m] = dy, q->dz[m] = dz;
-        q->ra[m] = ra, q->rb[m] = rb, q->sqm[m] = p->sqrt_m_eff;
-        q->ia[m] = ia, q->ib[m] = ib, q->off[m] = off, q->was[m] = was, q->sel[m] = i;
-        m += t;
-        /* a contact that has just ended loses its spring: stored whatever t is, with no
-         * branch on it (gcc turned a conditional store into a branch on t, mispredicted for
-         * half the pairs of a flowing sheet: half the filter's time) */
-        h->feature = was | (t - 1);
     }
     /* 2. the other shapes, through the manifold */
     for (int g = 0; g < ng; g++) {

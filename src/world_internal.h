@@ -251,6 +251,11 @@ void sd_pairlist_free(sd_pairlist *l);
  * contacts already represented by a face or edge contact (used by the force pass and by
  * sd_world_spring_energy, so that the energy counts the springs the forces use). */
 void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to);
+/* The touch filter of the sphere pairs in AVX-512 (on by default where the CPU has it, unless
+ * SD_NO_AVX512 is set) or scalar: the same bits either way. For tests; not to be called while
+ * a world steps. Returns the previous setting; asking for AVX-512 on a CPU without it gives
+ * the scalar filter. */
+int sd_contact_filter512(int on);
 /* the first k with mov[k] >= i (mov ascends) */
 static inline int sd_mov_lower(const int32_t *mov, int n, int i)
 {

@@ -138,10 +138,27 @@ int main(void)
     CHECK(h1 == h2);
     CHECK(c1 == c2);
     {
+        /* the touch filter's other form (AVX-512 or scalar) on the same scene: log pairs sit
+         * among the sphere pairs of a chunk, where the AVX-512 form hands over to the scalar
+         * loop and back */
+        const int was = sd_contact_filter512(0);
+        long cs = 0, cv = 0;
+        const uint64_t hs = run(1, &cs);
+        sd_contact_filter512(1);
+        const int have = sd_contact_filter512(1); /* on where the CPU has it */
+        const uint64_t hv = run(1, &cv);
+        sd_contact_filter512(was);
+        printf("touch filter scalar: hash %016llx; AVX-512: %s %016llx\n", (unsigned long long)hs,
+               have ? "" : "(not on this CPU, scalar again)", (unsigned long long)hv);
+        CHECK(hs == h1 && hv == h1);
+        CHECK(cs == c1 && cv == c1);
+    }
+    {
         sd_run_result a = run_driver(1), b = run_driver(2);
         printf("driver with water: 1 thread hash %016llx P_V %.6f, 2 threads hash %016llx P_V %.6f; flow ended at "
                "%.4f s, %ld steps\n",
-               (unsigned long long)a.state_hash, a.p_v, (unsigned long long)b.state_hash, b.p_v, a.phase_end[1], a.steps);
+               (unsigned long long)a.state_hash, a.p_v, (unsigned long long)b.state_hash, b.p_v, a.phase_end[1],
+               a.steps);
         CHECK(a.state_hash != 0);
         CHECK(a.phase_end[1] > a.phase_end[0] && a.phase_end[2] > a.phase_end[1]); /* flow and capture ran */
         CHECK(a.state_hash == b.state_hash);
