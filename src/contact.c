@@ -538,6 +538,41 @@ ss_filter512(const sd_world *w, const int32_t *ks, int i, int n, int *used, ss_b
     *ngp = ng;
     return i;
 }
+
+/* Step 3 of bb_chunk in AVX-512, 8 lanes at a time (the last group masked): the touching
+ * pairs' velocities, spins and stored springs gathered into the batch, a new contact's spring
+ * +0.0 as the scalar loop's mask gives it (same bits). */
+__attribute__((target("avx512f,avx512vl"))) static void ss_gather512(const sd_world *w, ss_batch *q, int m)
+{
+    const double *vel = &w->b.vel[0].x, *om = &w->b.omega[0].x;
+    const char *sh = (const char *)w->bb.hist + offsetof(sd_hist, shear);
+    const __m512d zero = _mm512_setzero_pd();
+    for (int j = 0; j < m; j += 8) {
+        const __mmask8 live = (__mmask8)(m - j >= 8 ? 0xFF : (1u << (m - j)) - 1u);
+        const __m256i ia = _mm256_maskz_loadu_epi32(live, q->ia + j), ib = _mm256_maskz_loadu_epi32(live, q->ib + j);
+        const __m256i a3 = _mm256_add_epi32(ia, _mm256_add_epi32(ia, ia)),
+                      b3 = _mm256_add_epi32(ib, _mm256_add_epi32(ib, ib));
+        _mm512_storeu_pd(q->vx + j, _mm512_sub_pd(_mm512_mask_i32gather_pd(zero, live, a3, vel, 8),
+                                                  _mm512_mask_i32gather_pd(zero, live, b3, vel, 8)));
+        _mm512_storeu_pd(q->vy + j, _mm512_sub_pd(_mm512_mask_i32gather_pd(zero, live, a3, vel + 1, 8),
+                                                  _mm512_mask_i32gather_pd(zero, live, b3, vel + 1, 8)));
+        _mm512_storeu_pd(q->vz + j, _mm512_sub_pd(_mm512_mask_i32gather_pd(zero, live, a3, vel + 2, 8),
+                                                  _mm512_mask_i32gather_pd(zero, live, b3, vel + 2, 8)));
+        _mm512_storeu_pd(q->wax + j, _mm512_mask_i32gather_pd(zero, live, a3, om, 8));
+        _mm512_storeu_pd(q->way + j, _mm512_mask_i32gather_pd(zero, live, a3, om + 1, 8));
+        _mm512_storeu_pd(q->waz + j, _mm512_mask_i32gather_pd(zero, live, a3, om + 2, 8));
+        _mm512_storeu_pd(q->wbx + j, _mm512_mask_i32gather_pd(zero, live, b3, om, 8));
+        _mm512_storeu_pd(q->wby + j, _mm512_mask_i32gather_pd(zero, live, b3, om + 1, 8));
+        _mm512_storeu_pd(q->wbz + j, _mm512_mask_i32gather_pd(zero, live, b3, om + 2, 8));
+        /* the spring of a held contact (its feature was 0); 32-byte slots: index 4 off, scale 8 */
+        const __mmask8 held = (__mmask8)(live & _mm256_cmpeq_epi32_mask(_mm256_maskz_loadu_epi32(live, q->was + j),
+                                                                        _mm256_setzero_si256()));
+        const __m256i o4 = _mm256_slli_epi32(_mm256_maskz_loadu_epi32(live, q->off + j), 2);
+        _mm512_storeu_pd(q->sx + j, _mm512_mask_i32gather_pd(zero, held, o4, sh, 8));
+        _mm512_storeu_pd(q->sy + j, _mm512_mask_i32gather_pd(zero, held, o4, sh + 8, 8));
+        _mm512_storeu_pd(q->sz + j, _mm512_mask_i32gather_pd(zero, held, o4, sh + 16, 8));
+    }
+}
 #else
 int sd_contact_filter512(int on)
 {
@@ -607,7 +642,14 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
         used[i] = pair_force_general(w, law, p, &hist[p->off], &out[i]);
     }
     /* 3. the rest of what the law needs of the touching spheres */
-    for (int j = 0; j < m; j++) {
+    int j3 = 0;
+#ifdef SD_FILTER512
+    if (filter512_on) {
+        ss_gather512(w, q, m);
+        j3 = m;
+    }
+#endif
+    for (int j = j3; j < m; j++) {
         const int ia = q->ia[j], ib = q->ib[j];
         const sd_hist *h = &hist[q->off[j]];
         const sd_vec3 va = vel[ia], vb = vel[ib], wa = omega[ia], wb = omega[ib];
