@@ -466,6 +466,8 @@ __attribute__((constructor)) static void filter512_init(void)
         !(e && *e && strcmp(e, "0") != 0) && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
 }
 
+int sd_simd512_on(void) { return filter512_on; }
+
 int sd_contact_filter512(int on)
 {
     const int was = filter512_on;
@@ -587,6 +589,8 @@ __attribute__((target("avx512f,avx512vl"))) static void ss_gather512(const sd_wo
     }
 }
 #else
+int sd_simd512_on(void) { return 0; }
+
 int sd_contact_filter512(int on)
 {
     (void)on;

@@ -256,6 +256,9 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
  * a world steps. Returns the previous setting; asking for AVX-512 on a CPU without it gives
  * the scalar filter. */
 int sd_contact_filter512(int on);
+/* Whether the AVX-512 kernels run now (contact.c's touch filter and gather, neighbor.c's cell
+ * scan): the CPU has AVX-512F/VL, SD_NO_AVX512 is unset and sd_contact_filter512 left them on. */
+int sd_simd512_on(void);
 /* the first k with mov[k] >= i (mov ascends) */
 static inline int sd_mov_lower(const int32_t *mov, int n, int i)
 {
