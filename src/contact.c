@@ -810,8 +810,7 @@ static void bt_flush(sd_world *w, const sd_law *law, bt_batch *q, int m)
         h->feature = SD_TRI_FACE;
         for (int s = 1; s < p->cap; s++)
             h[s].feature = -1;
-        o.t_b = v3(0, 0, 0);
-        w->bt.out[k] = o;
+        w->bt.out[k] = o.f_a;
         w->bt.active[k] = 1;
         const int i = p->a;
         b->force[i] = v3_add(b->force[i], o.f_a);
@@ -923,7 +922,7 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q
             sd_pair_out o;
             int used =
                 apply_manifold(w, law, &man[k - from], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap, &o);
-            w->bt.out[k] = o;
+            w->bt.out[k] = o.f_a;
             w->bt.active[k] = (uint8_t)(used > 0);
             count += used;
             if (used > 0) {
@@ -1403,6 +1402,6 @@ void sd_contact_gather(sd_world *w)
     for (int k = 0; k < w->bt.n; k++) {
         if (!w->bt.active[k]) continue;
         int t = w->bt.p[k].b;
-        w->w.force[t] = v3_sub(w->w.force[t], w->bt.out[k].f_a);
+        w->w.force[t] = v3_sub(w->w.force[t], w->bt.out[k]);
     }
 }

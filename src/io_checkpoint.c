@@ -580,7 +580,7 @@ static sd_status read_pairs(const rd_ctx *r, cursor *c, sd_world *w, sd_pairlist
         sd_grow((void **)&l->hist, &l->hcap, nh + 1, sizeof(sd_hist)))
         return SD_ERR_NOMEM;
     if (bt) { /* the wall pairs' results, rewritten by the next force pass (as restore_history) */
-        if (sd_grow((void **)&l->out, &l->out_cap, n + 1, sizeof(sd_pair_out)) ||
+        if (sd_grow((void **)&l->out, &l->out_cap, n + 1, sizeof(sd_vec3)) ||
             sd_grow((void **)&l->active, &l->active_cap, n + 1, 1))
             return SD_ERR_NOMEM;
         memset(l->active, 0, (size_t)n + 1);

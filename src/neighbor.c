@@ -292,7 +292,7 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l, const int32_t *fir
 {
     if (sd_grow((void **)&l->hist, &l->hcap, l->nh + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
     if (l == &w->bt) { /* the wall pairs' results (sd_contact_gather) */
-        if (sd_grow((void **)&l->out, &l->out_cap, l->n + 1, sizeof(sd_pair_out))) return SD_ERR_NOMEM;
+        if (sd_grow((void **)&l->out, &l->out_cap, l->n + 1, sizeof(sd_vec3))) return SD_ERR_NOMEM;
         if (sd_grow((void **)&l->active, &l->active_cap, l->n + 1, 1)) return SD_ERR_NOMEM;
         memset(l->active, 0, (size_t)l->n + 1);
     }

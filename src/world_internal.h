@@ -80,8 +80,8 @@ typedef struct {
 typedef struct {
     int n, cap;
     sd_pair *p;
-    sd_pair_out *out; /* the body–triangle list only (the wall loads); the body–body pass
-                       * keeps what it must share between threads in sd_owned */
+    sd_vec3 *out; /* the body–triangle list only: each pair's force on its body, for the wall
+                   * loads (the body–body pass keeps what its threads share in sd_owned) */
     uint8_t *active;  /* 1 when the pair touched in the last step (out[] valid) */
     int out_cap, active_cap;
     int nh, hcap;
