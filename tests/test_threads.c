@@ -138,9 +138,9 @@ int main(void)
     CHECK(h1 == h2);
     CHECK(c1 == c2);
     {
-        /* the touch filter's other form (AVX-512 or scalar) on the same scene: log pairs sit
-         * among the sphere pairs of a chunk, where the AVX-512 form hands over to the scalar
-         * loop and back */
+        /* the AVX-512 kernels (touch filter, gather, cell scan) off and on, on the same scene:
+         * log pairs sit among the sphere pairs of a chunk, where the AVX-512 filter hands them
+         * to the scalar path and goes on */
         const int was = sd_contact_filter512(0);
         long cs = 0, cv = 0;
         const uint64_t hs = run(1, &cs);
@@ -148,7 +148,7 @@ int main(void)
         const int have = sd_contact_filter512(1); /* on where the CPU has it */
         const uint64_t hv = run(1, &cv);
         sd_contact_filter512(was);
-        printf("touch filter scalar: hash %016llx; AVX-512: %s %016llx\n", (unsigned long long)hs,
+        printf("AVX-512 kernels off: hash %016llx; on: %s %016llx\n", (unsigned long long)hs,
                have ? "" : "(not on this CPU, scalar again)", (unsigned long long)hv);
         CHECK(hs == h1 && hv == h1);
         CHECK(cs == c1 && cv == c1);
