@@ -426,6 +426,19 @@ static inline int log_pair_apart(const sd_bodies *b, const sd_pair *p)
     return 0;
 }
 
+/* The touch filter's step for a log's pair (entry i of the chunk): apart, it gets what the
+ * manifold path gives for no contact (empty slots, no force); else it goes on to the manifold
+ * path, listed in gen. */
+static inline void filter_log_pair(const sd_world *w, const sd_pair *p, int i, int *used, int *gen, int *ng)
+{
+    if (log_pair_apart(&w->b, p)) {
+        used[i] = 0;
+        for (int s = 0; s < p->cap; s++)
+            w->bb.hist[p->off + s].feature = -1;
+    } else
+        gen[(*ng)++] = i;
+}
+
 static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
 {
     if (sd_body_is_bed(b, i)) return; /* its load is never read: stays zero (bt_range adds nothing to a fixed body) */
@@ -540,13 +553,7 @@ ss_filter512(const sd_world *w, const int32_t *ks, int i, int n, int *used, ss_b
         /* the log pairs of the group, as the scalar loop takes them */
         for (__mmask8 o = other; o; o &= (__mmask8)(o - 1)) {
             const int j = i + __builtin_ctz(o);
-            const sd_pair *p = &pairs[ks[j]];
-            if (log_pair_apart(&w->b, p)) {
-                used[j] = 0;
-                for (int s = 0; s < p->cap; s++)
-                    hist[p->off + s].feature = -1;
-            } else
-                gen[ng++] = j;
+            filter_log_pair(w, &pairs[ks[j]], j, used, gen, &ng);
         }
     }
     *mp = m;
@@ -624,14 +631,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
         for (; i < n; i++) {
             const sd_pair *p = &pairs[ks[i]];
             if (p->kind != SD_PAIR_SS) {
-                if (log_pair_apart(&w->b, p)) {
-                    /* what the manifold path gives for no contact: empty slots, no force */
-                    used[i] = 0;
-                    for (int s = 0; s < p->cap; s++)
-                        hist[p->off + s].feature = -1;
-                    continue;
-                }
-                gen[ng++] = i;
+                filter_log_pair(w, p, i, used, gen, &ng);
                 continue;
             }
             const int ia = p->a, ib = p->b, off = p->off;
