@@ -469,22 +469,23 @@ static inline double bits_and(double x, uint64_t mask)
 }
 
 #ifdef SD_FILTER512
-/* Whether this CPU runs the AVX-512 filter below, decided once at load (before any thread):
- * SD_NO_AVX512=1 in the environment keeps the scalar loop (the tests run both). */
-static int filter512_on;
-__attribute__((constructor)) static void filter512_init(void)
+/* Whether the AVX-512 kernels run (the touch filter and gather below, neighbor.c's cell scan),
+ * decided once at load (before any thread): SD_NO_AVX512=1 in the environment keeps the scalar
+ * loops (the tests run both). */
+static int simd512_on;
+__attribute__((constructor)) static void simd512_init(void)
 {
     const char *e = getenv("SD_NO_AVX512");
-    filter512_on =
+    simd512_on =
         !(e && *e && strcmp(e, "0") != 0) && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
 }
 
-int sd_simd512_on(void) { return filter512_on; }
+int sd_simd512_on(void) { return simd512_on; }
 
-int sd_contact_filter512(int on)
+int sd_simd512_set(int on)
 {
-    const int was = filter512_on;
-    filter512_on = on && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+    const int was = simd512_on;
+    simd512_on = on && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
     return was;
 }
 
@@ -598,7 +599,7 @@ __attribute__((target("avx512f,avx512vl"))) static void ss_gather512(const sd_wo
 #else
 int sd_simd512_on(void) { return 0; }
 
-int sd_contact_filter512(int on)
+int sd_simd512_set(int on)
 {
     (void)on;
     return 0;
@@ -626,7 +627,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
         /* (8 pairs at a time in AVX-512 where the CPU has it; the rest, or all, here) */
         int i = 0;
 #ifdef SD_FILTER512
-        if (filter512_on) i = ss_filter512(w, ks, 0, n, used, q, &m, gen, &ng);
+        if (simd512_on) i = ss_filter512(w, ks, 0, n, used, q, &m, gen, &ng);
 #endif
         for (; i < n; i++) {
             const sd_pair *p = &pairs[ks[i]];
@@ -661,7 +662,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
     /* 3. the rest of what the law needs of the touching spheres */
     int j3 = 0;
 #ifdef SD_FILTER512
-    if (filter512_on) {
+    if (simd512_on) {
         ss_gather512(w, q, m);
         j3 = m;
     }

@@ -80,9 +80,9 @@ typedef struct {
 typedef struct {
     int n, cap;
     sd_pair *p;
-    sd_vec3 *out; /* the body–triangle list only: each pair's force on its body, for the wall
-                   * loads (the body–body pass keeps what its threads share in sd_owned) */
-    uint8_t *active;  /* 1 when the pair touched in the last step (out[] valid) */
+    sd_vec3 *out;    /* the body–triangle list only: each pair's force on its body, for the wall
+                      * loads (the body–body pass keeps what its threads share in sd_owned) */
+    uint8_t *active; /* 1 when the pair touched in the last step (out[] valid) */
     int out_cap, active_cap;
     int nh, hcap;
     sd_hist *hist;
@@ -251,13 +251,13 @@ void sd_pairlist_free(sd_pairlist *l);
  * contacts already represented by a face or edge contact (used by the force pass and by
  * sd_world_spring_energy, so that the energy counts the springs the forces use). */
 void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to);
-/* The touch filter of the sphere pairs in AVX-512 (on by default where the CPU has it, unless
- * SD_NO_AVX512 is set) or scalar: the same bits either way. For tests; not to be called while
- * a world steps. Returns the previous setting; asking for AVX-512 on a CPU without it gives
- * the scalar filter. */
-int sd_contact_filter512(int on);
+/* The AVX-512 kernels (contact.c's touch filter and gather, neighbor.c's cell scan) on or off:
+ * on by default where the CPU has them, unless SD_NO_AVX512 is set; the same bits either way.
+ * For tests; not to be called while a world steps. Returns the previous setting; asking for
+ * them on a CPU without AVX-512 leaves the scalar loops. */
+int sd_simd512_set(int on);
 /* Whether the AVX-512 kernels run now (contact.c's touch filter and gather, neighbor.c's cell
- * scan): the CPU has AVX-512F/VL, SD_NO_AVX512 is unset and sd_contact_filter512 left them on. */
+ * scan): the CPU has AVX-512F/VL, SD_NO_AVX512 is unset and sd_simd512_set left them on. */
 int sd_simd512_on(void);
 /* the first k with mov[k] >= i (mov ascends) */
 static inline int sd_mov_lower(const int32_t *mov, int n, int i)

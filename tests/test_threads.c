@@ -141,13 +141,13 @@ int main(void)
         /* the AVX-512 kernels (touch filter, gather, cell scan) off and on, on the same scene:
          * log pairs sit among the sphere pairs of a chunk, where the AVX-512 filter hands them
          * to the scalar path and goes on */
-        const int was = sd_contact_filter512(0);
+        const int was = sd_simd512_set(0);
         long cs = 0, cv = 0;
         const uint64_t hs = run(1, &cs);
-        sd_contact_filter512(1);
-        const int have = sd_contact_filter512(1); /* on where the CPU has it */
+        sd_simd512_set(1);
+        const int have = sd_simd512_set(1); /* on where the CPU has it */
         const uint64_t hv = run(1, &cv);
-        sd_contact_filter512(was);
+        sd_simd512_set(was);
         printf("AVX-512 kernels off: hash %016llx; on: %s %016llx\n", (unsigned long long)hs,
                have ? "" : "(not on this CPU, scalar again)", (unsigned long long)hv);
         CHECK(hs == h1 && hv == h1);
