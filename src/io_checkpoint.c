@@ -832,8 +832,8 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
             goto out;
         }
         for (int k = 1; k < m; k++)
-            if (w->old_keys[k] < w->old_keys[k - 1]) {
-                st = fail(r, "section OLDH: keys not sorted");
+            if (w->old_keys[k] >> 32 < w->old_keys[k - 1] >> 32) {
+                st = fail(r, "section OLDH: keys not grouped by body");
                 goto out;
             }
     }

@@ -173,31 +173,6 @@ static uint64_t pair_key(int32_t gid_a, int kind, int32_t id_b)
     return ((uint64_t)(uint32_t)gid_a << 32) | ((uint64_t)(uint32_t)kind << 29) | (uint64_t)(uint32_t)id_b;
 }
 
-typedef struct {
-    uint64_t key;
-    sd_hist h;
-} keyed_hist;
-
-/* Stable LSD radix sort by key, 8 bits a pass; passes where every key has the same digit are
- * skipped. tmp holds n entries. */
-static void radix_sort_keyed(keyed_hist *a, keyed_hist *tmp, int n)
-{
-    for (int shift = 0; shift < 64; shift += 8) {
-        int count[257] = {0};
-        for (int i = 0; i < n; i++)
-            count[((a[i].key >> shift) & 255) + 1]++;
-        int trivial = 0;
-        for (int d = 1; d <= 256; d++)
-            if (count[d] == n) trivial = 1;
-        if (trivial) continue;
-        for (int d = 0; d < 256; d++)
-            count[d + 1] += count[d];
-        for (int i = 0; i < n; i++)
-            tmp[count[(a[i].key >> shift) & 255]++] = a[i];
-        memcpy(a, tmp, (size_t)n * sizeof(*a));
-    }
-}
-
 static uint64_t key_of(const sd_world *w, const sd_pair *p)
 {
     int32_t ida = w->b.gid[p->a];
@@ -205,51 +180,94 @@ static uint64_t key_of(const sd_world *w, const sd_pair *p)
     return pair_key(ida, p->kind, idb);
 }
 
+/* Pair k of the two lists taken as one (body-body first, then body-triangle). */
+static inline const sd_pair *any_pair(const sd_pairlist *const *lists, int k)
+{
+    return k < lists[0]->n ? &lists[0]->p[k] : &lists[1]->p[k - lists[0]->n];
+}
+
+static inline const sd_hist *any_hist(const sd_pairlist *const *lists, int k, const sd_pair *p)
+{
+    return (k < lists[0]->n ? lists[0]->hist : lists[1]->hist) + p->off;
+}
+
+/* The held springs of every pair, taken out of the lists before they are remade (sd_hist,
+ * keyed by the pair's gids and kind, so they survive the reordering of the store). Grouped by
+ * the first body's gid, ascending (a counting sort: the threads count their share of the
+ * pairs per gid, then each puts its entries in place), and inside a gid in list order; a
+ * pair's entries, in feature order, are one run. restore_history looks up a pair's run in its
+ * gid's few entries. */
 sd_status sd_neighbor_collect_history(sd_world *w)
 {
     if (w->keys_collected) return SD_OK;
     sd_contact_gather(w); /* the wall loads of the last step, before its pairs go */
-    int count = 0;
     const sd_pairlist *lists[2] = {&w->bb, &w->bt};
-    for (int l = 0; l < 2; l++)
-        for (int k = 0; k < lists[l]->nh; k++)
-            count += lists[l]->hist[k].feature >= 0;
-    keyed_hist *kh = malloc((size_t)(2 * count + 1) * sizeof(*kh));
-    if (!kh) return SD_ERR_NOMEM;
-    int m = 0;
-    for (int l = 0; l < 2; l++) {
-        const sd_pairlist *pl = lists[l];
-        for (int k = 0; k < pl->n; k++) {
-            const sd_pair *p = &pl->p[k];
-            uint64_t key = key_of(w, p);
-            const int m0 = m;
-            for (int s = 0; s < p->cap; s++) {
-                const sd_hist *h = &pl->hist[p->off + s];
-                if (h->feature < 0) continue;
-                /* one pair's slots in feature order (insertion: a handful at most) */
-                int j = m++;
-                while (j > m0 && kh[j - 1].h.feature > h->feature) {
-                    kh[j] = kh[j - 1];
-                    j--;
-                }
-                kh[j].key = key;
-                kh[j].h = *h;
-            }
+    const int np = w->bb.n + w->bt.n, G = w->next_gid;
+    int T = 1;
+#ifdef _OPENMP
+    T = omp_get_max_threads();
+    if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
+    if (np <= w->def.parallel_min) T = 1;
+#endif
+    /* cnt[t * (G + 1) + g]: thread t's entries of gid g, then where they go */
+    int32_t *cnt = calloc((size_t)T * (G + 1) + 1, sizeof(int32_t));
+    if (!cnt) return SD_ERR_NOMEM;
+    const int32_t *gid = w->b.gid;
+#pragma omp parallel for schedule(static, 1) num_threads(T) if (T > 1)
+    for (int t = 0; t < T; t++) {
+        int32_t *c = cnt + (size_t)t * (G + 1);
+        const int k0 = (int)((long)np * t / T), k1 = (int)((long)np * (t + 1) / T);
+        for (int k = k0; k < k1; k++) {
+            const sd_pair *p = any_pair(lists, k);
+            const sd_hist *h = any_hist(lists, k, p);
+            int m = 0;
+            for (int s = 0; s < p->cap; s++)
+                m += h[s].feature >= 0;
+            c[gid[p->a]] += m;
         }
     }
-    /* keys are unique per pair, so a stable sort by key orders by (key, feature) */
-    radix_sort_keyed(kh, kh + count, m);
-    if (sd_grow((void **)&w->old_keys, &w->old_cap, m + 1, sizeof(uint64_t)) ||
-        sd_grow((void **)&w->old_hist, &w->old_hist_cap, m + 1, sizeof(sd_hist))) {
-        free(kh);
+    int total = 0;
+    for (int g = 0; g < G; g++)
+        for (int t = 0; t < T; t++) {
+            const int32_t m = cnt[(size_t)t * (G + 1) + g];
+            cnt[(size_t)t * (G + 1) + g] = total;
+            total += m;
+        }
+    if (sd_grow((void **)&w->old_keys, &w->old_cap, total + 1, sizeof(uint64_t)) ||
+        sd_grow((void **)&w->old_hist, &w->old_hist_cap, total + 1, sizeof(sd_hist))) {
+        free(cnt);
         return SD_ERR_NOMEM;
     }
-    for (int i = 0; i < m; i++) {
-        w->old_keys[i] = kh[i].key;
-        w->old_hist[i] = kh[i].h;
+    uint64_t *keys = w->old_keys;
+    sd_hist *hist = w->old_hist;
+#pragma omp parallel for schedule(static, 1) num_threads(T) if (T > 1)
+    for (int t = 0; t < T; t++) {
+        int32_t *c = cnt + (size_t)t * (G + 1);
+        const int k0 = (int)((long)np * t / T), k1 = (int)((long)np * (t + 1) / T);
+        for (int k = k0; k < k1; k++) {
+            const sd_pair *p = any_pair(lists, k);
+            const sd_hist *h = any_hist(lists, k, p);
+            int m0 = -1, m = 0;
+            for (int s = 0; s < p->cap; s++) {
+                if (h[s].feature < 0) continue;
+                if (m0 < 0) m0 = c[gid[p->a]];
+                /* the pair's slots in feature order (insertion: a handful at most) */
+                int j = m0 + m++;
+                while (j > m0 && hist[j - 1].feature > h[s].feature) {
+                    hist[j] = hist[j - 1];
+                    j--;
+                }
+                hist[j] = h[s];
+            }
+            if (m0 < 0) continue;
+            const uint64_t key = key_of(w, p);
+            for (int j = m0; j < m0 + m; j++)
+                keys[j] = key;
+            c[gid[p->a]] = m0 + m;
+        }
     }
-    free(kh);
-    w->n_old = m;
+    free(cnt);
+    w->n_old = total;
     w->keys_collected = 1;
     w->bb.n = w->bt.n = 0;
     w->bb.nh = w->bt.nh = 0;
@@ -271,7 +289,8 @@ static sd_status push_pair(sd_pairlist *l, int32_t a, int32_t b, int kind)
 }
 
 /* Where each gid's carried history starts: first[g] is the first old entry whose key has
- * gid_a >= g (the keys are sorted, gid_a in their high half), for g = 0 .. next_gid. */
+ * gid_a >= g (the entries are grouped by gid_a, ascending, the key's high half), for
+ * g = 0 .. next_gid. */
 static int32_t *old_first_index(const sd_world *w)
 {
     const int G = w->next_gid;
@@ -307,7 +326,7 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l, const int32_t *fir
         const int g = (int)(key >> 32);
         int lo = first[g];
         const int hi = first[g + 1];
-        while (lo < hi && w->old_keys[lo] < key)
+        while (lo < hi && w->old_keys[lo] != key) /* the pair's run inside its gid's entries */
             lo++;
         for (int s = 0; lo < hi && w->old_keys[lo] == key && s < p->cap; lo++, s++)
             l->hist[p->off + s] = w->old_hist[lo];
