@@ -1240,6 +1240,11 @@ static sd_status owned_update(sd_world *w, int T)
         }
     }
     if (nomem) return SD_ERR_NOMEM;
+    const int nl = o->start[T];
+    if (sd_grow((void **)&o->xpre, &o->xpre_cap, nl + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    o->xpre[0] = 0;
+    for (int j = 0; j < nl; j++)
+        o->xpre[j + 1] = o->xpre[j] + (o->list[j] < 0);
     o->stamp = w->near_version;
     o->T = T;
     o->n = n;
@@ -1290,17 +1295,18 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 if (!sd_body_is_bed(b, i)) b->force[i] = b->torque[i] = v3(0, 0, 0);
             for (int j0 = o->start[t]; j0 < o->start[t + 1]; j0 += SS_CHUNK) {
                 const int j1 = o->start[t + 1] - j0 < SS_CHUNK ? o->start[t + 1] : j0 + SS_CHUNK;
-                int n = 0;
-                for (int j = j0; j < j1; j++)
-                    if (o->list[j] >= 0) x->ks[n++] = o->list[j];
                 /* a chunk without cross pairs adds its pairs onto the bodies itself */
-                const int direct = n == j1 - j0;
-                bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q, direct ? b : NULL);
-                if (direct) {
+                if (o->xpre[j1] == o->xpre[j0]) {
+                    const int n = j1 - j0;
+                    bb_chunk(w, law, &o->list[j0], n, x->out, x->used, &x->q, b);
                     for (int i = 0; i < n; i++)
                         count += x->used[i];
                     continue;
                 }
+                int n = 0;
+                for (int j = j0; j < j1; j++)
+                    if (o->list[j] >= 0) x->ks[n++] = o->list[j];
+                bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q, NULL);
                 /* the entries in contact, in list order: act = (entry j) << 8 | (own result i) */
                 int na = 0, i = 0;
                 for (int j = j0; j < j1; j++) {

@@ -83,6 +83,7 @@ void sd_world_destroy(sd_world *w)
         free(w->owned->xout);
         free(w->owned->xact);
         free(w->owned->list);
+        free(w->owned->xpre);
         free(w->owned->tmp);
     }
     free(w->owned);

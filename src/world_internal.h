@@ -123,6 +123,10 @@ typedef struct {
     int32_t *list;
     int start[SD_MAX_OWNERS + 1];
     int list_cap;
+    /* cross entries in list[0 .. j): a chunk of the list without any is handed to the pass
+     * as it stands, not copied */
+    int32_t *xpre;
+    int xpre_cap;
     /* balance by measured time (any split gives the same bits): the split as fractions of
      * the body-body pairs, and each owner's time since it was set */
     double fo[SD_MAX_OWNERS + 1];
