@@ -18,6 +18,11 @@
 #include <omp.h>
 #endif
 
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(SD_NO_CLONES)
+#include <immintrin.h>
+#define SD_FLUID512 1
+#endif
+
 enum { PH_PACK = 0, PH_FLOW = 1, PH_CAPTURE = 2, PH_DONE = 3, PH_RUN = 4 };
 static const char *phase_names[] = {"packing", "flow", "capture", "done", "run"};
 
@@ -121,6 +126,78 @@ static void fluid_flush(fluid_batch *q, const sd_fluid_params *fp, double h_d, s
     q->m = 0;
 }
 
+#ifdef SD_FLUID512
+/* The spheres among mov[k0 .. k1) in AVX-512, 8 bodies at a time, straight from the store
+ * (gathers by index, the forces scattered back): sd_fluid_sphere_batch's operations in its
+ * order, so the same bits, without the copy of each body into the batch and out. The logs
+ * among them are left to the caller. */
+__attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const struct fluid_ctx *fc, sd_world *w,
+                                                                         const int32_t *mov, int k0, int k1)
+{
+    const sd_fluid_params *p = &fc->fp;
+    sd_bodies *b = &w->b;
+    const double *pos = &b->pos[0].x, *vel = &b->vel[0].x, *rad = b->radius;
+    double *ext = &b->ext_force[0].x;
+    const uint8_t *shape = b->shape;
+    const double h = p->h, hd = fc->h_d >= h ? fc->h_d : h;
+    double al, be;
+    sd_fluid_capture_coeffs(h, hd, &al, &be);
+    const __m512d U = _mm512_set1_pd(p->U), H = _mm512_set1_pd(h), HD = _mm512_set1_pd(hd),
+                  nx = _mm512_set1_pd(p->bed_normal.x), ny = _mm512_set1_pd(p->bed_normal.y),
+                  nz = _mm512_set1_pd(p->bed_normal.z), zb = _mm512_set1_pd(p->z_bed),
+                  dx = _mm512_set1_pd(p->flow_dir.x), dy = _mm512_set1_pd(p->flow_dir.y),
+                  dz = _mm512_set1_pd(p->flow_dir.z), kd = _mm512_set1_pd(0.5 * p->C_D * p->rho),
+                  mrho = _mm512_set1_pd(-p->rho), gx = _mm512_set1_pd(p->gravity.x),
+                  gy = _mm512_set1_pd(p->gravity.y), gz = _mm512_set1_pd(p->gravity.z),
+                  bma = _mm512_set1_pd(be - al), A = _mm512_set1_pd(al), five = _mm512_set1_pd(5.0),
+                  c45 = _mm512_set1_pd(4.0 / 5.0), pi = _mm512_set1_pd(M_PI),
+                  c43pi = _mm512_set1_pd(4.0 / 3.0 * M_PI), XD = _mm512_set1_pd(fc->xd),
+                  zero = _mm512_setzero_pd();
+    const __mmask8 flow_ok = h > 0.0 ? 0xFF : 0, cap_ok = hd > 0.0 ? 0xFF : 0, capture = fc->capture ? 0xFF : 0;
+    for (int k = k0; k < k1; k += 8) {
+        const int nl = k1 - k < 8 ? k1 - k : 8;
+        __mmask8 sph = 0;
+        for (int l = 0; l < nl; l++)
+            sph |= (__mmask8)((shape[mov[k + l]] == SD_SHAPE_SPHERE) << l);
+        if (!sph) continue;
+        const __m256i i = _mm256_maskz_loadu_epi32(sph, mov + k);
+        const __m256i i3 = _mm256_add_epi32(i, _mm256_add_epi32(i, i));
+        const __m512d px = _mm512_mask_i32gather_pd(zero, sph, i3, pos, 8),
+                      py = _mm512_mask_i32gather_pd(zero, sph, i3, pos + 1, 8),
+                      pz = _mm512_mask_i32gather_pd(zero, sph, i3, pos + 2, 8),
+                      vx = _mm512_mask_i32gather_pd(zero, sph, i3, vel, 8),
+                      vy = _mm512_mask_i32gather_pd(zero, sph, i3, vel + 1, 8),
+                      vz = _mm512_mask_i32gather_pd(zero, sph, i3, vel + 2, 8),
+                      r = _mm512_mask_i32gather_pd(zero, sph, i, rad, 8);
+        /* z = p.n - z_bed (sd_fluid_height), clamped at the bed as z < 0 ? 0 : z */
+        const __m512d z = _mm512_sub_pd(
+            _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(px, nx), _mm512_mul_pd(py, ny)), _mm512_mul_pd(pz, nz)), zb);
+        const __m512d zc = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(z, zero, _CMP_LT_OQ), z, zero);
+        /* the capture profile upstream of the dam (capture && p.x < x_dam) */
+        const __mmask8 cap = (__mmask8)(capture & _mm512_cmp_pd_mask(px, XD, _CMP_LT_OQ));
+        const __m512d uf = _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_div_pd(zc, H), five), c45), U); /* eq 50 */
+        const __m512d uc = _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_mul_pd(bma, zc), HD), A), U); /* eq 51 */
+        const __mmask8 wet = (__mmask8)((cap & cap_ok & _mm512_cmp_pd_mask(zc, HD, _CMP_LE_OQ)) |
+                                        (~cap & flow_ok & _mm512_cmp_pd_mask(zc, H, _CMP_LE_OQ)));
+        const __m512d u = _mm512_mask_blend_pd(cap, uf, uc);
+        const __m512d rx = _mm512_sub_pd(_mm512_mul_pd(dx, u), vx), ry = _mm512_sub_pd(_mm512_mul_pd(dy, u), vy),
+                      rz = _mm512_sub_pd(_mm512_mul_pd(dz, u), vz);
+        const __m512d speed = _mm512_sqrt_pd(
+            _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(rx, rx), _mm512_mul_pd(ry, ry)), _mm512_mul_pd(rz, rz)));
+        const __m512d area = _mm512_mul_pd(_mm512_mul_pd(pi, r), r),
+                      volume = _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(c43pi, r), r), r);
+        const __m512d sk = _mm512_mul_pd(_mm512_mul_pd(kd, area), speed), bs = _mm512_mul_pd(mrho, volume);
+        const __m512d tx = _mm512_add_pd(_mm512_mul_pd(rx, sk), _mm512_mul_pd(gx, bs)),
+                      ty = _mm512_add_pd(_mm512_mul_pd(ry, sk), _mm512_mul_pd(gy, bs)),
+                      tz = _mm512_add_pd(_mm512_mul_pd(rz, sk), _mm512_mul_pd(gz, bs));
+        /* dry spheres get zero; every sphere lane is written */
+        _mm512_mask_i32scatter_pd(ext, sph, i3, _mm512_maskz_mov_pd(wet, tx), 8);
+        _mm512_mask_i32scatter_pd(ext + 1, sph, i3, _mm512_maskz_mov_pd(wet, ty), 8);
+        _mm512_mask_i32scatter_pd(ext + 2, sph, i3, _mm512_maskz_mov_pd(wet, tz), 8);
+    }
+}
+#endif
+
 /* The fluid forces on the moving bodies mov[k0 .. k1): called by the world's step for each
  * block of up to 128 of a thread's bodies just before it moves them (sd_world.ext_fn), so
  * their data are still in that core's L1 when they move. Spheres in batches (sd_fluid_sphere_batch: the same bits, vectorized),
@@ -132,6 +209,12 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
     const sd_fluid_params *fp = &fc->fp;
     const double xd = fc->xd, h_d = fc->h_d;
     const int capture = fc->capture;
+#ifdef SD_FLUID512
+    const int vec = sd_simd512_on();
+    if (vec) fluid_spheres512(fc, w, mov, k0, k1);
+#else
+    const int vec = 0;
+#endif
     fluid_batch q;
     q.m = 0;
     /* the store's arrays held in locals: the batch's flush is a call, after which gcc would
@@ -141,6 +224,7 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
     for (int k = k0; k < k1; k++) {
         const int i = mov[k];
         if (b->shape[i] == SD_SHAPE_SPHERE) {
+            if (vec) continue;
             const int j = q.m++;
             const sd_vec3 p = pos[i], v = vel[i];
             q.idx[j] = i;
@@ -162,7 +246,7 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
         sd_fluid_phase ph = (capture && b->pos[i].x < xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
         b->ext_force[i] = sd_fluid_force_total(fp, ph, h_d, &e);
     }
-    fluid_flush(&q, fp, h_d, b);
+    if (q.m > 0) fluid_flush(&q, fp, h_d, b);
 }
 
 /* The fluid forces of the current phase for the coming step: handed to the world, which calls

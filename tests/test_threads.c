@@ -163,6 +163,14 @@ int main(void)
         CHECK(a.phase_end[1] > a.phase_end[0] && a.phase_end[2] > a.phase_end[1]); /* flow and capture ran */
         CHECK(a.state_hash == b.state_hash);
         CHECK(a.p_v == b.p_v && a.steps == b.steps);
+        /* the fluid forces' AVX-512 form (run.c) against the batch's scalar one, with the
+         * other kernels, on the whole driver: flow and capture profiles, wet and dry */
+        const int was = sd_simd512_set(0);
+        sd_run_result c = run_driver(2);
+        sd_simd512_set(was);
+        printf("driver with the AVX-512 kernels off: hash %016llx P_V %.6f\n", (unsigned long long)c.state_hash, c.p_v);
+        CHECK(c.state_hash == a.state_hash);
+        CHECK(c.p_v == a.p_v && c.steps == a.steps);
     }
     return check_report("test_threads");
 }
