@@ -468,6 +468,66 @@ static inline double bits_and(double x, uint64_t mask)
     return x;
 }
 
+/* A chunk's pair records field by field (sd_pair_soa, offset to the chunk's first entry), or
+ * none: the filter then gathers them from the store. */
+typedef struct {
+    const int32_t *a, *b, *off, *ck;
+    const double *sqm;
+} soa_view;
+
+void sd_pair_soa_free(sd_pair_soa *s)
+{
+    free(s->a);
+    free(s->b);
+    free(s->off);
+    free(s->ck);
+    free(s->sqm);
+    memset(s, 0, sizeof *s);
+}
+
+static int pair_soa_reserve(sd_pair_soa *s, int n)
+{
+    if (n <= s->cap && s->a) return 0;
+    int cap = s->cap > 0 ? s->cap : 64;
+    while (cap < n)
+        cap *= 2;
+    sd_pair_soa t = *s;
+    t.a = realloc(s->a, (size_t)cap * sizeof(int32_t));
+    if (t.a) s->a = t.a;
+    t.b = realloc(s->b, (size_t)cap * sizeof(int32_t));
+    if (t.b) s->b = t.b;
+    t.off = realloc(s->off, (size_t)cap * sizeof(int32_t));
+    if (t.off) s->off = t.off;
+    t.ck = realloc(s->ck, (size_t)cap * sizeof(int32_t));
+    if (t.ck) s->ck = t.ck;
+    t.sqm = realloc(s->sqm, (size_t)cap * sizeof(double));
+    if (t.sqm) s->sqm = t.sqm;
+    if (!t.a || !t.b || !t.off || !t.ck || !t.sqm) return 1;
+    s->cap = cap;
+    return 0;
+}
+
+/* Entries j0 .. j1 of s from the records pairs[ks[j]] (an entry k < 0, a cross reference of
+ * an owner's list, is left as it is: never read). */
+static void pair_soa_fill(sd_pair_soa *s, const sd_pair *pairs, const int32_t *ks, int j0, int j1)
+{
+    for (int j = j0; j < j1; j++) {
+        const int k = ks[j];
+        if (k < 0) continue;
+        const sd_pair *p = &pairs[k];
+        s->a[j] = p->a;
+        s->b[j] = p->b;
+        s->off[j] = p->off;
+        s->ck[j] = (int32_t)((uint32_t)(uint16_t)p->cap | (uint32_t)(uint16_t)p->kind << 16);
+        s->sqm[j] = p->sqrt_m_eff;
+    }
+}
+
+static soa_view soa_at(const sd_pair_soa *s, int j0)
+{
+    return (soa_view){s->a + j0, s->b + j0, s->off + j0, s->ck + j0, s->sqm + j0};
+}
+
 #ifdef SD_FILTER512
 /* Whether the AVX-512 kernels run (the touch filter and gather below, neighbor.c's cell scan),
  * decided once at load (before any thread): SD_NO_AVX512=1 in the environment keeps the scalar
@@ -496,7 +556,8 @@ int sd_simd512_set(int on)
  * another kind (a log's) in a group takes the scalar loop's path for it, in pair order. Runs
  * while 8 pairs remain and returns where it stopped. */
 __attribute__((target("avx512f,avx512vl,popcnt"))) static int
-ss_filter512(const sd_world *w, const int32_t *ks, int i, int n, int *used, ss_batch *q, int *mp, int *gen, int *ngp)
+ss_filter512(const sd_world *w, const int32_t *ks, const soa_view *v, int i, int n, int *used, ss_batch *q, int *mp,
+             int *gen, int *ngp)
 {
     const sd_pair *pairs = w->bb.p;
     sd_hist *hist = w->bb.hist;
@@ -506,15 +567,25 @@ ss_filter512(const sd_world *w, const int32_t *ks, int i, int n, int *used, ss_b
     const __m256i one = _mm256_set1_epi32(1), none = _mm256_set1_epi32(-1), hi16 = _mm256_set1_epi32((int)0xFFFF0000u),
                   lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     for (; i + 8 <= n; i += 8) {
-        const __m256i k = _mm256_loadu_si256((const __m256i *)(ks + i));
-        const __m256i k3 = _mm256_add_epi32(k, _mm256_add_epi32(k, k)); /* 24-byte records, scale 8 */
-        /* cap (low half) and kind (high half) of each record: kind SD_PAIR_SS is 0 */
-        const __m256i ck = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, cap)), k3, 8);
+        __m256i ck, a, b, off;
+        __m512d sqm;
+        if (v) { /* the records field by field, in entry order */
+            ck = _mm256_loadu_si256((const __m256i *)(v->ck + i));
+            a = _mm256_loadu_si256((const __m256i *)(v->a + i));
+            b = _mm256_loadu_si256((const __m256i *)(v->b + i));
+            off = _mm256_loadu_si256((const __m256i *)(v->off + i));
+            sqm = _mm512_loadu_pd(v->sqm + i);
+        } else {
+            const __m256i k = _mm256_loadu_si256((const __m256i *)(ks + i));
+            const __m256i k3 = _mm256_add_epi32(k, _mm256_add_epi32(k, k)); /* 24-byte records, scale 8 */
+            /* cap (low half) and kind (high half) of each record: kind SD_PAIR_SS is 0 */
+            ck = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, cap)), k3, 8);
+            a = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, a)), k3, 8);
+            b = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, b)), k3, 8);
+            off = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, off)), k3, 8);
+            sqm = _mm512_i32gather_pd(k3, pr + offsetof(sd_pair, sqrt_m_eff), 8);
+        }
         const __mmask8 other = _mm256_test_epi32_mask(ck, hi16), ss = (__mmask8)~other;
-        const __m256i a = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, a)), k3, 8);
-        const __m256i b = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, b)), k3, 8);
-        const __m256i off = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, off)), k3, 8);
-        const __m512d sqm = _mm512_i32gather_pd(k3, pr + offsetof(sd_pair, sqrt_m_eff), 8);
         const __m256i a3 = _mm256_add_epi32(a, _mm256_add_epi32(a, a)),
                       b3 = _mm256_add_epi32(b, _mm256_add_epi32(b, b));
         const __m512d dx = _mm512_sub_pd(_mm512_i32gather_pd(a3, pos, 8), _mm512_i32gather_pd(b3, pos, 8));
@@ -611,8 +682,8 @@ int sd_simd512_set(int on)
  * With acc, the chunk also adds each pair in contact onto its two bodies, in chunk order (the
  * sphere pairs straight from the law's lanes, their out[] not written): the caller passes it
  * where nothing of its own comes between these pairs. */
-static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, int n, sd_pair_out *out, int *used,
-                     ss_batch *q, sd_bodies *acc)
+static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, const soa_view *v, int n,
+                     sd_pair_out *out, int *used, ss_batch *q, sd_bodies *acc)
 {
     const sd_pair *restrict pairs = w->bb.p;
     sd_hist *restrict hist = w->bb.hist;
@@ -627,7 +698,9 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, in
         /* (8 pairs at a time in AVX-512 where the CPU has it; the rest, or all, here) */
         int i = 0;
 #ifdef SD_FILTER512
-        if (simd512_on) i = ss_filter512(w, ks, 0, n, used, q, &m, gen, &ng);
+        if (simd512_on) i = ss_filter512(w, ks, v, 0, n, used, q, &m, gen, &ng);
+#else
+        (void)v;
 #endif
         for (; i < n; i++) {
             const sd_pair *p = &pairs[ks[i]];
@@ -1035,13 +1108,19 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
 {
     sd_bodies *b = &w->b;
     long count = 0;
+    const int nn = w->near_n;
+    if (w->near_soa_version != w->near_version + 1) { /* the near list's records, once for each list */
+        if (pair_soa_reserve(&w->near_soa, nn + 1)) return -1;
+        pair_soa_fill(&w->near_soa, w->bb.p, w->near, 0, nn);
+        w->near_soa_version = w->near_version + 1;
+    }
     for (int i = 0; i < b->n; i++)
         if (!sd_body_is_bed(b, i)) b->force[i] = b->torque[i] = v3(0, 0, 0);
-    const int nn = w->near_n;
     for (int k0 = 0; k0 < nn; k0 += SS_CHUNK) {
         const int n = nn - k0 < SS_CHUNK ? nn - k0 : SS_CHUNK;
         /* the chunk adds its pairs onto the bodies itself, in pair order */
-        bb_chunk(w, law, &w->near[k0], n, x->out, x->used, &x->q, b);
+        const soa_view v = soa_at(&w->near_soa, k0);
+        bb_chunk(w, law, &w->near[k0], &v, n, x->out, x->used, &x->q, b);
         for (int i = 0; i < n; i++)
             count += x->used[i];
     }
@@ -1221,7 +1300,8 @@ static sd_status owned_update(sd_world *w, int T)
             nomem = sd_grow((void **)&o->cross, &o->cap, xc > 0 ? xc : 1, sizeof(int32_t)) ||
                     sd_grow((void **)&o->xout, &o->xout_cap, xc > 0 ? xc : 1, sizeof(sd_pair_out)) ||
                     sd_grow((void **)&o->xact, &o->xact_cap, xc > 0 ? xc : 1, sizeof(uint8_t)) ||
-                    sd_grow((void **)&o->list, &o->list_cap, at > 0 ? at : 1, sizeof(int32_t));
+                    sd_grow((void **)&o->list, &o->list_cap, at > 0 ? at : 1, sizeof(int32_t)) ||
+                    pair_soa_reserve(&o->soa, at + 1) || pair_soa_reserve(&o->xsoa, xc + 1);
         }
         if (!nomem) {
             int xc = ccross[c];
@@ -1237,6 +1317,13 @@ static sd_status owned_update(sd_world *w, int T)
                 o->list[mine[tb]++] = ~xc;
                 o->cross[xc++] = k;
             }
+        }
+#pragma omp barrier
+        if (!nomem) { /* the records of a slice of the lists, field by field */
+            const int nl = o->start[T];
+            pair_soa_fill(&o->soa, w->bb.p, o->list, (int)((long)nl * c / nc), (int)((long)nl * (c + 1) / nc));
+            pair_soa_fill(&o->xsoa, w->bb.p, o->cross, (int)((long)o->ncross * c / nc),
+                          (int)((long)o->ncross * (c + 1) / nc));
         }
     }
     if (nomem) return SD_ERR_NOMEM;
@@ -1277,7 +1364,8 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
 #pragma omp for schedule(dynamic, 1) nowait
         for (int c = 0; c < nc; c += SS_CHUNK) {
             const int n = nc - c < SS_CHUNK ? nc - c : SS_CHUNK;
-            bb_chunk(w, law, &o->cross[c], n, x->out, x->used, &x->q, NULL);
+            const soa_view v = soa_at(&o->xsoa, c);
+            bb_chunk(w, law, &o->cross[c], &v, n, x->out, x->used, &x->q, NULL);
             /* into the cross pairs' own arrays, in cross order: the lines each owner then
              * reads from the other's cache are packed, not one or two per pair of the store */
             for (int i = 0; i < n; i++) {
@@ -1298,7 +1386,8 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 /* a chunk without cross pairs adds its pairs onto the bodies itself */
                 if (o->xpre[j1] == o->xpre[j0]) {
                     const int n = j1 - j0;
-                    bb_chunk(w, law, &o->list[j0], n, x->out, x->used, &x->q, b);
+                    const soa_view v = soa_at(&o->soa, j0);
+                    bb_chunk(w, law, &o->list[j0], &v, n, x->out, x->used, &x->q, b);
                     for (int i = 0; i < n; i++)
                         count += x->used[i];
                     continue;
@@ -1306,7 +1395,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 int n = 0;
                 for (int j = j0; j < j1; j++)
                     if (o->list[j] >= 0) x->ks[n++] = o->list[j];
-                bb_chunk(w, law, x->ks, n, x->out, x->used, &x->q, NULL);
+                bb_chunk(w, law, x->ks, NULL, n, x->out, x->used, &x->q, NULL);
                 /* the entries in contact, in list order: act = (entry j) << 8 | (own result i) */
                 int na = 0, i = 0;
                 for (int j = j0; j < j1; j++) {
@@ -1388,6 +1477,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
 #endif
     {
         count = bb_serial_pass(w, &law, w->bb_scratch);
+        if (count < 0) return SD_ERR_NOMEM;
         count += bt_range(w, &law, 0, w->b.n, &((bb_scratch *)w->bb_scratch)[0].wq);
     }
     w->contacts = count;

@@ -84,6 +84,8 @@ void sd_world_destroy(sd_world *w)
         free(w->owned->xact);
         free(w->owned->list);
         free(w->owned->xpre);
+        sd_pair_soa_free(&w->owned->soa);
+        sd_pair_soa_free(&w->owned->xsoa);
         free(w->owned->tmp);
     }
     free(w->owned);
@@ -98,6 +100,7 @@ void sd_world_destroy(sd_world *w)
     free(w->trange);
     free(w->mov);
     free(w->near);
+    sd_pair_soa_free(&w->near_soa);
     free(w);
 }
 

@@ -103,6 +103,13 @@ typedef struct {
     int cap_cells, cap_items;
 } sd_grid;
 
+/* Pair records, field by field (contact.c) */
+typedef struct {
+    int32_t *a, *b, *off, *ck; /* ck: cap in the low half, kind in the high half */
+    double *sqm;
+    int cap;
+} sd_pair_soa;
+
 /* Body ranges and cross pairs of the parallel body-body pass (contact.c), derived from the
  * pair list: rebuilt with it, never saved. */
 #define SD_MAX_OWNERS 64
@@ -127,6 +134,8 @@ typedef struct {
      * as it stands, not copied */
     int32_t *xpre;
     int xpre_cap;
+    /* the records of list's own pairs and of the cross pairs, field by field (sd_pair_soa) */
+    sd_pair_soa soa, xsoa;
     /* balance by measured time (any split gives the same bits): the split as fractions of
      * the body-body pairs, and each owner's time since it was set */
     double fo[SD_MAX_OWNERS + 1];
@@ -197,6 +206,10 @@ struct sd_world {
      * gone since the list was made (the largest |v| dt of each step, summed) */
     int32_t *near;
     int near_n, near_cap, near_nbb;
+    /* the records of the near pairs (a, b, off, cap | kind << 16, sqrt_m_eff) in near order,
+     * field by field: the touch filter loads them 8 at a time instead of gathering them */
+    sd_pair_soa near_soa;
+    long near_soa_version; /* near_version + 1 it was filled for (0: never) */
     long near_stamp, near_version;
     double near_drift, near_skin; /* near_skin: the skin it was made with */
     double ref_drift;             /* the same bound as near_drift since the last rebuild (pos_ref) */
@@ -243,6 +256,7 @@ sd_law sd_law_make(const sd_contact_def *d);
 sd_status sd_contact_compute(sd_world *w, int *integrated);
 /* Sums the last step's wall pairs into w.force if not done yet (lazy: see contact.c). */
 void sd_contact_gather(sd_world *w);
+void sd_pair_soa_free(sd_pair_soa *s);
 
 /* The bed roughness (fixed spheres, never made free): nobody reads its load, so nothing is
  * added to it and its force and torque stay at the zero they were created with (half the
