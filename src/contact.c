@@ -852,6 +852,8 @@ typedef struct {
     sd_pair_out out[SS_CHUNK];
     int used[SS_CHUNK];
     int32_t ks[SS_CHUNK];
+    int32_t ka[SS_CHUNK], kb[SS_CHUNK], koff[SS_CHUNK], kck[SS_CHUNK]; /* ks's records (soa_view) */
+    double ksqm[SS_CHUNK];
     int act[SS_CHUNK];
     bt_batch wq;
 } bb_scratch;
@@ -1394,8 +1396,14 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 }
                 int n = 0;
                 for (int j = j0; j < j1; j++)
-                    if (o->list[j] >= 0) x->ks[n++] = o->list[j];
-                bb_chunk(w, law, x->ks, NULL, n, x->out, x->used, &x->q, NULL);
+                    if (o->list[j] >= 0) {
+                        x->ks[n] = o->list[j];
+                        x->ka[n] = o->soa.a[j], x->kb[n] = o->soa.b[j], x->koff[n] = o->soa.off[j];
+                        x->kck[n] = o->soa.ck[j], x->ksqm[n] = o->soa.sqm[j];
+                        n++;
+                    }
+                const soa_view v = {x->ka, x->kb, x->koff, x->kck, x->ksqm};
+                bb_chunk(w, law, x->ks, &v, n, x->out, x->used, &x->q, NULL);
                 /* the entries in contact, in list order: act = (entry j) << 8 | (own result i) */
                 int na = 0, i = 0;
                 for (int j = j0; j < j1; j++) {
