@@ -175,11 +175,19 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
         const __m512d zc = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(z, zero, _CMP_LT_OQ), z, zero);
         /* the capture profile upstream of the dam (capture && p.x < x_dam) */
         const __mmask8 cap = (__mmask8)(capture & _mm512_cmp_pd_mask(px, XD, _CMP_LT_OQ));
-        const __m512d uf = _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_div_pd(zc, H), five), c45), U); /* eq 50 */
-        const __m512d uc = _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_mul_pd(bma, zc), HD), A), U); /* eq 51 */
         const __mmask8 wet = (__mmask8)((cap & cap_ok & _mm512_cmp_pd_mask(zc, HD, _CMP_LE_OQ)) |
                                         (~cap & flow_ok & _mm512_cmp_pd_mask(zc, H, _CMP_LE_OQ)));
-        const __m512d u = _mm512_mask_blend_pd(cap, uf, uc);
+        /* the profile of each lane; a group all of one profile (nearly every group) skips the
+         * other's divisions, the costliest part of this loop */
+        __m512d u;
+        if ((cap & sph) == sph)
+            u = _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_mul_pd(bma, zc), HD), A), U); /* eq 51 */
+        else if (!(cap & sph))
+            u = _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_div_pd(zc, H), five), c45), U); /* eq 50 */
+        else
+            u = _mm512_mask_blend_pd(
+                cap, _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_div_pd(zc, H), five), c45), U),
+                _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_mul_pd(bma, zc), HD), A), U));
         const __m512d rx = _mm512_sub_pd(_mm512_mul_pd(dx, u), vx), ry = _mm512_sub_pd(_mm512_mul_pd(dy, u), vy),
                       rz = _mm512_sub_pd(_mm512_mul_pd(dz, u), vz);
         const __m512d speed = _mm512_sqrt_pd(
