@@ -122,6 +122,20 @@ typedef struct {
     int32_t ia[SS_CHUNK + SS_PAD], ib[SS_CHUNK + SS_PAD], off[SS_CHUNK + SS_PAD]; /* bodies, history slot */
     int32_t was[SS_CHUNK + SS_PAD]; /* the slot's feature before this step */
     int32_t sel[SS_CHUNK + SS_PAD]; /* the pair's place in the chunk */
+    struct sc_lanes { /* sphere-log pairs touching at one point (bb_chunk step 2) */
+        double nx[SS_CHUNK], ny[SS_CHUNK], nz[SS_CHUNK], ov[SS_CHUNK]; /* normal (on the sphere), overlap */
+        double px[SS_CHUNK], py[SS_CHUNK], pz[SS_CHUNK];                /* contact point */
+        double rax[SS_CHUNK], ray[SS_CHUNK], raz[SS_CHUNK];             /* point - centre, sphere */
+        double rbx[SS_CHUNK], rby[SS_CHUNK], rbz[SS_CHUNK];             /* point - centre, log */
+        double vax[SS_CHUNK], vay[SS_CHUNK], vaz[SS_CHUNK], wax[SS_CHUNK], way[SS_CHUNK], waz[SS_CHUNK];
+        double vbx[SS_CHUNK], vby[SS_CHUNK], vbz[SS_CHUNK], wbx[SS_CHUNK], wby[SS_CHUNK], wbz[SS_CHUNK];
+        double sqm[SS_CHUNK];
+        double sx[SS_CHUNK], sy[SS_CHUNK], sz[SS_CHUNK]; /* spring in, then out */
+        double fx[SS_CHUNK], fy[SS_CHUNK], fz[SS_CHUNK], tax[SS_CHUNK], tay[SS_CHUNK], taz[SS_CHUNK];
+        double tbx[SS_CHUNK], tby[SS_CHUNK], tbz[SS_CHUNK];
+        double redo[SS_CHUNK];
+        int32_t feature[SS_CHUNK], i[SS_CHUNK]; /* the contact's feature, the pair's place */
+    } sc;
 } ss_batch;
 
 /* The constants of sd_contact_law for one pass of the lanes below. */
@@ -402,13 +416,6 @@ static __attribute__((noinline)) void ss_scalar(const sd_world *w, const sd_law 
     out->t_b = v3_scale(nf, -lb);
 }
 
-static __attribute__((noinline)) int pair_force_general(const sd_world *w, const sd_law *law, const sd_pair *p,
-                                                        sd_hist *h, sd_pair_out *o)
-{
-    sd_manifold m;
-    narrow_bb(&w->b, p, &m);
-    return apply_manifold(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, o);
-}
 
 /* A log's pair that fails its kernel's first exact rejection (most of them): skips the
  * manifold round trip. */
@@ -677,6 +684,132 @@ int sd_simd512_set(int on)
 }
 #endif
 
+/* A sphere-log pair whose manifold is one point (the sphere against the log's side or end:
+ * most of them) through the law in lanes, like the walls' face contacts: apply_manifold's
+ * arithmetic for a one-point manifold between two moving bodies, operation for operation
+ * (same bits). */
+static void sc_lane_fill(const sd_world *w, const sd_pair *p, const sd_manifold *mf, const sd_hist *h, int i,
+                         struct sc_lanes *q, int j)
+{
+    const sd_bodies *b = &w->b;
+    const int a = p->a, c = p->b;
+    const sd_vec3 pt = mf->point[0], ra = v3_sub(pt, b->pos[a]), rb = v3_sub(pt, b->pos[c]);
+    const sd_vec3 va = b->vel[a], wa = b->omega[a], vb = b->vel[c], wb = b->omega[c];
+    q->nx[j] = mf->normal[0].x, q->ny[j] = mf->normal[0].y, q->nz[j] = mf->normal[0].z, q->ov[j] = mf->overlap[0];
+    q->px[j] = pt.x, q->py[j] = pt.y, q->pz[j] = pt.z;
+    q->rax[j] = ra.x, q->ray[j] = ra.y, q->raz[j] = ra.z;
+    q->rbx[j] = rb.x, q->rby[j] = rb.y, q->rbz[j] = rb.z;
+    q->vax[j] = va.x, q->vay[j] = va.y, q->vaz[j] = va.z, q->wax[j] = wa.x, q->way[j] = wa.y, q->waz[j] = wa.z;
+    q->vbx[j] = vb.x, q->vby[j] = vb.y, q->vbz[j] = vb.z, q->wbx[j] = wb.x, q->wby[j] = wb.y, q->wbz[j] = wb.z;
+    q->sqm[j] = p->sqrt_m_eff;
+    /* the spring of the same feature, or a new one (the pair has one slot) */
+    const int same = h->feature == mf->feature[0];
+    q->sx[j] = same ? h->shear.x : 0.0, q->sy[j] = same ? h->shear.y : 0.0, q->sz[j] = same ? h->shear.z : 0.0;
+    q->feature[j] = mf->feature[0];
+    q->i[j] = i;
+}
+
+static int sc_lanes_on = 1;
+static long sc_lanes_run, sc_lanes_redo;
+
+int sd_sc_lanes_set(int on)
+{
+    const int was = sc_lanes_on;
+    sc_lanes_on = on != 0;
+    return was;
+}
+
+long sd_sc_lanes_count(long *redo)
+{
+    if (redo) *redo = __atomic_load_n(&sc_lanes_redo, __ATOMIC_RELAXED);
+    return __atomic_load_n(&sc_lanes_run, __ATOMIC_RELAXED);
+}
+
+/* A pair of another shape (chunk entry i) through its kernel: a one-point sphere-log contact
+ * into lane msc of q (returns 1), anything else through apply_manifold now (returns 0). Out of
+ * line: inlined, it crowded the sphere pass's registers. */
+static __attribute__((noinline)) int pair_general(const sd_world *w, const sd_law *law, const sd_pair *p, int i,
+                                                  struct sc_lanes *q, int msc, sd_pair_out *out, int *used)
+{
+    sd_manifold m;
+    narrow_bb(&w->b, p, &m);
+    sd_hist *h = &w->bb.hist[p->off];
+    if (p->kind == SD_PAIR_SC && m.n == 1 && p->cap == 1 && sc_lanes_on) {
+        sc_lane_fill(w, p, &m, h, i, q, msc);
+        return 1;
+    }
+    used[i] = apply_manifold(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, &out[i]);
+    return 0;
+}
+
+SD_SIMD_CLONES
+static void sc_batch_law(const sd_law *law, double dt, struct sc_lanes *restrict q, int m)
+{
+    const lane_law L = lane_law_make(law, dt);
+    for (int j = 0; j < m; j++) {
+        const double rax = q->rax[j], ray = q->ray[j], raz = q->raz[j], rbx = q->rbx[j], rby = q->rby[j],
+                     rbz = q->rbz[j];
+        /* v_a + w_a x r_a - (v_b + w_b x r_b) */
+        const double vax = q->vax[j] + (q->way[j] * raz - q->waz[j] * ray),
+                     vay = q->vay[j] + (q->waz[j] * rax - q->wax[j] * raz),
+                     vaz = q->vaz[j] + (q->wax[j] * ray - q->way[j] * rax);
+        const double vbx = q->vbx[j] + (q->wby[j] * rbz - q->wbz[j] * rby),
+                     vby = q->vby[j] + (q->wbz[j] * rbx - q->wbx[j] * rbz),
+                     vbz = q->vbz[j] + (q->wbx[j] * rby - q->wby[j] * rbx);
+        double sx = q->sx[j], sy = q->sy[j], sz = q->sz[j], fx, fy, fz;
+        q->redo[j] = law_lane(&L, q->nx[j], q->ny[j], q->nz[j], q->ov[j], vax - vbx, vay - vby, vaz - vbz, q->sqm[j],
+                              &sx, &sy, &sz, &fx, &fy, &fz);
+        q->sx[j] = sx;
+        q->sy[j] = sy;
+        q->sz[j] = sz;
+        /* apply_manifold's sums, from zero */
+        q->fx[j] = 0.0 + fx;
+        q->fy[j] = 0.0 + fy;
+        q->fz[j] = 0.0 + fz;
+        q->tax[j] = 0.0 + (ray * fz - raz * fy);
+        q->tay[j] = 0.0 + (raz * fx - rax * fz);
+        q->taz[j] = 0.0 + (rax * fy - ray * fx);
+        q->tbx[j] = 0.0 - (rby * fz - rbz * fy);
+        q->tby[j] = 0.0 - (rbz * fx - rbx * fz);
+        q->tbz[j] = 0.0 - (rbx * fy - rby * fx);
+    }
+}
+
+/* The lanes' results into their pairs' slots and out[]; a lane the law sends back (its spring
+ * tilted past the small-angle rule) through apply_manifold, from the slot not yet written. */
+static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, int m, const int32_t *ks,
+                     sd_pair_out *out, int *used)
+{
+    sc_batch_law(law, w->def.dt, q, m);
+    long redo = 0;
+    for (int j = 0; j < m; j++)
+        redo += q->redo[j] != 0.0;
+    /* (counts for the tests: one relaxed add a chunk) */
+    __atomic_fetch_add(&sc_lanes_run, m, __ATOMIC_RELAXED);
+    if (redo) __atomic_fetch_add(&sc_lanes_redo, redo, __ATOMIC_RELAXED);
+    for (int j = 0; j < m; j++) {
+        const int i = q->i[j];
+        const sd_pair *p = &w->bb.p[ks[i]];
+        sd_hist *h = &w->bb.hist[p->off];
+        if (q->redo[j] != 0.0) {
+            sd_manifold m1;
+            m1.n = 1;
+            m1.normal[0] = v3(q->nx[j], q->ny[j], q->nz[j]);
+            m1.point[0] = v3(q->px[j], q->py[j], q->pz[j]);
+            m1.overlap[0] = q->ov[j];
+            m1.feature[0] = q->feature[j];
+            used[i] = apply_manifold(w, law, &m1, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, &out[i]);
+            continue;
+        }
+        h->feature = q->feature[j];
+        h->shear = v3(q->sx[j], q->sy[j], q->sz[j]);
+        out[i].f_a = v3(q->fx[j], q->fy[j], q->fz[j]);
+        out[i].t_a = v3(q->tax[j], q->tay[j], q->taz[j]);
+        out[i].t_b = v3(q->tbx[j], q->tby[j], q->tbz[j]);
+        used[i] = 1;
+    }
+}
+
 /* The pairs ks[0 .. n) (n <= SS_CHUNK): forces into out[i], contact points into used[i]. Each
  * pair's result depends on that pair alone, so any split into chunks gives the same bits.
  * With acc, the chunk also adds each pair in contact onto its two bodies, in chunk order (the
@@ -727,10 +860,13 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
         }
     }
     /* 2. the other shapes, through the manifold */
-    for (int g = 0; g < ng; g++) {
-        const int i = gen[g];
-        const sd_pair *p = &pairs[ks[i]];
-        used[i] = pair_force_general(w, law, p, &hist[p->off], &out[i]);
+    {
+        int msc = 0;
+        for (int g = 0; g < ng; g++) {
+            const int i = gen[g];
+            msc += pair_general(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
+        }
+        if (msc > 0) sc_flush(w, law, &q->sc, msc, ks, out, used);
     }
     /* 3. the rest of what the law needs of the touching spheres */
     int j3 = 0;

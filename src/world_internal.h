@@ -277,6 +277,12 @@ int sd_simd512_set(int on);
 /* Whether the AVX-512 kernels run now (contact.c's touch filter and gather, neighbor.c's cell
  * scan): the CPU has AVX-512F/VL, SD_NO_AVX512 is unset and sd_simd512_set left them on. */
 int sd_simd512_on(void);
+/* The sphere-log pairs touching at one point through the law in lanes (contact.c) or all of
+ * them through apply_manifold: the same bits either way. For tests, like sd_simd512_set;
+ * returns the previous setting. sd_sc_lanes_count: the lanes run so far, and of them the ones
+ * sent back to the scalar law (*redo). */
+int sd_sc_lanes_set(int on);
+long sd_sc_lanes_count(long *redo);
 /* the first k with mov[k] >= i (mov ascends) */
 static inline int sd_mov_lower(const int32_t *mov, int n, int i)
 {

@@ -154,6 +154,23 @@ int main(void)
         CHECK(cs == c1 && cv == c1);
     }
     {
+        /* the sphere-log pairs touching at one point through the law in lanes and through
+         * apply_manifold: the log flume above, the same bits */
+        long redo0 = 0, redo1 = 0;
+        const long lanes0 = sd_sc_lanes_count(&redo0);
+        const int was = sd_sc_lanes_set(0);
+        long cg = 0;
+        const uint64_t hg = run(1, &cg);
+        const long lanes1 = sd_sc_lanes_count(&redo1);
+        sd_sc_lanes_set(was);
+        printf("sphere-log lanes: %ld run (%ld sent back to the scalar law) in the runs above; all through "
+               "apply_manifold: hash %016llx\n",
+               lanes0, redo0, (unsigned long long)hg);
+        CHECK(lanes0 > 1000);          /* the lanes really ran above */
+        CHECK(lanes1 == lanes0);       /* and not with them off */
+        CHECK(hg == h1 && cg == c1);
+    }
+    {
         sd_run_result a = run_driver(1), b = run_driver(2);
         printf("driver with water: 1 thread hash %016llx P_V %.6f, 2 threads hash %016llx P_V %.6f; flow ended at "
                "%.4f s, %ld steps\n",
