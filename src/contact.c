@@ -516,18 +516,19 @@ static int pair_soa_reserve(sd_pair_soa *s, int n)
 
 /* Entries j0 .. j1 of s from the records pairs[ks[j]] (an entry k < 0, a cross reference of
  * an owner's list, is left as it is: never read). */
+static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p)
+{
+    s->a[j] = p->a;
+    s->b[j] = p->b;
+    s->off[j] = p->off;
+    s->ck[j] = (int32_t)((uint32_t)(uint16_t)p->cap | (uint32_t)(uint16_t)p->kind << 16);
+    s->sqm[j] = p->sqrt_m_eff;
+}
+
 static void pair_soa_fill(sd_pair_soa *s, const sd_pair *pairs, const int32_t *ks, int j0, int j1)
 {
-    for (int j = j0; j < j1; j++) {
-        const int k = ks[j];
-        if (k < 0) continue;
-        const sd_pair *p = &pairs[k];
-        s->a[j] = p->a;
-        s->b[j] = p->b;
-        s->off[j] = p->off;
-        s->ck[j] = (int32_t)((uint32_t)(uint16_t)p->cap | (uint32_t)(uint16_t)p->kind << 16);
-        s->sqm[j] = p->sqrt_m_eff;
-    }
+    for (int j = j0; j < j1; j++)
+        if (ks[j] >= 0) pair_soa_set(s, j, &pairs[ks[j]]);
 }
 
 static soa_view soa_at(const sd_pair_soa *s, int j0)
@@ -1152,7 +1153,7 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q
 
 /* The candidates k0 .. k1-1 worth testing (near_update), into out in ascending order; returns
  * how many. */
-static int near_filter(sd_world *w, double skin, int k0, int k1, int32_t *out)
+static int near_filter(sd_world *w, double skin, int k0, int k1, int32_t *out, sd_pair_soa *soa)
 {
     const sd_pair *pairs = w->bb.p;
     const sd_vec3 *pos = w->b.pos;
@@ -1181,6 +1182,7 @@ static int near_filter(sd_world *w, double skin, int k0, int k1, int32_t *out)
                     hist[p->off + s].feature = -1;
         }
         out[m] = k;
+        if (soa) pair_soa_set(soa, m, p); /* (its records too, while the record is at hand) */
         m += keep;
     }
     return m;
@@ -1208,7 +1210,7 @@ static sd_status near_update(sd_world *w)
         return SD_OK;
     const double skin = SD_NEAR_SKIN * w->def.margin;
     if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    int m = 0;
+    int m = 0, soa_made = 0;
     const int T = bb_owners(w);
 #ifdef _OPENMP
     if (T > 1) {
@@ -1221,7 +1223,7 @@ static sd_status near_update(sd_world *w)
         {
             const int tid = omp_get_thread_num(), nthr = omp_get_num_threads();
             const int k0 = (int)((long)nbb * tid / nthr), k1 = (int)((long)nbb * (tid + 1) / nthr);
-            cnt[tid] = near_filter(w, skin, k0, k1, o->tmp + k0);
+            cnt[tid] = near_filter(w, skin, k0, k1, o->tmp + k0, NULL);
 #pragma omp barrier
             int off = 0;
             for (int t = 0; t < tid; t++)
@@ -1231,12 +1233,17 @@ static sd_status near_update(sd_world *w)
         }
     } else
 #endif
-        m = near_filter(w, skin, 0, nbb, w->near);
+    {
+        if (pair_soa_reserve(&w->near_soa, nbb + 1)) return SD_ERR_NOMEM;
+        m = near_filter(w, skin, 0, nbb, w->near, &w->near_soa);
+        soa_made = 1;
+    }
     (void)T;
     w->near_n = m;
     w->near_nbb = nbb;
     w->near_stamp = w->timers.rebuilds;
     w->near_version++;
+    w->near_soa_version = soa_made ? w->near_version + 1 : 0; /* (two threads: the owners' own) */
     w->near_drift = 0.0;
     w->near_skin = skin;
     return SD_OK;
@@ -1445,23 +1452,20 @@ static sd_status owned_update(sd_world *w, int T)
             int xc = ccross[c];
             for (int j = j0; j < j1; j++) {
                 const int k = near[j];
+                const sd_pair *p = &w->bb.p[k];
                 int ta, tb;
-                pair_owners(&w->b, &w->bb.p[k], o->B, T, &ta, &tb);
+                pair_owners(&w->b, p, o->B, T, &ta, &tb);
+                /* each entry's record too, field by field, while the record is at hand */
                 if (ta == tb) {
+                    pair_soa_set(&o->soa, mine[ta], p);
                     o->list[mine[ta]++] = k;
                     continue;
                 }
                 o->list[mine[ta]++] = ~xc;
                 o->list[mine[tb]++] = ~xc;
+                pair_soa_set(&o->xsoa, xc, p);
                 o->cross[xc++] = k;
             }
-        }
-#pragma omp barrier
-        if (!nomem) { /* the records of a slice of the lists, field by field */
-            const int nl = o->start[T];
-            pair_soa_fill(&o->soa, w->bb.p, o->list, (int)((long)nl * c / nc), (int)((long)nl * (c + 1) / nc));
-            pair_soa_fill(&o->xsoa, w->bb.p, o->cross, (int)((long)o->ncross * c / nc),
-                          (int)((long)o->ncross * (c + 1) / nc));
         }
     }
     if (nomem) return SD_ERR_NOMEM;
