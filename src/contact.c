@@ -416,7 +416,6 @@ static __attribute__((noinline)) void ss_scalar(const sd_world *w, const sd_law 
     out->t_b = v3_scale(nf, -lb);
 }
 
-
 /* A log's pair that fails its kernel's first exact rejection (most of them): skips the
  * manifold round trip. */
 static inline int log_pair_apart(const sd_bodies *b, const sd_pair *p)
@@ -475,8 +474,8 @@ static inline double bits_and(double x, uint64_t mask)
     return x;
 }
 
-/* A chunk's pair records field by field (sd_pair_soa, offset to the chunk's first entry), or
- * none: the filter then gathers them from the store. */
+/* A chunk's pair records field by field (sd_pair_soa, offset to the chunk's first entry): what
+ * the touch filter reads of each pair, in entry order. */
 typedef struct {
     const int32_t *a, *b, *off, *ck;
     const double *sqm;
@@ -514,8 +513,7 @@ static int pair_soa_reserve(sd_pair_soa *s, int n)
     return 0;
 }
 
-/* Entries j0 .. j1 of s from the records pairs[ks[j]] (an entry k < 0, a cross reference of
- * an owner's list, is left as it is: never read). */
+/* Entry j of s from the record p. */
 static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p)
 {
     s->a[j] = p->a;
@@ -525,6 +523,8 @@ static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p)
     s->sqm[j] = p->sqrt_m_eff;
 }
 
+/* Entries j0 .. j1 of s from the records pairs[ks[j]] (an entry k < 0, a cross reference of
+ * an owner's list, is left as it is: never read). */
 static void pair_soa_fill(sd_pair_soa *s, const sd_pair *pairs, const int32_t *ks, int j0, int j1)
 {
     for (int j = j0; j < j1; j++)
@@ -557,8 +557,9 @@ int sd_simd512_set(int on)
     return was;
 }
 
-/* Step 1 of bb_chunk (the touch filter) for 8 pairs at a time, in AVX-512: the pair records,
- * both centres and radii and the spring's feature gathered into lanes, the touch test with the
+/* Step 1 of bb_chunk (the touch filter) for 8 pairs at a time, in AVX-512: the pair records
+ * loaded from the chunk's view v, both centres and radii and the spring's feature gathered
+ * into lanes, the touch test with the
  * scalar loop's operations in its order (same bits), the touching sphere pairs packed into the
  * batch by compress and stored 8 lanes wide (the arrays are padded by SS_PAD). A pair of
  * another kind (a log's) in a group takes the scalar loop's path for it, in pair order. Runs
@@ -571,28 +572,17 @@ ss_filter512(const sd_world *w, const int32_t *ks, const soa_view *v, int i, int
     sd_hist *hist = w->bb.hist;
     const double *pos = &w->b.pos[0].x, *rad = w->b.radius;
     int m = *mp, ng = *ngp;
-    const char *pr = (const char *)pairs;
     const __m256i one = _mm256_set1_epi32(1), none = _mm256_set1_epi32(-1), hi16 = _mm256_set1_epi32((int)0xFFFF0000u),
                   lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     for (; i + 8 <= n; i += 8) {
-        __m256i ck, a, b, off;
-        __m512d sqm;
-        if (v) { /* the records field by field, in entry order */
-            ck = _mm256_loadu_si256((const __m256i *)(v->ck + i));
-            a = _mm256_loadu_si256((const __m256i *)(v->a + i));
-            b = _mm256_loadu_si256((const __m256i *)(v->b + i));
-            off = _mm256_loadu_si256((const __m256i *)(v->off + i));
-            sqm = _mm512_loadu_pd(v->sqm + i);
-        } else {
-            const __m256i k = _mm256_loadu_si256((const __m256i *)(ks + i));
-            const __m256i k3 = _mm256_add_epi32(k, _mm256_add_epi32(k, k)); /* 24-byte records, scale 8 */
-            /* cap (low half) and kind (high half) of each record: kind SD_PAIR_SS is 0 */
-            ck = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, cap)), k3, 8);
-            a = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, a)), k3, 8);
-            b = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, b)), k3, 8);
-            off = _mm256_i32gather_epi32((const int *)(pr + offsetof(sd_pair, off)), k3, 8);
-            sqm = _mm512_i32gather_pd(k3, pr + offsetof(sd_pair, sqrt_m_eff), 8);
-        }
+        /* the records field by field, in entry order (loads, where gathering them from the
+         * store's scattered lines cost the one-thread step 12-14 %: docs/performance.md §2-000000); cap in the low half
+         * of ck and kind in the high half, kind SD_PAIR_SS is 0 */
+        const __m256i ck = _mm256_loadu_si256((const __m256i *)(v->ck + i)),
+                      a = _mm256_loadu_si256((const __m256i *)(v->a + i)),
+                      b = _mm256_loadu_si256((const __m256i *)(v->b + i)),
+                      off = _mm256_loadu_si256((const __m256i *)(v->off + i));
+        const __m512d sqm = _mm512_loadu_pd(v->sqm + i);
         const __mmask8 other = _mm256_test_epi32_mask(ck, hi16), ss = (__mmask8)~other;
         const __m256i a3 = _mm256_add_epi32(a, _mm256_add_epi32(a, a)),
                       b3 = _mm256_add_epi32(b, _mm256_add_epi32(b, b));
