@@ -122,11 +122,11 @@ typedef struct {
     int32_t ia[SS_CHUNK + SS_PAD], ib[SS_CHUNK + SS_PAD], off[SS_CHUNK + SS_PAD]; /* bodies, history slot */
     int32_t was[SS_CHUNK + SS_PAD]; /* the slot's feature before this step */
     int32_t sel[SS_CHUNK + SS_PAD]; /* the pair's place in the chunk */
-    struct sc_lanes { /* sphere-log pairs touching at one point (bb_chunk step 2) */
+    struct sc_lanes {               /* sphere-log pairs touching at one point (bb_chunk step 2) */
         double nx[SS_CHUNK], ny[SS_CHUNK], nz[SS_CHUNK], ov[SS_CHUNK]; /* normal (on the sphere), overlap */
-        double px[SS_CHUNK], py[SS_CHUNK], pz[SS_CHUNK];                /* contact point */
-        double rax[SS_CHUNK], ray[SS_CHUNK], raz[SS_CHUNK];             /* point - centre, sphere */
-        double rbx[SS_CHUNK], rby[SS_CHUNK], rbz[SS_CHUNK];             /* point - centre, log */
+        double px[SS_CHUNK], py[SS_CHUNK], pz[SS_CHUNK];               /* contact point */
+        double rax[SS_CHUNK], ray[SS_CHUNK], raz[SS_CHUNK];            /* point - centre, sphere */
+        double rbx[SS_CHUNK], rby[SS_CHUNK], rbz[SS_CHUNK];            /* point - centre, log */
         double vax[SS_CHUNK], vay[SS_CHUNK], vaz[SS_CHUNK], wax[SS_CHUNK], way[SS_CHUNK], waz[SS_CHUNK];
         double vbx[SS_CHUNK], vby[SS_CHUNK], vbz[SS_CHUNK], wbx[SS_CHUNK], wby[SS_CHUNK], wbz[SS_CHUNK];
         double sqm[SS_CHUNK];
@@ -536,27 +536,106 @@ static soa_view soa_at(const sd_pair_soa *s, int j0)
     return (soa_view){s->a + j0, s->b + j0, s->off + j0, s->ck + j0, s->sqm + j0};
 }
 
-#ifdef SD_FILTER512
-/* Whether the AVX-512 kernels run (the touch filter and gather below, neighbor.c's cell scan),
- * decided once at load (before any thread): SD_NO_AVX512=1 in the environment keeps the scalar
- * loops (the tests run both). */
-static int simd512_on;
-__attribute__((constructor)) static void simd512_init(void)
+/* Step 1 of bb_chunk (the touch filter) for the chunk's entries i0 .. i1: which pairs touch,
+ * with no branch on the answer (it is close to a coin toss in a dense bed). Each sphere pair's
+ * geometry is written to the next free batch lane whether it touches or not; only a touching
+ * pair moves the lane on (what the law needs is read once). A log's pair goes to
+ * filter_log_pair. */
+static inline void ss_filter_range(const sd_world *w, const int32_t *ks, const soa_view *v, int i0, int i1, int *used,
+                                   ss_batch *q, int *mp, int *gen, int *ngp)
 {
-    const char *e = getenv("SD_NO_AVX512");
-    simd512_on =
-        !(e && *e && strcmp(e, "0") != 0) && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+    const sd_pair *restrict pairs = w->bb.p;
+    sd_hist *restrict hist = w->bb.hist;
+    const sd_vec3 *restrict pos = w->b.pos;
+    const double *restrict rad = w->b.radius;
+    int m = *mp;
+    for (int i = i0; i < i1; i++) {
+        /* the records from the chunk's view, in entry order (kind in ck's high half,
+         * SD_PAIR_SS is 0) */
+        if ((uint32_t)v->ck[i] >> 16) {
+            filter_log_pair(w, &pairs[ks[i]], i, used, gen, ngp);
+            continue;
+        }
+        const int ia = v->a[i], ib = v->b[i], off = v->off[i];
+        const sd_vec3 pa = pos[ia], pb = pos[ib];
+        const double dx = pa.x - pb.x, dy = pa.y - pb.y, dz = pa.z - pb.z;
+        const double ra = rad[ia], rb = rad[ib], rs = ra + rb;
+        const int t = !(dx * dx + dy * dy + dz * dz >= rs * rs);
+        sd_hist *h = &hist[off];
+        const int was = h->feature;
+        used[i] = t;
+        q->dx[m] = dx, q->dy[m] = dy, q->dz[m] = dz;
+        q->ra[m] = ra, q->rb[m] = rb, q->sqm[m] = v->sqm[i];
+        q->ia[m] = ia, q->ib[m] = ib, q->off[m] = off, q->was[m] = was, q->sel[m] = i;
+        m += t;
+        /* a contact that has just ended loses its spring: stored whatever t is, with no
+         * branch on it (gcc turned a conditional store into a branch on t, mispredicted for
+         * half the pairs of a flowing sheet: half the filter's time) */
+        h->feature = was | (t - 1);
+    }
+    *mp = m;
 }
 
-int sd_simd512_on(void) { return simd512_on; }
-
-int sd_simd512_set(int on)
+/* Step 3 of bb_chunk for the touching lanes j0 .. m: velocities, spins and the stored spring of
+ * each. */
+static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m)
 {
-    const int was = simd512_on;
-    simd512_on = on && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+    const sd_hist *restrict hist = w->bb.hist;
+    const sd_vec3 *restrict vel = w->b.vel, *restrict omega = w->b.omega;
+    for (int j = j0; j < m; j++) {
+        const int ia = q->ia[j], ib = q->ib[j];
+        const sd_hist *h = &hist[q->off[j]];
+        const sd_vec3 va = vel[ia], vb = vel[ib], wa = omega[ia], wb = omega[ib];
+        q->vx[j] = va.x - vb.x, q->vy[j] = va.y - vb.y, q->vz[j] = va.z - vb.z;
+        q->wax[j] = wa.x, q->way[j] = wa.y, q->waz[j] = wa.z;
+        q->wbx[j] = wb.x, q->wby[j] = wb.y, q->wbz[j] = wb.z;
+        /* a new contact starts from zero: the stored spring's bits masked, with no branch on
+         * it (a select compiled into one; new contacts come at random in a flow) */
+        const uint64_t keep = -(uint64_t)(q->was[j] == 0);
+        q->sx[j] = bits_and(h->shear.x, keep), q->sy[j] = bits_and(h->shear.y, keep),
+        q->sz[j] = bits_and(h->shear.z, keep);
+    }
+}
+
+/* Which hand-written SIMD kernels run: SD_SIMD_SCALAR (none), SD_SIMD_AVX2 (contact.c's touch
+ * filter and gather in 4 lanes) or SD_SIMD_AVX512 (those in 8 lanes, neighbor.c's cell scan and
+ * run.c's fluid forces too), the best the CPU has unless the environment caps it (SD_SIMD =
+ * scalar, avx2 or avx512; SD_NO_AVX512=1 keeps the scalar loops, as it always has). Decided once
+ * at load, before any thread; every level gives the same bits (the tests run them all). */
+static int simd_level;
+
+static int simd_cpu_level(void)
+{
+#ifdef SD_FILTER512
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")) return SD_SIMD_AVX512;
+    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt")) return SD_SIMD_AVX2;
+#endif
+    return SD_SIMD_SCALAR;
+}
+
+__attribute__((constructor)) static void simd_level_init(void)
+{
+    int level = simd_cpu_level();
+    const char *e = getenv("SD_NO_AVX512");
+    if (e && *e && strcmp(e, "0") != 0) level = SD_SIMD_SCALAR;
+    const char *c = getenv("SD_SIMD");
+    if (c && (strcmp(c, "scalar") == 0 || strcmp(c, "0") == 0)) level = SD_SIMD_SCALAR;
+    if (c && (strcmp(c, "avx2") == 0 || strcmp(c, "1") == 0) && level > SD_SIMD_AVX2) level = SD_SIMD_AVX2;
+    simd_level = level;
+}
+
+int sd_simd_level(void) { return simd_level; }
+
+int sd_simd_level_set(int level)
+{
+    const int was = simd_level, cpu = simd_cpu_level();
+    simd_level = level < SD_SIMD_SCALAR ? SD_SIMD_SCALAR : (level > cpu ? cpu : level);
     return was;
 }
 
+int sd_simd512_on(void) { return simd_level >= SD_SIMD_AVX512; }
+
+#ifdef SD_FILTER512
 /* Step 1 of bb_chunk (the touch filter) for 8 pairs at a time, in AVX-512: the pair records
  * loaded from the chunk's view v, both centres and radii and the spring's feature gathered
  * into lanes, the touch test with the
@@ -564,9 +643,9 @@ int sd_simd512_set(int on)
  * batch by compress and stored 8 lanes wide (the arrays are padded by SS_PAD). A pair of
  * another kind (a log's) in a group takes the scalar loop's path for it, in pair order. Runs
  * while 8 pairs remain and returns where it stopped. */
-__attribute__((target("avx512f,avx512vl,popcnt"))) static int
-ss_filter512(const sd_world *w, const int32_t *ks, const soa_view *v, int i, int n, int *used, ss_batch *q, int *mp,
-             int *gen, int *ngp)
+__attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const sd_world *w, const int32_t *ks,
+                                                                           const soa_view *v, int i, int n, int *used,
+                                                                           ss_batch *q, int *mp, int *gen, int *ngp)
 {
     const sd_pair *pairs = w->bb.p;
     sd_hist *hist = w->bb.hist;
@@ -665,13 +744,158 @@ __attribute__((target("avx512f,avx512vl"))) static void ss_gather512(const sd_wo
         _mm512_storeu_pd(q->sz + j, _mm512_mask_i32gather_pd(zero, held, o4, sh + 16, 8));
     }
 }
-#else
-int sd_simd512_on(void) { return 0; }
 
-int sd_simd512_set(int on)
+/* Four rows (x, y, z, -) of one vec3 array each into lanes: x, y, z of the four. */
+__attribute__((target("avx2"))) static inline void transpose_xyz(__m256d r0, __m256d r1, __m256d r2, __m256d r3,
+                                                                 __m256d *x, __m256d *y, __m256d *z)
 {
-    (void)on;
-    return 0;
+    const __m256d lo01 = _mm256_unpacklo_pd(r0, r1), hi01 = _mm256_unpackhi_pd(r0, r1);
+    const __m256d lo23 = _mm256_unpacklo_pd(r2, r3), hi23 = _mm256_unpackhi_pd(r2, r3);
+    *x = _mm256_permute2f128_pd(lo01, lo23, 0x20);
+    *y = _mm256_permute2f128_pd(hi01, hi23, 0x20);
+    *z = _mm256_permute2f128_pd(lo01, lo23, 0x31);
+}
+
+/* vec3 i of the array at p as (x, y, z, 0): a masked load, which reads nothing past z (the
+ * last element of an array has nothing after it) */
+#define XYZ_LOAD(p, i) _mm256_maskload_pd((p) + 3 * (i), _mm256_setr_epi64x(-1, -1, -1, 0))
+
+/* Lane compress for AVX2, indexed by a 4-bit mask of kept lanes: the kept lanes moved down in
+ * order. perm_pd: _mm256_permutevar8x32 indices for 4 doubles; shuf_i32: _mm_shuffle_epi8
+ * bytes for 4 int32. Filled once (simd_tables_init, at load). */
+static int32_t perm_pd[16][8];
+static uint8_t shuf_i32[16][16];
+static int32_t bit_i32[16][4]; /* lane k: bit k of the mask, 0 or 1 */
+
+__attribute__((constructor)) static void simd_tables_init(void)
+{
+    for (int mask = 0; mask < 16; mask++) {
+        int n = 0;
+        for (int k = 0; k < 4; k++) {
+            bit_i32[mask][k] = (mask >> k) & 1;
+            if (!((mask >> k) & 1)) continue;
+            perm_pd[mask][2 * n] = 2 * k, perm_pd[mask][2 * n + 1] = 2 * k + 1;
+            for (int c = 0; c < 4; c++)
+                shuf_i32[mask][4 * n + c] = (uint8_t)(4 * k + c);
+            n++;
+        }
+        for (; n < 4; n++) { /* the rest: anything (never read) */
+            perm_pd[mask][2 * n] = 0, perm_pd[mask][2 * n + 1] = 1;
+            for (int c = 0; c < 4; c++)
+                shuf_i32[mask][4 * n + c] = 0x80;
+        }
+    }
+}
+
+/* Step 1 of bb_chunk in AVX2, 4 pairs at a time: ss_filter_range's operations in its order
+ * (same bits), the centres read as rows (a masked 32-byte load each) and turned into lanes,
+ * the touching pairs packed into the batch by a permutation from a table and stored 4 lanes
+ * wide (the arrays are padded by SS_PAD). A group of four with a log's pair goes through
+ * ss_filter_range as it stands. Runs while 4 pairs remain and returns where it stopped. */
+__attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w, const int32_t *ks, const soa_view *v,
+                                                               int i, int n, int *used, ss_batch *q, int *mp, int *gen,
+                                                               int *ngp)
+{
+    sd_hist *hist = w->bb.hist;
+    const double *pos = &w->b.pos[0].x, *rad = w->b.radius;
+    int m = *mp;
+    const __m128i kind = _mm_set1_epi32((int)0xFFFF0000u), lane = _mm_setr_epi32(0, 1, 2, 3);
+    for (; i + 4 <= n; i += 4) {
+        const __m128i ck = _mm_loadu_si128((const __m128i *)(v->ck + i));
+        if (!_mm_testz_si128(ck, kind)) { /* a log's pair among the four */
+            *mp = m;
+            ss_filter_range(w, ks, v, i, i + 4, used, q, mp, gen, ngp);
+            m = *mp;
+            continue;
+        }
+        const int a0 = v->a[i], a1 = v->a[i + 1], a2 = v->a[i + 2], a3 = v->a[i + 3];
+        const int b0 = v->b[i], b1 = v->b[i + 1], b2 = v->b[i + 2], b3 = v->b[i + 3];
+        const int o0 = v->off[i], o1 = v->off[i + 1], o2 = v->off[i + 2], o3 = v->off[i + 3];
+        __m256d dx, dy, dz;
+        transpose_xyz(_mm256_sub_pd(XYZ_LOAD(pos, a0), XYZ_LOAD(pos, b0)),
+                      _mm256_sub_pd(XYZ_LOAD(pos, a1), XYZ_LOAD(pos, b1)),
+                      _mm256_sub_pd(XYZ_LOAD(pos, a2), XYZ_LOAD(pos, b2)),
+                      _mm256_sub_pd(XYZ_LOAD(pos, a3), XYZ_LOAD(pos, b3)), &dx, &dy, &dz);
+        const __m256d ra = _mm256_setr_pd(rad[a0], rad[a1], rad[a2], rad[a3]);
+        const __m256d rb = _mm256_setr_pd(rad[b0], rad[b1], rad[b2], rad[b3]);
+        const __m256d rs = _mm256_add_pd(ra, rb);
+        const __m256d d2 =
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
+        /* t = !(d2 >= rs^2), as the scalar loop (true for an unordered pair too) */
+        const int t = _mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(rs, rs), _CMP_NGE_UQ));
+        const int w0 = hist[o0].feature, w1 = hist[o1].feature, w2 = hist[o2].feature, w3 = hist[o3].feature;
+        _mm_storeu_si128((__m128i *)(used + i), _mm_loadu_si128((const __m128i *)bit_i32[t]));
+        /* was | (t - 1), stored whatever t is (no branch on it) */
+        hist[o0].feature = w0 | ((t & 1) - 1);
+        hist[o1].feature = w1 | (((t >> 1) & 1) - 1);
+        hist[o2].feature = w2 | (((t >> 2) & 1) - 1);
+        hist[o3].feature = w3 | (((t >> 3) & 1) - 1);
+        const __m256i pp = _mm256_loadu_si256((const __m256i *)perm_pd[t]);
+        const __m128i ps = _mm_loadu_si128((const __m128i *)shuf_i32[t]);
+#define PACK_PD(dst, x) _mm256_storeu_pd((dst) + m, _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(x), pp)))
+#define PACK_I32(dst, x) _mm_storeu_si128((__m128i *)((dst) + m), _mm_shuffle_epi8((x), ps))
+        PACK_PD(q->dx, dx);
+        PACK_PD(q->dy, dy);
+        PACK_PD(q->dz, dz);
+        PACK_PD(q->ra, ra);
+        PACK_PD(q->rb, rb);
+        PACK_PD(q->sqm, _mm256_loadu_pd(v->sqm + i));
+        PACK_I32(q->ia, _mm_loadu_si128((const __m128i *)(v->a + i)));
+        PACK_I32(q->ib, _mm_loadu_si128((const __m128i *)(v->b + i)));
+        PACK_I32(q->off, _mm_loadu_si128((const __m128i *)(v->off + i)));
+        PACK_I32(q->was, _mm_setr_epi32(w0, w1, w2, w3));
+        PACK_I32(q->sel, _mm_add_epi32(_mm_set1_epi32(i), lane));
+#undef PACK_PD
+#undef PACK_I32
+        m += __builtin_popcount((unsigned)t);
+    }
+    *mp = m;
+    return i;
+}
+
+/* Step 3 of bb_chunk in AVX2, 4 touching lanes at a time: each body's velocity and spin read as
+ * a row and turned into lanes, the slot's spring likewise, masked to +0.0 for a new contact as
+ * ss_gather_range does (same bits). Returns where it stopped (the rest: ss_gather_range). */
+_Static_assert(sizeof(sd_hist) == 32 && offsetof(sd_hist, shear) == 8, "ss_gather256 reads a slot as 4 doubles");
+
+__attribute__((target("avx2"))) static int ss_gather256(const sd_world *w, ss_batch *q, int m)
+{
+    const double *vel = &w->b.vel[0].x, *om = &w->b.omega[0].x;
+    const sd_hist *hist = w->bb.hist;
+    int j = 0;
+    for (; j + 4 <= m; j += 4) {
+        const int a0 = q->ia[j], a1 = q->ia[j + 1], a2 = q->ia[j + 2], a3 = q->ia[j + 3];
+        const int b0 = q->ib[j], b1 = q->ib[j + 1], b2 = q->ib[j + 2], b3 = q->ib[j + 3];
+        __m256d x, y, z;
+        transpose_xyz(_mm256_sub_pd(XYZ_LOAD(vel, a0), XYZ_LOAD(vel, b0)),
+                      _mm256_sub_pd(XYZ_LOAD(vel, a1), XYZ_LOAD(vel, b1)),
+                      _mm256_sub_pd(XYZ_LOAD(vel, a2), XYZ_LOAD(vel, b2)),
+                      _mm256_sub_pd(XYZ_LOAD(vel, a3), XYZ_LOAD(vel, b3)), &x, &y, &z);
+        _mm256_storeu_pd(q->vx + j, x);
+        _mm256_storeu_pd(q->vy + j, y);
+        _mm256_storeu_pd(q->vz + j, z);
+        transpose_xyz(XYZ_LOAD(om, a0), XYZ_LOAD(om, a1), XYZ_LOAD(om, a2), XYZ_LOAD(om, a3), &x, &y, &z);
+        _mm256_storeu_pd(q->wax + j, x);
+        _mm256_storeu_pd(q->way + j, y);
+        _mm256_storeu_pd(q->waz + j, z);
+        transpose_xyz(XYZ_LOAD(om, b0), XYZ_LOAD(om, b1), XYZ_LOAD(om, b2), XYZ_LOAD(om, b3), &x, &y, &z);
+        _mm256_storeu_pd(q->wbx + j, x);
+        _mm256_storeu_pd(q->wby + j, y);
+        _mm256_storeu_pd(q->wbz + j, z);
+        /* the slots as rows (feature and padding, shear x, y, z): a held contact's (was 0) kept */
+        const __m256d r0 = _mm256_loadu_pd((const double *)&hist[q->off[j]]),
+                      r1 = _mm256_loadu_pd((const double *)&hist[q->off[j + 1]]),
+                      r2 = _mm256_loadu_pd((const double *)&hist[q->off[j + 2]]),
+                      r3 = _mm256_loadu_pd((const double *)&hist[q->off[j + 3]]);
+        const __m256d lo01 = _mm256_unpacklo_pd(r0, r1), hi01 = _mm256_unpackhi_pd(r0, r1);
+        const __m256d lo23 = _mm256_unpacklo_pd(r2, r3), hi23 = _mm256_unpackhi_pd(r2, r3);
+        const __m256d keep = _mm256_castsi256_pd(_mm256_cvtepi32_epi64(
+            _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(q->was + j)), _mm_setzero_si128())));
+        _mm256_storeu_pd(q->sx + j, _mm256_and_pd(_mm256_permute2f128_pd(hi01, hi23, 0x20), keep));
+        _mm256_storeu_pd(q->sy + j, _mm256_and_pd(_mm256_permute2f128_pd(lo01, lo23, 0x31), keep));
+        _mm256_storeu_pd(q->sz + j, _mm256_and_pd(_mm256_permute2f128_pd(hi01, hi23, 0x31), keep));
+    }
+    return j;
 }
 #endif
 
@@ -811,44 +1035,20 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
 {
     const sd_pair *restrict pairs = w->bb.p;
     sd_hist *restrict hist = w->bb.hist;
-    const sd_vec3 *restrict pos = w->b.pos, *restrict vel = w->b.vel, *restrict omega = w->b.omega;
-    const double *restrict rad = w->b.radius;
     int gen[SS_CHUNK];
     int m = 0, ng = 0;
-    /* 1. which pairs touch: no branch on the answer (it is close to a coin toss in a dense bed).
-     * Each sphere pair's geometry is written to the next free batch lane whether it touches
-     * or not; only a touching pair moves the lane on (what the law needs is read once) */
+    /* 1. which pairs touch (ss_filter_range) */
     {
-        /* (8 pairs at a time in AVX-512 where the CPU has it; the rest, or all, here) */
+        /* (8 pairs at a time in AVX-512, 4 in AVX2, where the CPU has it; the rest, or all,
+         * in the scalar loop) */
         int i = 0;
 #ifdef SD_FILTER512
-        if (simd512_on) i = ss_filter512(w, ks, v, 0, n, used, q, &m, gen, &ng);
-#else
-        (void)v;
+        if (simd_level == SD_SIMD_AVX512)
+            i = ss_filter512(w, ks, v, 0, n, used, q, &m, gen, &ng);
+        else if (simd_level == SD_SIMD_AVX2)
+            i = ss_filter256(w, ks, v, 0, n, used, q, &m, gen, &ng);
 #endif
-        for (; i < n; i++) {
-            const sd_pair *p = &pairs[ks[i]];
-            if (p->kind != SD_PAIR_SS) {
-                filter_log_pair(w, p, i, used, gen, &ng);
-                continue;
-            }
-            const int ia = p->a, ib = p->b, off = p->off;
-            const sd_vec3 pa = pos[ia], pb = pos[ib];
-            const double dx = pa.x - pb.x, dy = pa.y - pb.y, dz = pa.z - pb.z;
-            const double ra = rad[ia], rb = rad[ib], rs = ra + rb;
-            const int t = !(dx * dx + dy * dy + dz * dz >= rs * rs);
-            sd_hist *h = &hist[off];
-            const int was = h->feature;
-            used[i] = t;
-            q->dx[m] = dx, q->dy[m] = dy, q->dz[m] = dz;
-            q->ra[m] = ra, q->rb[m] = rb, q->sqm[m] = p->sqrt_m_eff;
-            q->ia[m] = ia, q->ib[m] = ib, q->off[m] = off, q->was[m] = was, q->sel[m] = i;
-            m += t;
-            /* a contact that has just ended loses its spring: stored whatever t is, with no
-             * branch on it (gcc turned a conditional store into a branch on t, mispredicted for
-             * half the pairs of a flowing sheet: half the filter's time) */
-            h->feature = was | (t - 1);
-        }
+        ss_filter_range(w, ks, v, i, n, used, q, &m, gen, &ng);
     }
     /* 2. the other shapes, through the manifold */
     {
@@ -860,25 +1060,16 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
         if (msc > 0) sc_flush(w, law, &q->sc, msc, ks, out, used);
     }
     /* 3. the rest of what the law needs of the touching spheres */
-    int j3 = 0;
+    {
+        int j = 0;
 #ifdef SD_FILTER512
-    if (simd512_on) {
-        ss_gather512(w, q, m);
-        j3 = m;
-    }
+        if (simd_level == SD_SIMD_AVX512) {
+            ss_gather512(w, q, m);
+            j = m;
+        } else if (simd_level == SD_SIMD_AVX2)
+            j = ss_gather256(w, q, m);
 #endif
-    for (int j = j3; j < m; j++) {
-        const int ia = q->ia[j], ib = q->ib[j];
-        const sd_hist *h = &hist[q->off[j]];
-        const sd_vec3 va = vel[ia], vb = vel[ib], wa = omega[ia], wb = omega[ib];
-        q->vx[j] = va.x - vb.x, q->vy[j] = va.y - vb.y, q->vz[j] = va.z - vb.z;
-        q->wax[j] = wa.x, q->way[j] = wa.y, q->waz[j] = wa.z;
-        q->wbx[j] = wb.x, q->wby[j] = wb.y, q->wbz[j] = wb.z;
-        /* a new contact starts from zero: the stored spring's bits masked, with no branch on
-         * it (a select compiled into one; new contacts come at random in a flow) */
-        const uint64_t keep = -(uint64_t)(q->was[j] == 0);
-        q->sx[j] = bits_and(h->shear.x, keep), q->sy[j] = bits_and(h->shear.y, keep),
-        q->sz[j] = bits_and(h->shear.z, keep);
+        ss_gather_range(w, q, j, m);
     }
     /* 4. the law, vectorized */
     ss_batch_law(law, w->def.dt, q, m);

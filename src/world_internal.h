@@ -269,16 +269,19 @@ void sd_pairlist_free(sd_pairlist *l);
  * contacts already represented by a face or edge contact (used by the force pass and by
  * sd_world_spring_energy, so that the energy counts the springs the forces use). */
 void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to);
-/* The AVX-512 kernels (contact.c's touch filter and gather, neighbor.c's cell scan) on or off:
- * on by default where the CPU has them, unless SD_NO_AVX512 is set; the same bits either way.
- * For tests; not to be called while a world steps. Returns the previous setting; asking for
- * them on a CPU without AVX-512 leaves the scalar loops. */
-int sd_simd512_set(int on);
-/* Whether the AVX-512 kernels run now (contact.c's touch filter and gather, neighbor.c's cell
- * scan): the CPU has AVX-512F/VL, SD_NO_AVX512 is unset and sd_simd512_set left them on. */
+/* The hand-written SIMD kernels: none (the scalar loops), AVX2 (contact.c's touch filter and
+ * gather, 4 lanes) or AVX-512 (those in 8 lanes, neighbor.c's cell scan, run.c's fluid forces).
+ * The best the CPU has by default; the environment's SD_SIMD (scalar, avx2, avx512) caps it,
+ * SD_NO_AVX512=1 keeps the scalar loops. The same bits at every level. */
+enum { SD_SIMD_SCALAR = 0, SD_SIMD_AVX2 = 1, SD_SIMD_AVX512 = 2 };
+int sd_simd_level(void);
+/* For tests; not to be called while a world steps: asks for a level (capped at what the CPU
+ * has) and returns the previous one. */
+int sd_simd_level_set(int level);
+/* Whether the AVX-512 kernels run now (sd_simd_level() is SD_SIMD_AVX512). */
 int sd_simd512_on(void);
 /* The sphere-log pairs touching at one point through the law in lanes (contact.c) or all of
- * them through apply_manifold: the same bits either way. For tests, like sd_simd512_set;
+ * them through apply_manifold: the same bits either way. For tests, like sd_simd_level_set;
  * returns the previous setting. sd_sc_lanes_count: the lanes run so far, and of them the ones
  * sent back to the scalar law (*redo). */
 int sd_sc_lanes_set(int on);

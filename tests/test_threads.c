@@ -138,20 +138,21 @@ int main(void)
     CHECK(h1 == h2);
     CHECK(c1 == c2);
     {
-        /* the AVX-512 kernels (touch filter, gather, cell scan) off and on, on the same scene:
-         * log pairs sit among the sphere pairs of a chunk, where the AVX-512 filter hands them
-         * to the scalar path and goes on */
-        const int was = sd_simd512_set(0);
-        long cs = 0, cv = 0;
-        const uint64_t hs = run(1, &cs);
-        sd_simd512_set(1);
-        const int have = sd_simd512_set(1); /* on where the CPU has it */
-        const uint64_t hv = run(1, &cv);
-        sd_simd512_set(was);
-        printf("AVX-512 kernels off: hash %016llx; on: %s %016llx\n", (unsigned long long)hs,
-               have ? "" : "(not on this CPU, scalar again)", (unsigned long long)hv);
-        CHECK(hs == h1 && hv == h1);
-        CHECK(cs == c1 && cv == c1);
+        /* every level of the hand-written SIMD kernels the CPU has (scalar; AVX2 filter and
+         * gather; AVX-512 filter, gather and cell scan), on the same scene: log pairs sit among
+         * the sphere pairs of a chunk, where the SIMD filters hand them to the scalar path */
+        const int was = sd_simd_level_set(SD_SIMD_SCALAR);
+        for (int level = SD_SIMD_SCALAR; level <= SD_SIMD_AVX512; level++) {
+            sd_simd_level_set(level);
+            if (sd_simd_level() != level) continue; /* not on this CPU */
+            long cl = 0;
+            const uint64_t hl = run(1, &cl);
+            printf("SIMD kernels at level %d (0 scalar, 1 AVX2, 2 AVX-512): hash %016llx, %ld contacts\n", level,
+                   (unsigned long long)hl, cl);
+            CHECK(hl == h1);
+            CHECK(cl == c1);
+        }
+        sd_simd_level_set(was);
     }
     {
         /* the sphere-log pairs touching at one point through the law in lanes and through
@@ -166,8 +167,8 @@ int main(void)
         printf("sphere-log lanes: %ld run (%ld sent back to the scalar law) in the runs above; all through "
                "apply_manifold: hash %016llx\n",
                lanes0, redo0, (unsigned long long)hg);
-        CHECK(lanes0 > 1000);          /* the lanes really ran above */
-        CHECK(lanes1 == lanes0);       /* and not with them off */
+        CHECK(lanes0 > 1000);    /* the lanes really ran above */
+        CHECK(lanes1 == lanes0); /* and not with them off */
         CHECK(hg == h1 && cg == c1);
     }
     {
@@ -181,11 +182,11 @@ int main(void)
         CHECK(a.state_hash == b.state_hash);
         CHECK(a.p_v == b.p_v && a.steps == b.steps);
         /* the fluid forces' AVX-512 form (run.c) against the batch's scalar one, with the
-         * other kernels, on the whole driver: flow and capture profiles, wet and dry */
-        const int was = sd_simd512_set(0);
+         * other kernels (those the CPU has), on the whole driver: flow and capture profiles, wet and dry */
+        const int was = sd_simd_level_set(SD_SIMD_SCALAR);
         sd_run_result c = run_driver(2);
-        sd_simd512_set(was);
-        printf("driver with the AVX-512 kernels off: hash %016llx P_V %.6f\n", (unsigned long long)c.state_hash, c.p_v);
+        sd_simd_level_set(was);
+        printf("driver with the SIMD kernels off: hash %016llx P_V %.6f\n", (unsigned long long)c.state_hash, c.p_v);
         CHECK(c.state_hash == a.state_hash);
         CHECK(c.p_v == a.p_v && c.steps == a.steps);
     }
