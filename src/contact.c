@@ -897,6 +897,61 @@ __attribute__((target("avx2"))) static int ss_gather256(const sd_world *w, ss_ba
     }
     return j;
 }
+/* Four lanes x, y, z, u into four rows (x_k, y_k, z_k, u_k). */
+__attribute__((target("avx2"))) static inline void transpose_rows(__m256d x, __m256d y, __m256d z, __m256d u,
+                                                                  __m256d r[4])
+{
+    const __m256d t0 = _mm256_unpacklo_pd(x, y), t1 = _mm256_unpackhi_pd(x, y);
+    const __m256d t2 = _mm256_unpacklo_pd(z, u), t3 = _mm256_unpackhi_pd(z, u);
+    r[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
+    r[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+    r[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+    r[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+}
+
+/* *p + (x, y, z) of row r, or *p - it (sub): add_pair's v3_add / v3_sub, x and y in one
+ * 16-byte operation */
+__attribute__((target("avx2"))) static inline void row_add(sd_vec3 *p, __m256d r, int sub)
+{
+    const __m128d xy = _mm_loadu_pd(&p->x), rxy = _mm256_castpd256_pd128(r);
+    const double rz = _mm_cvtsd_f64(_mm256_extractf128_pd(r, 1));
+    _mm_storeu_pd(&p->x, sub ? _mm_sub_pd(xy, rxy) : _mm_add_pd(xy, rxy));
+    p->z = sub ? p->z - rz : p->z + rz;
+}
+
+/* Step 5 of bb_chunk (with acc) in AVX2 for the lanes j .. j+3, when none is to be redone
+ * (returns 0 and does nothing otherwise): the torques of four lanes at once, the slots' springs
+ * stored as 32-byte rows (the feature 0), and each pair onto its two bodies in lane order as
+ * add_pair does (same bits). */
+__attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const ss_batch *q, int j, sd_bodies *acc)
+{
+    const __m256d zero = _mm256_setzero_pd();
+    if (_mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(q->redo + j), zero, _CMP_NEQ_UQ))) return 0;
+    sd_hist *hist = w->bb.hist;
+    const __m256d nfx = _mm256_loadu_pd(q->nfx + j), nfy = _mm256_loadu_pd(q->nfy + j),
+                  nfz = _mm256_loadu_pd(q->nfz + j);
+    const __m256d sign = _mm256_set1_pd(-0.0); /* -la as the scalar loop negates it: the sign bit flipped */
+    const __m256d mla = _mm256_xor_pd(_mm256_loadu_pd(q->la + j), sign),
+                  mlb = _mm256_xor_pd(_mm256_loadu_pd(q->lb + j), sign);
+    __m256d hr[4], fr[4], ta[4], tb[4];
+    transpose_rows(zero, _mm256_loadu_pd(q->sx + j), _mm256_loadu_pd(q->sy + j), _mm256_loadu_pd(q->sz + j), hr);
+    transpose_rows(_mm256_loadu_pd(q->fx + j), _mm256_loadu_pd(q->fy + j), _mm256_loadu_pd(q->fz + j), zero, fr);
+    transpose_rows(_mm256_mul_pd(nfx, mla), _mm256_mul_pd(nfy, mla), _mm256_mul_pd(nfz, mla), zero, ta);
+    transpose_rows(_mm256_mul_pd(nfx, mlb), _mm256_mul_pd(nfy, mlb), _mm256_mul_pd(nfz, mlb), zero, tb);
+    for (int k = 0; k < 4; k++) {
+        const int ia = q->ia[j + k], ib = q->ib[j + k];
+        _mm256_storeu_pd((double *)&hist[q->off[j + k]], hr[k]);
+        if (!sd_body_is_bed(acc, ia)) {
+            row_add(&acc->force[ia], fr[k], 0);
+            row_add(&acc->torque[ia], ta[k], 0);
+        }
+        if (!sd_body_is_bed(acc, ib)) {
+            row_add(&acc->force[ib], fr[k], 1);
+            row_add(&acc->torque[ib], tb[k], 0);
+        }
+    }
+    return 1;
+}
 #endif
 
 /* A sphere-log pair whose manifold is one point (the sphere against the log's side or end:
@@ -1083,6 +1138,15 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             for (; g < ng && gen[g] < i; g++)
                 if (used[gen[g]] > 0) add_both(acc, &pairs[ks[gen[g]]], &out[gen[g]]);
             if (j == m) break;
+#ifdef SD_FILTER512
+            /* four lanes at once where no other shape's pair comes between them and none is
+             * to be redone (nearly always) */
+            if (simd_level >= SD_SIMD_AVX2 && j + 4 <= m && (g == ng || gen[g] > q->sel[j + 3]) &&
+                ss_sums256(w, q, j, acc)) {
+                j += 3;
+                continue;
+            }
+#endif
             const int ia = q->ia[j], ib = q->ib[j];
             sd_hist *h = &hist[q->off[j]];
             if (q->redo[j] != 0.0) {
