@@ -823,13 +823,13 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
             _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
         /* t = !(d2 >= rs^2), as the scalar loop (true for an unordered pair too) */
         const int t = _mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(rs, rs), _CMP_NGE_UQ));
-        const int w0 = hist[o0].feature, w1 = hist[o1].feature, w2 = hist[o2].feature, w3 = hist[o3].feature;
+        const __m128i was = _mm_setr_epi32(hist[o0].feature, hist[o1].feature, hist[o2].feature, hist[o3].feature);
         _mm_storeu_si128((__m128i *)(used + i), _mm_loadu_si128((const __m128i *)bit_i32[t]));
-        /* was | (t - 1), stored whatever t is (no branch on it) */
-        hist[o0].feature = w0 | ((t & 1) - 1);
-        hist[o1].feature = w1 | (((t >> 1) & 1) - 1);
-        hist[o2].feature = w2 | (((t >> 2) & 1) - 1);
-        hist[o3].feature = w3 | (((t >> 3) & 1) - 1);
+        /* was | (t - 1): stored only where it changes (a contact that has just ended; few in a
+         * step, so the branch is seldom taken) */
+        int gone = ~t & ~_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(was, _mm_set1_epi32(-1)))) & 15;
+        for (; gone; gone &= gone - 1)
+            hist[v->off[i + __builtin_ctz((unsigned)gone)]].feature = -1;
         const __m256i pp = _mm256_loadu_si256((const __m256i *)perm_pd[t]);
         const __m128i ps = _mm_loadu_si128((const __m128i *)shuf_i32[t]);
 #define PACK_PD(dst, x) _mm256_storeu_pd((dst) + m, _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(x), pp)))
@@ -843,7 +843,7 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
         PACK_I32(q->ia, _mm_loadu_si128((const __m128i *)(v->a + i)));
         PACK_I32(q->ib, _mm_loadu_si128((const __m128i *)(v->b + i)));
         PACK_I32(q->off, _mm_loadu_si128((const __m128i *)(v->off + i)));
-        PACK_I32(q->was, _mm_setr_epi32(w0, w1, w2, w3));
+        PACK_I32(q->was, was);
         PACK_I32(q->sel, _mm_add_epi32(_mm_set1_epi32(i), lane));
 #undef PACK_PD
 #undef PACK_I32
