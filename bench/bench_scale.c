@@ -74,7 +74,8 @@ static double run_case(int n, long steps)
 {
     const double tile = 0.3; /* the reservoir: x in [0, 0.3], y in [0, 0.3] */
     int nt = 1;
-    while (nt * nt * g_n < n) nt++;
+    while (nt * nt * g_n < n)
+        nt++;
     int ntot = nt * nt * g_n;
     grain *all = malloc((size_t)ntot * sizeof(grain));
     if (!all) return 0;
@@ -108,13 +109,19 @@ static double run_case(int n, long steps)
     quad(w, v3(0, 0, 0), v3(0, ymax, 0), v3(0, ymax, H), v3(0, 0, H));
     quad(w, v3(L, 0, 0), v3(L, ymax, 0), v3(L, ymax, H), v3(L, 0, H));
     sd_world_run(w, 50); /* warm-up: candidate lists, history, caches */
+    const sd_world_timers k0 = sd_world_get_timers(w);
     double t0 = sd_now();
     sd_status st = sd_world_run(w, steps);
     double wall = sd_now() - t0;
+    const sd_world_timers k1 = sd_world_get_timers(w);
     if (st) fprintf(stderr, "N %d: %s\n", n, sd_status_message(st));
     double ps = (double)n * steps / wall;
-    printf("N %8d  steps %6ld  wall %8.3f s  particle-steps/s %.4e  ns/particle-step %6.1f  contacts/sphere %.2f\n", n,
-           steps, wall, ps, 1e9 / ps, 2.0 * sd_world_contact_count(w) / n);
+    const long nc = sd_world_contact_count(w);
+    /* the rebuilds in the timed steps and their time (neighbor), and the cost per contact */
+    printf("N %8d  steps %6ld  wall %8.3f s  particle-steps/s %.4e  ns/particle-step %6.1f  contacts/sphere %.2f  "
+           "ns/contact-step %5.1f  rebuilds %ld neighbor %.3f s\n",
+           n, steps, wall, ps, 1e9 / ps, 2.0 * nc / n, 1e9 * wall / ((double)(nc > 0 ? nc : 1) * steps),
+           k1.rebuilds - k0.rebuilds, k1.neighbor - k0.neighbor);
     fflush(stdout);
     sd_world_destroy(w);
     return ps;
@@ -126,10 +133,14 @@ int main(int argc, char **argv)
     int threads = 1, big = 0;
     const char *path = NULL;
     for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
-        else if (!strcmp(argv[i], "--big")) big = 1;
-        else if (!path) path = argv[i];
-        else steps = atol(argv[i]);
+        if (!strcmp(argv[i], "--threads") && i + 1 < argc)
+            threads = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--big"))
+            big = 1;
+        else if (!path)
+            path = argv[i];
+        else
+            steps = atol(argv[i]);
     }
     if (!path || read_data(path)) {
         fprintf(stderr, "usage: %s SETTLED.data [steps] [--threads N] [--big]\n", argv[0]);

@@ -147,12 +147,10 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
                   nz = _mm512_set1_pd(p->bed_normal.z), zb = _mm512_set1_pd(p->z_bed),
                   dx = _mm512_set1_pd(p->flow_dir.x), dy = _mm512_set1_pd(p->flow_dir.y),
                   dz = _mm512_set1_pd(p->flow_dir.z), kd = _mm512_set1_pd(0.5 * p->C_D * p->rho),
-                  mrho = _mm512_set1_pd(-p->rho), gx = _mm512_set1_pd(p->gravity.x),
-                  gy = _mm512_set1_pd(p->gravity.y), gz = _mm512_set1_pd(p->gravity.z),
-                  bma = _mm512_set1_pd(be - al), A = _mm512_set1_pd(al), five = _mm512_set1_pd(5.0),
-                  c45 = _mm512_set1_pd(4.0 / 5.0), pi = _mm512_set1_pd(M_PI),
-                  c43pi = _mm512_set1_pd(4.0 / 3.0 * M_PI), XD = _mm512_set1_pd(fc->xd),
-                  zero = _mm512_setzero_pd();
+                  mrho = _mm512_set1_pd(-p->rho), gx = _mm512_set1_pd(p->gravity.x), gy = _mm512_set1_pd(p->gravity.y),
+                  gz = _mm512_set1_pd(p->gravity.z), bma = _mm512_set1_pd(be - al), A = _mm512_set1_pd(al),
+                  five = _mm512_set1_pd(5.0), c45 = _mm512_set1_pd(4.0 / 5.0), pi = _mm512_set1_pd(M_PI),
+                  c43pi = _mm512_set1_pd(4.0 / 3.0 * M_PI), XD = _mm512_set1_pd(fc->xd), zero = _mm512_setzero_pd();
     const __mmask8 flow_ok = h > 0.0 ? 0xFF : 0, cap_ok = hd > 0.0 ? 0xFF : 0, capture = fc->capture ? 0xFF : 0;
     for (int k = k0; k < k1; k += 8) {
         const int nl = k1 - k < 8 ? k1 - k : 8;
@@ -185,9 +183,9 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
         else if (!(cap & sph))
             u = _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_div_pd(zc, H), five), c45), U); /* eq 50 */
         else
-            u = _mm512_mask_blend_pd(
-                cap, _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_div_pd(zc, H), five), c45), U),
-                _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_mul_pd(bma, zc), HD), A), U));
+            u = _mm512_mask_blend_pd(cap,
+                                     _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_div_pd(zc, H), five), c45), U),
+                                     _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_mul_pd(bma, zc), HD), A), U));
         const __m512d rx = _mm512_sub_pd(_mm512_mul_pd(dx, u), vx), ry = _mm512_sub_pd(_mm512_mul_pd(dy, u), vy),
                       rz = _mm512_sub_pd(_mm512_mul_pd(dz, u), vz);
         const __m512d speed = _mm512_sqrt_pd(
@@ -204,12 +202,103 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
         _mm512_mask_i32scatter_pd(ext + 2, sph, i3, _mm512_maskz_mov_pd(wet, tz), 8);
     }
 }
+/* Four rows (x, y, z, -) into lanes x, y, z (as contact.c's transpose_xyz). */
+__attribute__((target("avx2"))) static inline void rows_to_lanes(__m256d r0, __m256d r1, __m256d r2, __m256d r3,
+                                                                 __m256d *x, __m256d *y, __m256d *z)
+{
+    const __m256d lo01 = _mm256_unpacklo_pd(r0, r1), hi01 = _mm256_unpackhi_pd(r0, r1);
+    const __m256d lo23 = _mm256_unpacklo_pd(r2, r3), hi23 = _mm256_unpackhi_pd(r2, r3);
+    *x = _mm256_permute2f128_pd(lo01, lo23, 0x20);
+    *y = _mm256_permute2f128_pd(hi01, hi23, 0x20);
+    *z = _mm256_permute2f128_pd(lo01, lo23, 0x31);
+}
+
+/* The spheres among mov[k0 .. k1) in AVX2, 4 bodies at a time while 4 remain (returns where it
+ * stopped; the rest go through the batch): fluid_spheres512's operations, so the same bits, with
+ * each body's centre and velocity read as a row (a masked 32-byte load) and its force written
+ * back as one. The logs among them are left to the caller. */
+__attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_ctx *fc, sd_world *w, const int32_t *mov,
+                                                            int k0, int k1)
+{
+    const sd_fluid_params *p = &fc->fp;
+    sd_bodies *b = &w->b;
+    const double *pos = &b->pos[0].x, *vel = &b->vel[0].x, *rad = b->radius;
+    const uint8_t *shape = b->shape;
+    const double h = p->h, hd = fc->h_d >= h ? fc->h_d : h;
+    double al, be;
+    sd_fluid_capture_coeffs(h, hd, &al, &be);
+    const __m256d U = _mm256_set1_pd(p->U), H = _mm256_set1_pd(h), HD = _mm256_set1_pd(hd),
+                  nx = _mm256_set1_pd(p->bed_normal.x), ny = _mm256_set1_pd(p->bed_normal.y),
+                  nz = _mm256_set1_pd(p->bed_normal.z), zb = _mm256_set1_pd(p->z_bed),
+                  dx = _mm256_set1_pd(p->flow_dir.x), dy = _mm256_set1_pd(p->flow_dir.y),
+                  dz = _mm256_set1_pd(p->flow_dir.z), kd = _mm256_set1_pd(0.5 * p->C_D * p->rho),
+                  mrho = _mm256_set1_pd(-p->rho), gx = _mm256_set1_pd(p->gravity.x), gy = _mm256_set1_pd(p->gravity.y),
+                  gz = _mm256_set1_pd(p->gravity.z), bma = _mm256_set1_pd(be - al), A = _mm256_set1_pd(al),
+                  five = _mm256_set1_pd(5.0), c45 = _mm256_set1_pd(4.0 / 5.0), pi = _mm256_set1_pd(M_PI),
+                  c43pi = _mm256_set1_pd(4.0 / 3.0 * M_PI), XD = _mm256_set1_pd(fc->xd), zero = _mm256_setzero_pd();
+    const __m256i xyz = _mm256_setr_epi64x(-1, -1, -1, 0);
+    const __m256d flow_ok = h > 0.0 ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero,
+                  cap_ok = hd > 0.0 ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero,
+                  capture = fc->capture ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero;
+    int k = k0;
+    for (; k + 4 <= k1; k += 4) {
+        const int i0 = mov[k], i1 = mov[k + 1], i2 = mov[k + 2], i3 = mov[k + 3];
+        const int sph = (shape[i0] == SD_SHAPE_SPHERE) | (shape[i1] == SD_SHAPE_SPHERE) << 1 |
+                        (shape[i2] == SD_SHAPE_SPHERE) << 2 | (shape[i3] == SD_SHAPE_SPHERE) << 3;
+        if (!sph) continue;
+        __m256d px, py, pz, vx, vy, vz;
+        rows_to_lanes(_mm256_maskload_pd(pos + 3 * i0, xyz), _mm256_maskload_pd(pos + 3 * i1, xyz),
+                      _mm256_maskload_pd(pos + 3 * i2, xyz), _mm256_maskload_pd(pos + 3 * i3, xyz), &px, &py, &pz);
+        rows_to_lanes(_mm256_maskload_pd(vel + 3 * i0, xyz), _mm256_maskload_pd(vel + 3 * i1, xyz),
+                      _mm256_maskload_pd(vel + 3 * i2, xyz), _mm256_maskload_pd(vel + 3 * i3, xyz), &vx, &vy, &vz);
+        const __m256d r = _mm256_setr_pd(rad[i0], rad[i1], rad[i2], rad[i3]);
+        /* z = p.n - z_bed (sd_fluid_height), clamped at the bed as z < 0 ? 0 : z */
+        const __m256d z = _mm256_sub_pd(
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(px, nx), _mm256_mul_pd(py, ny)), _mm256_mul_pd(pz, nz)), zb);
+        const __m256d zc = _mm256_blendv_pd(z, zero, _mm256_cmp_pd(z, zero, _CMP_LT_OQ));
+        /* the capture profile upstream of the dam (capture && p.x < x_dam) */
+        const __m256d cap = _mm256_and_pd(capture, _mm256_cmp_pd(px, XD, _CMP_LT_OQ));
+        const __m256d wet =
+            _mm256_or_pd(_mm256_and_pd(_mm256_and_pd(cap, cap_ok), _mm256_cmp_pd(zc, HD, _CMP_LE_OQ)),
+                         _mm256_andnot_pd(cap, _mm256_and_pd(flow_ok, _mm256_cmp_pd(zc, H, _CMP_LE_OQ))));
+        /* the profile of each lane; a group all of one profile skips the other's divisions */
+        const int capm = _mm256_movemask_pd(cap) & sph;
+        __m256d u;
+        if (capm == sph)
+            u = _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_mul_pd(bma, zc), HD), A), U); /* eq 51 */
+        else if (!capm)
+            u = _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_div_pd(zc, H), five), c45), U); /* eq 50 */
+        else
+            u = _mm256_blendv_pd(_mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_div_pd(zc, H), five), c45), U),
+                                 _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_mul_pd(bma, zc), HD), A), U), cap);
+        const __m256d rx = _mm256_sub_pd(_mm256_mul_pd(dx, u), vx), ry = _mm256_sub_pd(_mm256_mul_pd(dy, u), vy),
+                      rz = _mm256_sub_pd(_mm256_mul_pd(dz, u), vz);
+        const __m256d speed = _mm256_sqrt_pd(
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(rx, rx), _mm256_mul_pd(ry, ry)), _mm256_mul_pd(rz, rz)));
+        const __m256d area = _mm256_mul_pd(_mm256_mul_pd(pi, r), r),
+                      volume = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(c43pi, r), r), r);
+        const __m256d sk = _mm256_mul_pd(_mm256_mul_pd(kd, area), speed), bs = _mm256_mul_pd(mrho, volume);
+        /* dry spheres get zero */
+        const __m256d tx = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(rx, sk), _mm256_mul_pd(gx, bs))),
+                      ty = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(ry, sk), _mm256_mul_pd(gy, bs))),
+                      tz = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(rz, sk), _mm256_mul_pd(gz, bs)));
+        /* back as rows (x, y, z, -), each sphere's written */
+        const __m256d t0 = _mm256_unpacklo_pd(tx, ty), t1 = _mm256_unpackhi_pd(tx, ty);
+        const __m256d t2 = _mm256_unpacklo_pd(tz, zero), t3 = _mm256_unpackhi_pd(tz, zero);
+        const __m256d row[4] = {_mm256_permute2f128_pd(t0, t2, 0x20), _mm256_permute2f128_pd(t1, t3, 0x20),
+                                _mm256_permute2f128_pd(t0, t2, 0x31), _mm256_permute2f128_pd(t1, t3, 0x31)};
+        const int idx[4] = {i0, i1, i2, i3};
+        for (int l = 0; l < 4; l++)
+            if (sph >> l & 1) _mm256_maskstore_pd(&b->ext_force[idx[l]].x, xyz, row[l]);
+    }
+    return k;
+}
 #endif
 
 /* The fluid forces on the moving bodies mov[k0 .. k1): called by the world's step for each
  * block of up to 128 of a thread's bodies just before it moves them (sd_world.ext_fn), so
- * their data are still in that core's L1 when they move. Spheres in batches (sd_fluid_sphere_batch: the same bits, vectorized),
- * logs one by one. */
+ * their data are still in that core's L1 when they move. Spheres in batches (sd_fluid_sphere_batch: the same bits,
+ * vectorized), logs one by one. */
 static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int k1)
 {
     const struct fluid_ctx *fc = ctx;
@@ -217,11 +306,15 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
     const sd_fluid_params *fp = &fc->fp;
     const double xd = fc->xd, h_d = fc->h_d;
     const int capture = fc->capture;
+    /* the spheres of mov[k0 .. kv) in SIMD lanes where the CPU has them (8 AVX-512 lanes, 4 AVX2
+     * lanes), the rest through the batch */
+    int kv = k0;
 #ifdef SD_FLUID512
-    const int vec = sd_simd512_on();
-    if (vec) fluid_spheres512(fc, w, mov, k0, k1);
-#else
-    const int vec = 0;
+    if (sd_simd_level() == SD_SIMD_AVX512) {
+        fluid_spheres512(fc, w, mov, k0, k1);
+        kv = k1;
+    } else if (sd_simd_level() == SD_SIMD_AVX2)
+        kv = fluid_spheres256(fc, w, mov, k0, k1);
 #endif
     fluid_batch q;
     q.m = 0;
@@ -232,7 +325,7 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
     for (int k = k0; k < k1; k++) {
         const int i = mov[k];
         if (b->shape[i] == SD_SHAPE_SPHERE) {
-            if (vec) continue;
+            if (k < kv) continue;
             const int j = q.m++;
             const sd_vec3 p = pos[i], v = vel[i];
             q.idx[j] = i;
