@@ -598,8 +598,8 @@ static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m
 }
 
 /* Which hand-written SIMD kernels run: SD_SIMD_SCALAR (none), SD_SIMD_AVX2 (contact.c's touch
- * filter and gather in 4 lanes) or SD_SIMD_AVX512 (those in 8 lanes, neighbor.c's cell scan and
- * run.c's fluid forces too), the best the CPU has unless the environment caps it (SD_SIMD =
+ * filter, gather and sums and run.c's fluid forces in 4 lanes) or SD_SIMD_AVX512 (the filter,
+ * gather and fluid forces in 8 lanes, the sums in 4, neighbor.c's cell scan), the best the CPU has unless the environment caps it (SD_SIMD =
  * scalar, avx2 or avx512; SD_NO_AVX512=1 keeps the scalar loops, as it always has). Decided once
  * at load, before any thread; every level gives the same bits (the tests run them all). */
 static int simd_level;
@@ -801,13 +801,10 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
     int m = *mp;
     const __m128i kind = _mm_set1_epi32((int)0xFFFF0000u), lane = _mm_setr_epi32(0, 1, 2, 3);
     for (; i + 4 <= n; i += 4) {
-        const __m128i ck = _mm_loadu_si128((const __m128i *)(v->ck + i));
-        if (!_mm_testz_si128(ck, kind)) { /* a log's pair among the four */
-            *mp = m;
-            ss_filter_range(w, ks, v, i, i + 4, used, q, mp, gen, ngp);
-            m = *mp;
-            continue;
-        }
+        /* the lanes of sphere pairs (kind 0 in ck's high half); a log's pair takes the scalar
+         * loop's path after the group (in pair order among the log pairs) */
+        const int ss = _mm_movemask_ps(_mm_castsi128_ps(
+            _mm_cmpeq_epi32(_mm_and_si128(_mm_loadu_si128((const __m128i *)(v->ck + i)), kind), _mm_setzero_si128())));
         const int a0 = v->a[i], a1 = v->a[i + 1], a2 = v->a[i + 2], a3 = v->a[i + 3];
         const int b0 = v->b[i], b1 = v->b[i + 1], b2 = v->b[i + 2], b3 = v->b[i + 3];
         const int o0 = v->off[i], o1 = v->off[i + 1], o2 = v->off[i + 2], o3 = v->off[i + 3];
@@ -822,12 +819,12 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
         const __m256d d2 =
             _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
         /* t = !(d2 >= rs^2), as the scalar loop (true for an unordered pair too) */
-        const int t = _mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(rs, rs), _CMP_NGE_UQ));
+        const int t = _mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(rs, rs), _CMP_NGE_UQ)) & ss;
         const __m128i was = _mm_setr_epi32(hist[o0].feature, hist[o1].feature, hist[o2].feature, hist[o3].feature);
         _mm_storeu_si128((__m128i *)(used + i), _mm_loadu_si128((const __m128i *)bit_i32[t]));
         /* was | (t - 1): stored only where it changes (a contact that has just ended; few in a
          * step, so the branch is seldom taken) */
-        int gone = ~t & ~_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(was, _mm_set1_epi32(-1)))) & 15;
+        int gone = ~t & ~_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(was, _mm_set1_epi32(-1)))) & ss;
         for (; gone; gone &= gone - 1)
             hist[v->off[i + __builtin_ctz((unsigned)gone)]].feature = -1;
         const __m256i pp = _mm256_loadu_si256((const __m256i *)perm_pd[t]);
@@ -848,6 +845,10 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
 #undef PACK_PD
 #undef PACK_I32
         m += __builtin_popcount((unsigned)t);
+        for (int o = ~ss & 15; o; o &= o - 1) {
+            const int j = i + __builtin_ctz((unsigned)o);
+            filter_log_pair(w, &w->bb.p[ks[j]], j, used, gen, ngp);
+        }
     }
     *mp = m;
     return i;

@@ -570,49 +570,6 @@ __attribute__((target("avx512f,avx512vl"))) static int scan_cell512(const sd_wor
     }
     return n;
 }
-/* scan_cell512 in AVX2, 4 entries at a time: each entry's centre read as a row (a masked
- * 32-byte load) and turned into lanes, the reach test with the scalar loop's operations, then
- * the lowest-cell test on the entries within reach one by one; the last (k1 - k0) % 4 entries
- * through the same tests unvectorized. The same candidates in the same order. */
-__attribute__((target("avx2"))) static int scan_cell256(const sd_world *w, const int32_t *items, int k0, int k1,
-                                                        sd_vec3 pi, double bri, const int32_t *ri, int x, int y, int z,
-                                                        int32_t *js)
-{
-    const double *pos = &w->b.pos[0].x, *br = w->b.bound_r;
-    const double margin = w->def.margin;
-    const __m256d px = _mm256_set1_pd(pi.x), py = _mm256_set1_pd(pi.y), pz = _mm256_set1_pd(pi.z),
-                  b0 = _mm256_set1_pd(bri), mg = _mm256_set1_pd(margin);
-    const __m256i xyz = _mm256_setr_epi64x(-1, -1, -1, 0);
-    int n = 0, k = k0;
-    for (; k + 4 <= k1; k += 4) {
-        const int j0 = items[k], j1 = items[k + 1], j2 = items[k + 2], j3 = items[k + 3];
-        const __m256d r0 = _mm256_maskload_pd(pos + 3 * j0, xyz), r1 = _mm256_maskload_pd(pos + 3 * j1, xyz),
-                      r2 = _mm256_maskload_pd(pos + 3 * j2, xyz), r3 = _mm256_maskload_pd(pos + 3 * j3, xyz);
-        const __m256d lo01 = _mm256_unpacklo_pd(r0, r1), hi01 = _mm256_unpackhi_pd(r0, r1);
-        const __m256d lo23 = _mm256_unpacklo_pd(r2, r3), hi23 = _mm256_unpackhi_pd(r2, r3);
-        const __m256d dx = _mm256_sub_pd(px, _mm256_permute2f128_pd(lo01, lo23, 0x20)),
-                      dy = _mm256_sub_pd(py, _mm256_permute2f128_pd(hi01, hi23, 0x20)),
-                      dz = _mm256_sub_pd(pz, _mm256_permute2f128_pd(lo01, lo23, 0x31));
-        /* reach = bri + r_j + margin; out of reach when |pi - pj|^2 > reach^2 (v3_norm2's order) */
-        const __m256d reach = _mm256_add_pd(_mm256_add_pd(b0, _mm256_setr_pd(br[j0], br[j1], br[j2], br[j3])), mg);
-        const __m256d d2 =
-            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
-        int in = _mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(reach, reach), _CMP_NGT_UQ));
-        for (; in; in &= in - 1) {
-            const int j = items[k + __builtin_ctz((unsigned)in)];
-            js[n] = j;
-            n += lowest_shared_cell(w->range[j], ri, x, y, z);
-        }
-    }
-    for (; k < k1; k++) {
-        const int j = items[k];
-        const double reach = bri + br[j] + margin;
-        if (v3_norm2(v3_sub(pi, w->b.pos[j])) > reach * reach) continue;
-        js[n] = j;
-        n += lowest_shared_cell(w->range[j], ri, x, y, z);
-    }
-    return n;
-}
 #endif
 
 /* The body–body candidates (j > i) of body i, in the order of the serial scan. Returns
@@ -626,8 +583,9 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
     const double bri = b->bound_r[i], margin = w->def.margin;
     const sd_vec3 pi = b->pos[i];
 #ifdef SD_SCAN512
-    /* a moving body's entries 8 at a time in AVX-512, 4 in AVX2, where the CPU has it */
-    const int vec = fixed_i ? SD_SIMD_SCALAR : sd_simd_level();
+    /* a moving body's entries 8 at a time where the CPU has AVX-512 (an AVX2 form, 4 at a
+     * time, was measured and dropped: docs/performance.md §2-0000000) */
+    const int vec = !fixed_i && sd_simd512_on();
 #endif
     int e = w->reg0[i]; /* i's entries, in the order of the loops below (grid_fill) */
     for (int z = ri[2]; z <= ri[5]; z++)
@@ -652,12 +610,11 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
                     k = w->slot[e++] + 1; /* just past i's own entry in this cell */
                 }
 #ifdef SD_SCAN512
-                if (vec != SD_SIMD_SCALAR) {
+                if (vec) {
                     int32_t js[SD_SCAN_BUF + 8];
                     for (int k0 = k; k0 < kend; k0 += SD_SCAN_BUF) {
                         const int k1 = kend - k0 < SD_SCAN_BUF ? kend : k0 + SD_SCAN_BUF;
-                        const int nj = vec == SD_SIMD_AVX512 ? scan_cell512(w, items, k0, k1, pi, bri, ri, x, y, z, js)
-                                                             : scan_cell256(w, items, k0, k1, pi, bri, ri, x, y, z, js);
+                        const int nj = scan_cell512(w, items, k0, k1, pi, bri, ri, x, y, z, js);
                         for (int q = 0; q < nj; q++)
                             if (take_pair(w, i, js[q], hm, out)) return 1;
                     }

@@ -289,7 +289,10 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
                                 _mm256_permute2f128_pd(t0, t2, 0x31), _mm256_permute2f128_pd(t1, t3, 0x31)};
         const int idx[4] = {i0, i1, i2, i3};
         for (int l = 0; l < 4; l++)
-            if (sph >> l & 1) _mm256_maskstore_pd(&b->ext_force[idx[l]].x, xyz, row[l]);
+            if (sph >> l & 1) { /* x and y in one 16-byte store, z alone (no masked store: slow on AMD) */
+                _mm_storeu_pd(&b->ext_force[idx[l]].x, _mm256_castpd256_pd128(row[l]));
+                b->ext_force[idx[l]].z = _mm_cvtsd_f64(_mm256_extractf128_pd(row[l], 1));
+            }
     }
     return k;
 }

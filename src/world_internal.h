@@ -269,8 +269,9 @@ void sd_pairlist_free(sd_pairlist *l);
  * contacts already represented by a face or edge contact (used by the force pass and by
  * sd_world_spring_energy, so that the energy counts the springs the forces use). */
 void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to);
-/* The hand-written SIMD kernels: none (the scalar loops), AVX2 (contact.c's touch filter and
- * gather, 4 lanes) or AVX-512 (those in 8 lanes, neighbor.c's cell scan, run.c's fluid forces).
+/* The hand-written SIMD kernels: none (the scalar loops), AVX2 (contact.c's touch filter, gather
+ * and sums, run.c's fluid forces, 4 lanes) or AVX-512 (the filter, gather and fluid forces in 8
+ * lanes, the sums in 4, neighbor.c's cell scan).
  * The best the CPU has by default; the environment's SD_SIMD (scalar, avx2, avx512) caps it,
  * SD_NO_AVX512=1 keeps the scalar loops. The same bits at every level. */
 enum { SD_SIMD_SCALAR = 0, SD_SIMD_AVX2 = 1, SD_SIMD_AVX512 = 2 };

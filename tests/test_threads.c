@@ -138,9 +138,10 @@ int main(void)
     CHECK(h1 == h2);
     CHECK(c1 == c2);
     {
-        /* every level of the hand-written SIMD kernels the CPU has (scalar; AVX2 filter and
-         * gather; AVX-512 filter, gather and cell scan), on the same scene: log pairs sit among
-         * the sphere pairs of a chunk, where the SIMD filters hand them to the scalar path */
+        /* every level of the hand-written SIMD kernels the CPU has (scalar; AVX2 filter, gather
+         * and sums; AVX-512 filter, gather, sums and cell scan), on the same scene: log pairs sit
+         * among the sphere pairs of a chunk, where the SIMD filters hand them to the scalar
+         * path and the sums take the lanes between them */
         const int was = sd_simd_level_set(SD_SIMD_SCALAR);
         for (int level = SD_SIMD_SCALAR; level <= SD_SIMD_AVX512; level++) {
             sd_simd_level_set(level);
