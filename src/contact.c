@@ -599,9 +599,9 @@ static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m
 
 /* Which hand-written SIMD kernels run: SD_SIMD_SCALAR (none), SD_SIMD_AVX2 (contact.c's touch
  * filter, gather and sums and run.c's fluid forces in 4 lanes) or SD_SIMD_AVX512 (the filter,
- * gather and fluid forces in 8 lanes, the sums in 4, neighbor.c's cell scan), the best the CPU has unless the environment caps it (SD_SIMD =
- * scalar, avx2 or avx512; SD_NO_AVX512=1 keeps the scalar loops, as it always has). Decided once
- * at load, before any thread; every level gives the same bits (the tests run them all). */
+ * gather and fluid forces in 8 lanes, the sums in 4, neighbor.c's cell scan), the best the CPU has unless the
+ * environment caps it (SD_SIMD = scalar, avx2 or avx512; SD_NO_AVX512=1 keeps the scalar loops, as it always has).
+ * Decided once at load, before any thread; every level gives the same bits (the tests run them all). */
 static int simd_level;
 
 static int simd_cpu_level(void)
@@ -745,20 +745,15 @@ __attribute__((target("avx512f,avx512vl"))) static void ss_gather512(const sd_wo
     }
 }
 
-/* Four rows (x, y, z, -) of one vec3 array each into lanes: x, y, z of the four. */
-__attribute__((target("avx2"))) static inline void transpose_xyz(__m256d r0, __m256d r1, __m256d r2, __m256d r3,
-                                                                 __m256d *x, __m256d *y, __m256d *z)
+/* p[a[k]] - p[b[k]] for the four vec3 rows of the array p, in lanes x, y, z */
+__attribute__((target("avx2"))) static inline void diff_lanes(const double *p, const int32_t *a, const int32_t *b,
+                                                              __m256d *x, __m256d *y, __m256d *z)
 {
-    const __m256d lo01 = _mm256_unpacklo_pd(r0, r1), hi01 = _mm256_unpackhi_pd(r0, r1);
-    const __m256d lo23 = _mm256_unpacklo_pd(r2, r3), hi23 = _mm256_unpackhi_pd(r2, r3);
-    *x = _mm256_permute2f128_pd(lo01, lo23, 0x20);
-    *y = _mm256_permute2f128_pd(hi01, hi23, 0x20);
-    *z = _mm256_permute2f128_pd(lo01, lo23, 0x31);
+    sd_rows_to_lanes(_mm256_sub_pd(SD_XYZ_LOAD(p, a[0]), SD_XYZ_LOAD(p, b[0])),
+                     _mm256_sub_pd(SD_XYZ_LOAD(p, a[1]), SD_XYZ_LOAD(p, b[1])),
+                     _mm256_sub_pd(SD_XYZ_LOAD(p, a[2]), SD_XYZ_LOAD(p, b[2])),
+                     _mm256_sub_pd(SD_XYZ_LOAD(p, a[3]), SD_XYZ_LOAD(p, b[3])), x, y, z);
 }
-
-/* vec3 i of the array at p as (x, y, z, 0): a masked load, which reads nothing past z (the
- * last element of an array has nothing after it) */
-#define XYZ_LOAD(p, i) _mm256_maskload_pd((p) + 3 * (i), _mm256_setr_epi64x(-1, -1, -1, 0))
 
 /* Lane compress for AVX2, indexed by a 4-bit mask of kept lanes: the kept lanes moved down in
  * order. perm_pd: _mm256_permutevar8x32 indices for 4 doubles; shuf_i32: _mm_shuffle_epi8
@@ -809,10 +804,7 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
         const int b0 = v->b[i], b1 = v->b[i + 1], b2 = v->b[i + 2], b3 = v->b[i + 3];
         const int o0 = v->off[i], o1 = v->off[i + 1], o2 = v->off[i + 2], o3 = v->off[i + 3];
         __m256d dx, dy, dz;
-        transpose_xyz(_mm256_sub_pd(XYZ_LOAD(pos, a0), XYZ_LOAD(pos, b0)),
-                      _mm256_sub_pd(XYZ_LOAD(pos, a1), XYZ_LOAD(pos, b1)),
-                      _mm256_sub_pd(XYZ_LOAD(pos, a2), XYZ_LOAD(pos, b2)),
-                      _mm256_sub_pd(XYZ_LOAD(pos, a3), XYZ_LOAD(pos, b3)), &dx, &dy, &dz);
+        diff_lanes(pos, v->a + i, v->b + i, &dx, &dy, &dz);
         const __m256d ra = _mm256_setr_pd(rad[a0], rad[a1], rad[a2], rad[a3]);
         const __m256d rb = _mm256_setr_pd(rad[b0], rad[b1], rad[b2], rad[b3]);
         const __m256d rs = _mm256_add_pd(ra, rb);
@@ -868,18 +860,17 @@ __attribute__((target("avx2"))) static int ss_gather256(const sd_world *w, ss_ba
         const int a0 = q->ia[j], a1 = q->ia[j + 1], a2 = q->ia[j + 2], a3 = q->ia[j + 3];
         const int b0 = q->ib[j], b1 = q->ib[j + 1], b2 = q->ib[j + 2], b3 = q->ib[j + 3];
         __m256d x, y, z;
-        transpose_xyz(_mm256_sub_pd(XYZ_LOAD(vel, a0), XYZ_LOAD(vel, b0)),
-                      _mm256_sub_pd(XYZ_LOAD(vel, a1), XYZ_LOAD(vel, b1)),
-                      _mm256_sub_pd(XYZ_LOAD(vel, a2), XYZ_LOAD(vel, b2)),
-                      _mm256_sub_pd(XYZ_LOAD(vel, a3), XYZ_LOAD(vel, b3)), &x, &y, &z);
+        diff_lanes(vel, q->ia + j, q->ib + j, &x, &y, &z);
         _mm256_storeu_pd(q->vx + j, x);
         _mm256_storeu_pd(q->vy + j, y);
         _mm256_storeu_pd(q->vz + j, z);
-        transpose_xyz(XYZ_LOAD(om, a0), XYZ_LOAD(om, a1), XYZ_LOAD(om, a2), XYZ_LOAD(om, a3), &x, &y, &z);
+        sd_rows_to_lanes(SD_XYZ_LOAD(om, a0), SD_XYZ_LOAD(om, a1), SD_XYZ_LOAD(om, a2), SD_XYZ_LOAD(om, a3), &x, &y,
+                         &z);
         _mm256_storeu_pd(q->wax + j, x);
         _mm256_storeu_pd(q->way + j, y);
         _mm256_storeu_pd(q->waz + j, z);
-        transpose_xyz(XYZ_LOAD(om, b0), XYZ_LOAD(om, b1), XYZ_LOAD(om, b2), XYZ_LOAD(om, b3), &x, &y, &z);
+        sd_rows_to_lanes(SD_XYZ_LOAD(om, b0), SD_XYZ_LOAD(om, b1), SD_XYZ_LOAD(om, b2), SD_XYZ_LOAD(om, b3), &x, &y,
+                         &z);
         _mm256_storeu_pd(q->wbx + j, x);
         _mm256_storeu_pd(q->wby + j, y);
         _mm256_storeu_pd(q->wbz + j, z);

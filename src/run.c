@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "build.h"
+#include "core/simd.h"
 #include "fluid.h"
 #include "io_checkpoint.h"
 #include "io_vtk.h"
@@ -202,17 +203,6 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
         _mm512_mask_i32scatter_pd(ext + 2, sph, i3, _mm512_maskz_mov_pd(wet, tz), 8);
     }
 }
-/* Four rows (x, y, z, -) into lanes x, y, z (as contact.c's transpose_xyz). */
-__attribute__((target("avx2"))) static inline void rows_to_lanes(__m256d r0, __m256d r1, __m256d r2, __m256d r3,
-                                                                 __m256d *x, __m256d *y, __m256d *z)
-{
-    const __m256d lo01 = _mm256_unpacklo_pd(r0, r1), hi01 = _mm256_unpackhi_pd(r0, r1);
-    const __m256d lo23 = _mm256_unpacklo_pd(r2, r3), hi23 = _mm256_unpackhi_pd(r2, r3);
-    *x = _mm256_permute2f128_pd(lo01, lo23, 0x20);
-    *y = _mm256_permute2f128_pd(hi01, hi23, 0x20);
-    *z = _mm256_permute2f128_pd(lo01, lo23, 0x31);
-}
-
 /* The spheres among mov[k0 .. k1) in AVX2, 4 bodies at a time while 4 remain (returns where it
  * stopped; the rest go through the batch): fluid_spheres512's operations, so the same bits, with
  * each body's centre and velocity read as a row (a masked 32-byte load) and its force written
@@ -236,7 +226,6 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
                   gz = _mm256_set1_pd(p->gravity.z), bma = _mm256_set1_pd(be - al), A = _mm256_set1_pd(al),
                   five = _mm256_set1_pd(5.0), c45 = _mm256_set1_pd(4.0 / 5.0), pi = _mm256_set1_pd(M_PI),
                   c43pi = _mm256_set1_pd(4.0 / 3.0 * M_PI), XD = _mm256_set1_pd(fc->xd), zero = _mm256_setzero_pd();
-    const __m256i xyz = _mm256_setr_epi64x(-1, -1, -1, 0);
     const __m256d flow_ok = h > 0.0 ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero,
                   cap_ok = hd > 0.0 ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero,
                   capture = fc->capture ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero;
@@ -247,10 +236,10 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
                         (shape[i2] == SD_SHAPE_SPHERE) << 2 | (shape[i3] == SD_SHAPE_SPHERE) << 3;
         if (!sph) continue;
         __m256d px, py, pz, vx, vy, vz;
-        rows_to_lanes(_mm256_maskload_pd(pos + 3 * i0, xyz), _mm256_maskload_pd(pos + 3 * i1, xyz),
-                      _mm256_maskload_pd(pos + 3 * i2, xyz), _mm256_maskload_pd(pos + 3 * i3, xyz), &px, &py, &pz);
-        rows_to_lanes(_mm256_maskload_pd(vel + 3 * i0, xyz), _mm256_maskload_pd(vel + 3 * i1, xyz),
-                      _mm256_maskload_pd(vel + 3 * i2, xyz), _mm256_maskload_pd(vel + 3 * i3, xyz), &vx, &vy, &vz);
+        sd_rows_to_lanes(SD_XYZ_LOAD(pos, i0), SD_XYZ_LOAD(pos, i1), SD_XYZ_LOAD(pos, i2), SD_XYZ_LOAD(pos, i3), &px,
+                         &py, &pz);
+        sd_rows_to_lanes(SD_XYZ_LOAD(vel, i0), SD_XYZ_LOAD(vel, i1), SD_XYZ_LOAD(vel, i2), SD_XYZ_LOAD(vel, i3), &vx,
+                         &vy, &vz);
         const __m256d r = _mm256_setr_pd(rad[i0], rad[i1], rad[i2], rad[i3]);
         /* z = p.n - z_bed (sd_fluid_height), clamped at the bed as z < 0 ? 0 : z */
         const __m256d z = _mm256_sub_pd(
