@@ -749,10 +749,12 @@ __attribute__((target("avx512f,avx512vl"))) static void ss_gather512(const sd_wo
 __attribute__((target("avx2"))) static inline void diff_lanes(const double *p, const int32_t *a, const int32_t *b,
                                                               __m256d *x, __m256d *y, __m256d *z)
 {
-    sd_rows_to_lanes(_mm256_sub_pd(SD_XYZ_LOAD(p, a[0]), SD_XYZ_LOAD(p, b[0])),
-                     _mm256_sub_pd(SD_XYZ_LOAD(p, a[1]), SD_XYZ_LOAD(p, b[1])),
-                     _mm256_sub_pd(SD_XYZ_LOAD(p, a[2]), SD_XYZ_LOAD(p, b[2])),
-                     _mm256_sub_pd(SD_XYZ_LOAD(p, a[3]), SD_XYZ_LOAD(p, b[3])), x, y, z);
+    __m256d r[4];
+    sd_transpose4(_mm256_sub_pd(SD_XYZ_LOAD(p, a[0]), SD_XYZ_LOAD(p, b[0])),
+                  _mm256_sub_pd(SD_XYZ_LOAD(p, a[1]), SD_XYZ_LOAD(p, b[1])),
+                  _mm256_sub_pd(SD_XYZ_LOAD(p, a[2]), SD_XYZ_LOAD(p, b[2])),
+                  _mm256_sub_pd(SD_XYZ_LOAD(p, a[3]), SD_XYZ_LOAD(p, b[3])), r);
+    *x = r[0], *y = r[1], *z = r[2];
 }
 
 /* Lane compress for AVX2, indexed by a 4-bit mask of kept lanes: the kept lanes moved down in
@@ -785,8 +787,9 @@ __attribute__((constructor)) static void simd_tables_init(void)
 /* Step 1 of bb_chunk in AVX2, 4 pairs at a time: ss_filter_range's operations in its order
  * (same bits), the centres read as rows (a masked 32-byte load each) and turned into lanes,
  * the touching pairs packed into the batch by a permutation from a table and stored 4 lanes
- * wide (the arrays are padded by SS_PAD). A group of four with a log's pair goes through
- * ss_filter_range as it stands. Runs while 4 pairs remain and returns where it stopped. */
+ * wide (the arrays are padded by SS_PAD). The log pairs of a group take the scalar loop's path
+ * after its sphere lanes, in pair order, as in ss_filter512. Runs while 4 pairs remain and
+ * returns where it stopped. */
 __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w, const int32_t *ks, const soa_view *v,
                                                                int i, int n, int *used, ss_batch *q, int *mp, int *gen,
                                                                int *ngp)
@@ -859,46 +862,32 @@ __attribute__((target("avx2"))) static int ss_gather256(const sd_world *w, ss_ba
     for (; j + 4 <= m; j += 4) {
         const int a0 = q->ia[j], a1 = q->ia[j + 1], a2 = q->ia[j + 2], a3 = q->ia[j + 3];
         const int b0 = q->ib[j], b1 = q->ib[j + 1], b2 = q->ib[j + 2], b3 = q->ib[j + 3];
+        __m256d r[4];
         __m256d x, y, z;
         diff_lanes(vel, q->ia + j, q->ib + j, &x, &y, &z);
         _mm256_storeu_pd(q->vx + j, x);
         _mm256_storeu_pd(q->vy + j, y);
         _mm256_storeu_pd(q->vz + j, z);
-        sd_rows_to_lanes(SD_XYZ_LOAD(om, a0), SD_XYZ_LOAD(om, a1), SD_XYZ_LOAD(om, a2), SD_XYZ_LOAD(om, a3), &x, &y,
-                         &z);
-        _mm256_storeu_pd(q->wax + j, x);
-        _mm256_storeu_pd(q->way + j, y);
-        _mm256_storeu_pd(q->waz + j, z);
-        sd_rows_to_lanes(SD_XYZ_LOAD(om, b0), SD_XYZ_LOAD(om, b1), SD_XYZ_LOAD(om, b2), SD_XYZ_LOAD(om, b3), &x, &y,
-                         &z);
-        _mm256_storeu_pd(q->wbx + j, x);
-        _mm256_storeu_pd(q->wby + j, y);
-        _mm256_storeu_pd(q->wbz + j, z);
+        sd_transpose4(SD_XYZ_LOAD(om, a0), SD_XYZ_LOAD(om, a1), SD_XYZ_LOAD(om, a2), SD_XYZ_LOAD(om, a3), r);
+        _mm256_storeu_pd(q->wax + j, r[0]);
+        _mm256_storeu_pd(q->way + j, r[1]);
+        _mm256_storeu_pd(q->waz + j, r[2]);
+        sd_transpose4(SD_XYZ_LOAD(om, b0), SD_XYZ_LOAD(om, b1), SD_XYZ_LOAD(om, b2), SD_XYZ_LOAD(om, b3), r);
+        _mm256_storeu_pd(q->wbx + j, r[0]);
+        _mm256_storeu_pd(q->wby + j, r[1]);
+        _mm256_storeu_pd(q->wbz + j, r[2]);
         /* the slots as rows (feature and padding, shear x, y, z): a held contact's (was 0) kept */
-        const __m256d r0 = _mm256_loadu_pd((const double *)&hist[q->off[j]]),
-                      r1 = _mm256_loadu_pd((const double *)&hist[q->off[j + 1]]),
-                      r2 = _mm256_loadu_pd((const double *)&hist[q->off[j + 2]]),
-                      r3 = _mm256_loadu_pd((const double *)&hist[q->off[j + 3]]);
-        const __m256d lo01 = _mm256_unpacklo_pd(r0, r1), hi01 = _mm256_unpackhi_pd(r0, r1);
-        const __m256d lo23 = _mm256_unpacklo_pd(r2, r3), hi23 = _mm256_unpackhi_pd(r2, r3);
+        sd_transpose4(_mm256_loadu_pd((const double *)&hist[q->off[j]]),
+                      _mm256_loadu_pd((const double *)&hist[q->off[j + 1]]),
+                      _mm256_loadu_pd((const double *)&hist[q->off[j + 2]]),
+                      _mm256_loadu_pd((const double *)&hist[q->off[j + 3]]), r);
         const __m256d keep = _mm256_castsi256_pd(_mm256_cvtepi32_epi64(
             _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(q->was + j)), _mm_setzero_si128())));
-        _mm256_storeu_pd(q->sx + j, _mm256_and_pd(_mm256_permute2f128_pd(hi01, hi23, 0x20), keep));
-        _mm256_storeu_pd(q->sy + j, _mm256_and_pd(_mm256_permute2f128_pd(lo01, lo23, 0x31), keep));
-        _mm256_storeu_pd(q->sz + j, _mm256_and_pd(_mm256_permute2f128_pd(hi01, hi23, 0x31), keep));
+        _mm256_storeu_pd(q->sx + j, _mm256_and_pd(r[1], keep));
+        _mm256_storeu_pd(q->sy + j, _mm256_and_pd(r[2], keep));
+        _mm256_storeu_pd(q->sz + j, _mm256_and_pd(r[3], keep));
     }
     return j;
-}
-/* Four lanes x, y, z, u into four rows (x_k, y_k, z_k, u_k). */
-__attribute__((target("avx2"))) static inline void transpose_rows(__m256d x, __m256d y, __m256d z, __m256d u,
-                                                                  __m256d r[4])
-{
-    const __m256d t0 = _mm256_unpacklo_pd(x, y), t1 = _mm256_unpackhi_pd(x, y);
-    const __m256d t2 = _mm256_unpacklo_pd(z, u), t3 = _mm256_unpackhi_pd(z, u);
-    r[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
-    r[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
-    r[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
-    r[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
 }
 
 /* *p + (x, y, z) of row r, or *p - it (sub): add_pair's v3_add / v3_sub, x and y in one
@@ -926,10 +915,10 @@ __attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const s
     const __m256d mla = _mm256_xor_pd(_mm256_loadu_pd(q->la + j), sign),
                   mlb = _mm256_xor_pd(_mm256_loadu_pd(q->lb + j), sign);
     __m256d hr[4], fr[4], ta[4], tb[4];
-    transpose_rows(zero, _mm256_loadu_pd(q->sx + j), _mm256_loadu_pd(q->sy + j), _mm256_loadu_pd(q->sz + j), hr);
-    transpose_rows(_mm256_loadu_pd(q->fx + j), _mm256_loadu_pd(q->fy + j), _mm256_loadu_pd(q->fz + j), zero, fr);
-    transpose_rows(_mm256_mul_pd(nfx, mla), _mm256_mul_pd(nfy, mla), _mm256_mul_pd(nfz, mla), zero, ta);
-    transpose_rows(_mm256_mul_pd(nfx, mlb), _mm256_mul_pd(nfy, mlb), _mm256_mul_pd(nfz, mlb), zero, tb);
+    sd_transpose4(zero, _mm256_loadu_pd(q->sx + j), _mm256_loadu_pd(q->sy + j), _mm256_loadu_pd(q->sz + j), hr);
+    sd_transpose4(_mm256_loadu_pd(q->fx + j), _mm256_loadu_pd(q->fy + j), _mm256_loadu_pd(q->fz + j), zero, fr);
+    sd_transpose4(_mm256_mul_pd(nfx, mla), _mm256_mul_pd(nfy, mla), _mm256_mul_pd(nfz, mla), zero, ta);
+    sd_transpose4(_mm256_mul_pd(nfx, mlb), _mm256_mul_pd(nfy, mlb), _mm256_mul_pd(nfz, mlb), zero, tb);
     for (int k = 0; k < 4; k++) {
         const int ia = q->ia[j + k], ib = q->ib[j + k];
         _mm256_storeu_pd((double *)&hist[q->off[j + k]], hr[k]);

@@ -235,11 +235,10 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
         const int sph = (shape[i0] == SD_SHAPE_SPHERE) | (shape[i1] == SD_SHAPE_SPHERE) << 1 |
                         (shape[i2] == SD_SHAPE_SPHERE) << 2 | (shape[i3] == SD_SHAPE_SPHERE) << 3;
         if (!sph) continue;
-        __m256d px, py, pz, vx, vy, vz;
-        sd_rows_to_lanes(SD_XYZ_LOAD(pos, i0), SD_XYZ_LOAD(pos, i1), SD_XYZ_LOAD(pos, i2), SD_XYZ_LOAD(pos, i3), &px,
-                         &py, &pz);
-        sd_rows_to_lanes(SD_XYZ_LOAD(vel, i0), SD_XYZ_LOAD(vel, i1), SD_XYZ_LOAD(vel, i2), SD_XYZ_LOAD(vel, i3), &vx,
-                         &vy, &vz);
+        __m256d P[4], V[4];
+        sd_transpose4(SD_XYZ_LOAD(pos, i0), SD_XYZ_LOAD(pos, i1), SD_XYZ_LOAD(pos, i2), SD_XYZ_LOAD(pos, i3), P);
+        sd_transpose4(SD_XYZ_LOAD(vel, i0), SD_XYZ_LOAD(vel, i1), SD_XYZ_LOAD(vel, i2), SD_XYZ_LOAD(vel, i3), V);
+        const __m256d px = P[0], py = P[1], pz = P[2], vx = V[0], vy = V[1], vz = V[2];
         const __m256d r = _mm256_setr_pd(rad[i0], rad[i1], rad[i2], rad[i3]);
         /* z = p.n - z_bed (sd_fluid_height), clamped at the bed as z < 0 ? 0 : z */
         const __m256d z = _mm256_sub_pd(
@@ -272,10 +271,8 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
                       ty = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(ry, sk), _mm256_mul_pd(gy, bs))),
                       tz = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(rz, sk), _mm256_mul_pd(gz, bs)));
         /* back as rows (x, y, z, -), each sphere's written */
-        const __m256d t0 = _mm256_unpacklo_pd(tx, ty), t1 = _mm256_unpackhi_pd(tx, ty);
-        const __m256d t2 = _mm256_unpacklo_pd(tz, zero), t3 = _mm256_unpackhi_pd(tz, zero);
-        const __m256d row[4] = {_mm256_permute2f128_pd(t0, t2, 0x20), _mm256_permute2f128_pd(t1, t3, 0x20),
-                                _mm256_permute2f128_pd(t0, t2, 0x31), _mm256_permute2f128_pd(t1, t3, 0x31)};
+        __m256d row[4];
+        sd_transpose4(tx, ty, tz, zero, row);
         const int idx[4] = {i0, i1, i2, i3};
         for (int l = 0; l < 4; l++)
             if (sph >> l & 1) { /* x and y in one 16-byte store, z alone (no masked store: slow on AMD) */

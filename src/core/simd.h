@@ -13,15 +13,17 @@
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(SD_NO_CLONES)
 #include <immintrin.h>
 
-/* Four rows (x, y, z, -) of a vec3 array into lanes: x, y, z of the four (AVX2 kernels). */
-__attribute__((target("avx2"))) static inline void sd_rows_to_lanes(__m256d r0, __m256d r1, __m256d r2, __m256d r3,
-                                                                    __m256d *x, __m256d *y, __m256d *z)
+/* The 4 x 4 transpose (AVX2 kernels): r[k] = (a_k, b_k, c_k, d_k). Four rows (x, y, z, -) of a
+ * vec3 array become lanes x, y, z (r[0..2]); lanes x, y, z, - become rows. */
+__attribute__((target("avx2"))) static inline void sd_transpose4(__m256d a, __m256d b, __m256d c, __m256d d,
+                                                                 __m256d r[4])
 {
-    const __m256d lo01 = _mm256_unpacklo_pd(r0, r1), hi01 = _mm256_unpackhi_pd(r0, r1);
-    const __m256d lo23 = _mm256_unpacklo_pd(r2, r3), hi23 = _mm256_unpackhi_pd(r2, r3);
-    *x = _mm256_permute2f128_pd(lo01, lo23, 0x20);
-    *y = _mm256_permute2f128_pd(hi01, hi23, 0x20);
-    *z = _mm256_permute2f128_pd(lo01, lo23, 0x31);
+    const __m256d lo_ab = _mm256_unpacklo_pd(a, b), hi_ab = _mm256_unpackhi_pd(a, b);
+    const __m256d lo_cd = _mm256_unpacklo_pd(c, d), hi_cd = _mm256_unpackhi_pd(c, d);
+    r[0] = _mm256_permute2f128_pd(lo_ab, lo_cd, 0x20);
+    r[1] = _mm256_permute2f128_pd(hi_ab, hi_cd, 0x20);
+    r[2] = _mm256_permute2f128_pd(lo_ab, lo_cd, 0x31);
+    r[3] = _mm256_permute2f128_pd(hi_ab, hi_cd, 0x31);
 }
 
 /* vec3 i of the array at p (3 doubles each) as the row (x, y, z, 0): a masked load, which reads
