@@ -5,8 +5,9 @@
  * triangles, gravity vertical. The bed depth, the local structure and the contact count per
  * sphere are those of the flume's dense bed at every N, so the cost per particle-step should
  * not depend on N. After a short warm-up, `steps` steps are timed.
- * usage: bench_scale SETTLED.data [steps] [--threads N] [--big]
- *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/50). */
+ * usage: bench_scale SETTLED.data [steps] [--threads N] [--big] [--only N]
+ *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/50); --only N runs
+ *   that one size for `steps` steps (for profiling). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -130,26 +131,29 @@ static double run_case(int n, long steps)
 int main(int argc, char **argv)
 {
     long steps = 2000;
-    int threads = 1, big = 0;
+    int threads = 1, big = 0, only = 0;
     const char *path = NULL;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--threads") && i + 1 < argc)
             threads = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--big"))
             big = 1;
+        else if (!strcmp(argv[i], "--only") && i + 1 < argc)
+            only = atoi(argv[++i]);
         else if (!path)
             path = argv[i];
         else
             steps = atol(argv[i]);
     }
     if (!path || read_data(path)) {
-        fprintf(stderr, "usage: %s SETTLED.data [steps] [--threads N] [--big]\n", argv[0]);
+        fprintf(stderr, "usage: %s SETTLED.data [steps] [--threads N] [--big] [--only N]\n", argv[0]);
         return 2;
     }
 #ifdef _OPENMP
     omp_set_num_threads(threads);
 #endif
     printf("threads %d, bed of %d spheres tiled\n", threads, g_n);
+    if (only > 0) return run_case(only, steps) > 0 ? 0 : 1;
     run_case(1000, steps);
     run_case(10000, steps / 2);
     run_case(100000, steps / 10);
