@@ -55,10 +55,10 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
             const int i = mov[k];
             const sd_vec3 f = v3_add(b->force[i], b->ext_force[i]);
             const sd_vec3 acc = v3_madd(g, f, b->inv_mass[i]);
-            /* the new velocity and centre kept in registers: read back from the store right
-             * after being written (x and y by one 16-byte store), the y component waited for
-             * the store on AMD Zen 3 (no forwarding from a store's upper half): a tenth of this
-             * loop's samples. The same values either way. */
+            /* the new velocity and centre kept in registers, not read back from the store
+             * right after being written (x and y by one 16-byte store): on AMD Zen 3 a tenth
+             * of this loop's samples sat on the read of y, as if it waited for the store. The
+             * same values either way. */
             const sd_vec3 vn = v3_madd(b->vel[i], acc, dt);
             const sd_vec3 pn = v3_madd(b->pos[i], vn, dt);
             b->vel[i] = vn;
