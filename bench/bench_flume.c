@@ -70,7 +70,8 @@ static double phase(sd_world *w, const char *name, long steps, int n)
     printf("PHASE %-7s steps %7ld wall %8.3f s  particle-steps/s %.4e  contacts %6ld  | neighbor %.3f contact %.3f "
            "gather %.3f integrate %.3f rebuilds %ld candidates %d+%d near %d\n",
            name, steps, wall, ps, sd_world_contact_count(w), t1.neighbor - t0.neighbor, t1.contact - t0.contact,
-           t1.gather - t0.gather, t1.integrate - t0.integrate, t1.rebuilds - t0.rebuilds, w->bb.n, w->bt.n, w->near_n);
+           t1.gather - t0.gather, t1.integrate - t0.integrate, t1.rebuilds - t0.rebuilds, w->bb.n, w->bt.n,
+           sd_contact_near_count(w));
     fflush(stdout);
     return ps;
 }

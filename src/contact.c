@@ -1377,39 +1377,105 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q
     return count;
 }
 
-/* The candidates k0 .. k1-1 worth testing (near_update), into out in ascending order; returns
- * how many. */
-static int near_filter(sd_world *w, double skin, int k0, int k1, int32_t *out, sd_pair_soa *soa)
+/* Whether candidate p can touch before the bodies drift by half the skin (near_update): its
+ * gap is below the skin. */
+static inline int near_test(const sd_world *w, double skin, const sd_pair *p)
 {
-    const sd_pair *pairs = w->bb.p;
     const sd_vec3 *pos = w->b.pos;
     const double *rad = w->b.radius;
-    sd_hist *hist = w->bb.hist;
+    if (p->kind == SD_PAIR_SS) {
+        const double reach = rad[p->a] + rad[p->b] + skin;
+        return v3_norm2(v3_sub(pos[p->a], pos[p->b])) <= reach * reach;
+    }
+    /* a log lies within its radius of its axis segment: a sphere (or the other log's bounding
+     * sphere) farther than the radii and the skin from it cannot touch */
+    const sd_cyl c = sd_body_cyl(&w->b, p->b);
+    const double ra = p->kind == SD_PAIR_SC ? rad[p->a] : w->b.bound_r[p->a];
+    const sd_vec3 d = v3_sub(pos[p->a], c.c);
+    double t = v3_dot(d, c.a);
+    t = t > c.hl ? c.hl : (t < -c.hl ? -c.hl : t);
+    const double reach = ra + c.r + skin;
+    return v3_norm2(v3_madd(d, c.a, -t)) <= reach * reach;
+}
+
+/* near_test of candidates k0 .. k1-1 into keep[k - k0] (1 or 0), then what it means for each:
+ * a pair left out has its springs cleared, as the pass would clear them. Only a pair that was
+ * near (near_mark, or any after a rebuild: fresh) can hold a spring: the others' slots are not
+ * touched, which spares the making a line of the springs for each candidate. The answers
+ * first, alone: the loop that stored each one's consequences as it went ran at 18 ns a
+ * candidate. */
+#ifdef SD_FILTER512
+/* near_test of candidates k0 .. while 4 remain, the sphere pairs' in AVX2 lanes (the centres
+ * as rows, near_test's operations; a log's pair through near_test); returns where it stopped. */
+__attribute__((target("avx2"))) static int near_test256(const sd_world *w, double skin, int k0, int k1,
+                                                        uint8_t *restrict keep)
+{
+    const double *pos = &w->b.pos[0].x, *rad = w->b.radius;
+    const sd_pair *pairs = w->bb.p;
+    const __m256d sk = _mm256_set1_pd(skin);
+    int k = k0;
+    for (; k + 4 <= k1; k += 4) {
+        const sd_pair *p = pairs + k;
+        const int32_t a[4] = {p[0].a, p[1].a, p[2].a, p[3].a}, b[4] = {p[0].b, p[1].b, p[2].b, p[3].b};
+        __m256d dx, dy, dz;
+        diff_lanes(pos, a, b, &dx, &dy, &dz);
+        const __m256d reach = _mm256_add_pd(_mm256_add_pd(_mm256_setr_pd(rad[a[0]], rad[a[1]], rad[a[2]], rad[a[3]]),
+                                                          _mm256_setr_pd(rad[b[0]], rad[b[1]], rad[b[2]], rad[b[3]])),
+                                            sk);
+        const __m256d d2 =
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
+        const int in = _mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(reach, reach), _CMP_LE_OQ));
+        for (int l = 0; l < 4; l++)
+            keep[k + l - k0] = (uint8_t)(p[l].kind == SD_PAIR_SS ? in >> l & 1 : near_test(w, skin, &p[l]));
+    }
+    return k;
+}
+#endif
+
+static void near_keep_range(sd_world *w, double skin, int k0, int k1, int fresh, uint8_t *restrict keep)
+{
+    const sd_pair *restrict pairs = w->bb.p;
+    int k = k0;
+#ifdef SD_FILTER512
+    if (simd_level >= SD_SIMD_AVX2) k = near_test256(w, skin, k0, k1, keep);
+#endif
+    for (; k < k1; k++)
+        keep[k - k0] = (uint8_t)near_test(w, skin, &pairs[k]);
+    uint8_t *restrict mark = w->near_mark;
+    sd_hist *restrict hist = w->bb.hist;
+    for (int j = k0; j < k1; j++) {
+        const int kp = keep[j - k0];
+        if ((kp ^ 1) & (fresh | mark[j])) { /* (one branch, seldom taken: kp is a coin toss) */
+            const sd_pair *p = &pairs[j];
+            for (int s = 0; s < p->cap; s++)
+                hist[p->off + s].feature = -1;
+        }
+        mark[j] = (uint8_t)kp;
+    }
+}
+
+/* near_mark sized for the candidates; returns whether this making of the near pairs is the
+ * first since the rebuild (near_keep's fresh), or -1 when out of memory. */
+static int near_mark_ready(sd_world *w)
+{
+    if (sd_grow((void **)&w->near_mark, &w->near_mark_cap, 2 * (w->bb.n + 1), 1)) return -1;
+    const int fresh = w->near_mark_rb != w->timers.rebuilds;
+    w->near_mark_rb = w->timers.rebuilds;
+    return fresh;
+}
+
+/* The candidates k0 .. k1-1 worth testing (near_update), into out in ascending order, with
+ * their records; returns how many. */
+static int near_filter(sd_world *w, double skin, int k0, int k1, int fresh, uint8_t *keep, int32_t *out,
+                       sd_pair_soa *soa)
+{
+    near_keep_range(w, skin, k0, k1, fresh, keep);
+    const sd_pair *pairs = w->bb.p;
     int m = 0;
     for (int k = k0; k < k1; k++) {
-        const sd_pair *p = &pairs[k];
-        int keep = 1;
-        if (p->kind == SD_PAIR_SS) {
-            const double reach = rad[p->a] + rad[p->b] + skin;
-            keep = v3_norm2(v3_sub(pos[p->a], pos[p->b])) <= reach * reach;
-            hist[p->off].feature |= keep - 1; /* -1 when left out: no branch on keep */
-        } else {
-            /* a log lies within its radius of its axis segment: a sphere (or the other log's
-             * bounding sphere) farther than the radii and the skin from it cannot touch */
-            const sd_cyl c = sd_body_cyl(&w->b, p->b);
-            const double ra = p->kind == SD_PAIR_SC ? rad[p->a] : w->b.bound_r[p->a];
-            const sd_vec3 d = v3_sub(pos[p->a], c.c);
-            double t = v3_dot(d, c.a);
-            t = t > c.hl ? c.hl : (t < -c.hl ? -c.hl : t);
-            const double reach = ra + c.r + skin;
-            keep = v3_norm2(v3_madd(d, c.a, -t)) <= reach * reach;
-            if (!keep)
-                for (int s = 0; s < p->cap; s++)
-                    hist[p->off + s].feature = -1;
-        }
         out[m] = k;
-        if (soa) pair_soa_set(soa, m, p); /* (its records too, while the record is at hand) */
-        m += keep;
+        pair_soa_set(soa, m, &pairs[k]); /* (its records too, while the record is at hand) */
+        m += keep[k - k0];
     }
     return m;
 }
@@ -1431,45 +1497,19 @@ static sd_owned *owned_get(sd_world *w)
 static sd_status near_update(sd_world *w)
 {
     const int nbb = w->bb.n;
+    /* (near_soa_version: not remade since by the owners' path, which keeps its own lists) */
     if (w->near_stamp == w->timers.rebuilds && w->near_nbb == nbb && w->near && !w->rebuild_every_step &&
-        2.0 * w->near_drift < 0.999 * w->near_skin)
+        w->near_soa_version == w->near_version + 1 && 2.0 * w->near_drift < 0.999 * w->near_skin)
         return SD_OK;
     const double skin = SD_NEAR_SKIN * w->def.margin;
     if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    int m = 0, soa_made = 0;
-    const int T = bb_owners(w);
-#ifdef _OPENMP
-    if (T > 1) {
-        /* each thread filters a chunk into the scratch at the chunk's start, then moves its
-         * part to its place: the list of one thread */
-        sd_owned *o = owned_get(w);
-        if (!o || sd_grow((void **)&o->tmp, &o->tmp_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-        int cnt[SD_MAX_OWNERS + 1];
-#pragma omp parallel num_threads(T)
-        {
-            const int tid = omp_get_thread_num(), nthr = omp_get_num_threads();
-            const int k0 = (int)((long)nbb * tid / nthr), k1 = (int)((long)nbb * (tid + 1) / nthr);
-            cnt[tid] = near_filter(w, skin, k0, k1, o->tmp + k0, NULL);
-#pragma omp barrier
-            int off = 0;
-            for (int t = 0; t < tid; t++)
-                off += cnt[t];
-            memcpy(w->near + off, o->tmp + k0, (size_t)cnt[tid] * sizeof(int32_t));
-            if (tid == nthr - 1) m = off + cnt[tid]; /* the last part ends the list */
-        }
-    } else
-#endif
-    {
-        if (pair_soa_reserve(&w->near_soa, nbb + 1)) return SD_ERR_NOMEM;
-        m = near_filter(w, skin, 0, nbb, w->near, &w->near_soa);
-        soa_made = 1;
-    }
-    (void)T;
-    w->near_n = m;
+    const int fresh = near_mark_ready(w);
+    if (fresh < 0 || pair_soa_reserve(&w->near_soa, nbb + 1)) return SD_ERR_NOMEM;
+    w->near_n = near_filter(w, skin, 0, nbb, fresh, w->near_mark + nbb + 1, w->near, &w->near_soa);
     w->near_nbb = nbb;
     w->near_stamp = w->timers.rebuilds;
     w->near_version++;
-    w->near_soa_version = soa_made ? w->near_version + 1 : 0; /* (two threads: the owners' own) */
+    w->near_soa_version = w->near_version + 1;
     w->near_drift = 0.0;
     w->near_skin = skin;
     return SD_OK;
@@ -1585,16 +1625,36 @@ static int uneven(sd_owned *o)
     return 1;
 }
 
-/* The body ranges, owner lists and cross pairs for T owners, from the current near list
- * (O(pairs) on all threads, at each change of the near list). */
+/* The first candidate at or after k0 whose lower body is at least i (the candidates are
+ * generated by their lower body, ascending). */
+static int first_led_by(const sd_world *w, int k0, int i)
+{
+    int lo = k0, hi = w->bb.n;
+    while (lo < hi) {
+        const int mid = (lo + hi) >> 1;
+        if (pair_lead(&w->b, &w->bb.p[mid]) < i)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The body ranges, the owners' near lists and the cross pairs for T owners, remade when the
+ * near pairs would change (near_update's rule: a rebuild, or a drift past half the near skin)
+ * or the owners' times drift apart. Each owner filters its own candidates (those whose lower
+ * body it owns) into its own segment, in pair order: the pairs it owns both sides of with
+ * their records, and a mark for each cross pair. Which candidates are near does not change
+ * the bits (near_update), so a remake for balance filters afresh. O(candidates) on all
+ * threads; no list is copied from one thread's work to another's. */
 #ifdef _OPENMP
 static sd_status owned_update(sd_world *w, int T)
 {
-    const int n = w->b.n, nbb = w->near_n;
-    const int32_t *near = w->near;
+    const int n = w->b.n, nbb = w->bb.n;
     sd_owned *o = w->owned;
-    if (o && o->stamp == w->near_version && o->T == T && o->n == n && o->nbb == nbb && o->pairs == w->bb.p &&
-        !uneven(o))
+    const int same = o && o->T == T && o->n == n && o->nbb == nbb && o->pairs == w->bb.p && o->rb == w->timers.rebuilds;
+    if (same && o->stamp == w->near_version && w->near_stamp == w->timers.rebuilds && !w->rebuild_every_step &&
+        2.0 * w->near_drift < 0.999 * w->near_skin && !uneven(o))
         return SD_OK;
     if (!(o = owned_get(w))) return SD_ERR_NOMEM;
     if (o->T != T) { /* new: even shares */
@@ -1606,101 +1666,87 @@ static sd_status owned_update(sd_world *w, int T)
         rebalance(o->fo, o->tau, T);
     }
     o->passes = 0;
-    /* split by pairs, not bodies: the pairs are generated in order of their lower body
-     * index, so range t starts at the lower body of pair nbb fo[t] */
+    /* split by candidates, not bodies (they are generated by their lower body, ascending):
+     * range t starts at the lower body of candidate nbb fo[t] */
     o->B[0] = 0;
     o->B[T] = n;
     for (int t = 1; t < T; t++) {
         long k = (long)(nbb * o->fo[t]);
         if (k > nbb - 1) k = nbb - 1;
         if (k < 0) k = 0;
-        const sd_pair *p = &w->bb.p[nbb > 0 ? near[k] : 0];
-        o->B[t] = nbb > 0 ? pair_lead(&w->b, p) : 0;
+        o->B[t] = nbb > 0 ? pair_lead(&w->b, &w->bb.p[k]) : 0;
         if (o->B[t] < o->B[t - 1]) o->B[t] = o->B[t - 1];
     }
+    o->K[0] = 0;
+    o->K[T] = nbb;
+    for (int t = 1; t < T; t++)
+        o->K[t] = first_led_by(w, o->K[t - 1], o->B[t]);
     if (o->n != n || o->nf_stamp != w->timers.rebuilds) {
         o->nf = n;
         while (o->nf > 0 && sd_body_is_bed(&w->b, o->nf - 1))
             o->nf--;
         o->nf_stamp = w->timers.rebuilds;
     }
-    /* owner t's list holds its own pairs and the cross pairs touching it, in ascending pair
-     * order; made by T threads over T chunks of the near list: count, place, fill */
-    _Static_assert(SD_MAX_OWNERS <= 64, "the per-chunk counts live on the stack");
-    int cnt[SD_MAX_OWNERS][SD_MAX_OWNERS], ccross[SD_MAX_OWNERS + 1];
-    int nomem = 0;
+    /* owner t's segment, its cross pairs (cross[K[t] ..]) and its counts of cross entries
+     * (xpre + K[t] + 2t) all sit at its candidates' place: no owner waits for another's */
+    if (sd_grow((void **)&o->list, &o->list_cap, nbb + 1, sizeof(int32_t)) ||
+        sd_grow((void **)&o->xpre, &o->xpre_cap, nbb + 2 * T + 2, sizeof(int32_t)) ||
+        sd_grow((void **)&o->cross, &o->cap, nbb + 1, sizeof(int32_t)) ||
+        sd_grow((void **)&o->xo, &o->xo_cap, nbb + 1, sizeof(uint8_t)) ||
+        sd_grow((void **)&o->xout, &o->xout_cap, nbb + 1, sizeof(sd_pair_out)) ||
+        sd_grow((void **)&o->xact, &o->xact_cap, nbb + 1, sizeof(uint8_t)) || pair_soa_reserve(&o->soa, nbb + 1) ||
+        pair_soa_reserve(&o->xsoa, nbb + 1))
+        return SD_ERR_NOMEM;
+    const double skin = SD_NEAR_SKIN * w->def.margin;
+    const int fresh = near_mark_ready(w);
+    if (fresh < 0) return SD_ERR_NOMEM;
 #pragma omp parallel num_threads(T)
     {
-        const int c = omp_get_thread_num(), nc = omp_get_num_threads();
-        const int j0 = (int)((long)nbb * c / nc), j1 = (int)((long)nbb * (c + 1) / nc);
-        int *mine = cnt[c];
-        for (int t = 0; t < T; t++)
-            mine[t] = 0;
-        int nx = 0;
-        for (int j = j0; j < j1; j++) {
-            int ta, tb;
-            pair_owners(&w->b, &w->bb.p[near[j]], o->B, T, &ta, &tb);
-            mine[ta]++;
-            if (ta != tb) {
-                mine[tb]++;
-                nx++;
-            }
-        }
-        ccross[c] = nx;
-#pragma omp barrier
-#pragma omp single
-        {
-            /* cnt[c][t] becomes where chunk c's entries of owner t go; ccross[c] likewise */
-            int at = 0;
-            for (int t = 0; t < T; t++) {
-                o->start[t] = at;
-                for (int q = 0; q < nc; q++) {
-                    const int k = cnt[q][t];
-                    cnt[q][t] = at;
-                    at += k;
-                }
-            }
-            o->start[T] = at;
-            int xc = 0;
-            for (int q = 0; q < nc; q++) {
-                const int k = ccross[q];
-                ccross[q] = xc;
-                xc += k;
-            }
-            o->ncross = xc;
-            nomem = sd_grow((void **)&o->cross, &o->cap, xc > 0 ? xc : 1, sizeof(int32_t)) ||
-                    sd_grow((void **)&o->xout, &o->xout_cap, xc > 0 ? xc : 1, sizeof(sd_pair_out)) ||
-                    sd_grow((void **)&o->xact, &o->xact_cap, xc > 0 ? xc : 1, sizeof(uint8_t)) ||
-                    sd_grow((void **)&o->list, &o->list_cap, at > 0 ? at : 1, sizeof(int32_t)) ||
-                    pair_soa_reserve(&o->soa, at + 1) || pair_soa_reserve(&o->xsoa, xc + 1);
-        }
-        if (!nomem) {
-            int xc = ccross[c];
-            for (int j = j0; j < j1; j++) {
-                const int k = near[j];
+        const int tid = omp_get_thread_num(), nthr = omp_get_num_threads();
+        for (int t = tid; t < T; t += nthr) {
+            const int k0 = o->K[t], k1 = o->K[t + 1];
+            uint8_t *kp = w->near_mark + nbb + 1 + k0;
+            near_keep_range(w, skin, k0, k1, fresh, kp);
+            /* the near ones into its segment in pair order, each cross pair as ~c; xp[j - k0]
+             * counts the cross entries before entry j */
+            const unsigned i0 = (unsigned)o->B[t], len = (unsigned)(o->B[t + 1] - o->B[t]);
+            int32_t *xp = o->xpre + k0 + 2 * t;
+            int m = k0, xc = k0;
+            xp[0] = 0;
+            for (int k = k0; k < k1; k++) {
+                /* every candidate written, kept or not (then overwritten): no branch on the
+                 * answer, close to a coin toss */
                 const sd_pair *p = &w->bb.p[k];
-                int ta, tb;
-                pair_owners(&w->b, p, o->B, T, &ta, &tb);
-                /* each entry's record too, field by field, while the record is at hand */
-                if (ta == tb) {
-                    pair_soa_set(&o->soa, mine[ta], p);
-                    o->list[mine[ta]++] = k;
-                    continue;
+                const int keep = kp[k - k0];
+                int cross = 0, ta = t, tb = t;
+                if (!((unsigned)p->a - i0 < len && (unsigned)p->b - i0 < len)) { /* (both its own: most) */
+                    pair_owners(&w->b, p, o->B, T, &ta, &tb);
+                    cross = ta != tb;
                 }
-                o->list[mine[ta]++] = ~xc;
-                o->list[mine[tb]++] = ~xc;
-                pair_soa_set(&o->xsoa, xc, p);
-                o->cross[xc++] = k;
+                pair_soa_set(&o->soa, m, p);
+                o->list[m] = k;
+                if (cross & keep) { /* few */
+                    o->cross[xc] = k;
+                    o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
+                    pair_soa_set(&o->xsoa, xc, p);
+                    o->list[m] = ~xc++;
+                }
+                m += keep;
             }
+            o->seg1[t] = m;
+            for (int j = k0, q = 0; j < m; j++) {
+                q += o->list[j] < 0;
+                xp[j - k0 + 1] = q;
+            }
+            o->xb[t] = xc; /* its cross pairs: cross[K[t] .. xb[t]-1] */
         }
     }
-    if (nomem) return SD_ERR_NOMEM;
-    const int nl = o->start[T];
-    if (sd_grow((void **)&o->xpre, &o->xpre_cap, nl + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    o->xpre[0] = 0;
-    for (int j = 0; j < nl; j++)
-        o->xpre[j + 1] = o->xpre[j] + (o->list[j] < 0);
+    w->near_version++;
+    w->near_stamp = w->timers.rebuilds;
+    w->near_drift = 0.0;
+    w->near_skin = skin;
     o->stamp = w->near_version;
+    o->rb = w->timers.rebuilds;
     o->T = T;
     o->n = n;
     o->nbb = nbb;
@@ -1716,7 +1762,10 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
 {
     sd_bodies *b = &w->b;
     sd_owned *o = w->owned;
-    const int nc = o->ncross;
+    /* the cross pairs' chunks: each owner's block cut in chunks of SS_CHUNK, taken in turn */
+    int nch = 0;
+    for (int t = 0; t < T; t++)
+        nch += (o->xb[t] - o->K[t] + SS_CHUNK - 1) / SS_CHUNK;
     long count = 0;
     int moved = 0;
     double v2 = 0.0, dc = 0.0, xf = -INFINITY;
@@ -1730,8 +1779,14 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
          * packing step was spent waiting here; split in two halves by count, one half often
          * took twice the other's time on the sphere bench) */
 #pragma omp for schedule(dynamic, 1) nowait
-        for (int c = 0; c < nc; c += SS_CHUNK) {
-            const int n = nc - c < SS_CHUNK ? nc - c : SS_CHUNK;
+        for (int h = 0; h < nch; h++) {
+            int t = 0, c = h;
+            while (c >= (o->xb[t] - o->K[t] + SS_CHUNK - 1) / SS_CHUNK) { /* (T blocks: a few steps) */
+                c -= (o->xb[t] - o->K[t] + SS_CHUNK - 1) / SS_CHUNK;
+                t++;
+            }
+            c = o->K[t] + c * SS_CHUNK;
+            const int n = o->xb[t] - c < SS_CHUNK ? o->xb[t] - c : SS_CHUNK;
             const soa_view v = soa_at(&o->xsoa, c);
             bb_chunk(w, law, &o->cross[c], &v, n, x->out, x->used, &x->q, NULL);
             /* into the cross pairs' own arrays, in cross order: the lines each owner then
@@ -1749,10 +1804,22 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
             const int i0 = o->B[t], i1 = o->B[t + 1], i1f = i1 < o->nf ? i1 : o->nf;
             for (int i = i0; i < i1f; i++)
                 if (!sd_body_is_bed(b, i)) b->force[i] = b->torque[i] = v3(0, 0, 0);
-            for (int j0 = o->start[t]; j0 < o->start[t + 1]; j0 += SS_CHUNK) {
-                const int j1 = o->start[t + 1] - j0 < SS_CHUNK ? o->start[t + 1] : j0 + SS_CHUNK;
+            /* the cross pairs of lower owners that touch its bodies, ascending: each comes
+             * before every pair of its own (a lower lower body) */
+            for (int s = 0; s < t; s++)
+                for (int c = o->K[s]; c < o->xb[s]; c++)
+                    if (o->xo[c] == t && o->xact[c]) {
+                        const sd_pair *p = &w->bb.p[o->cross[c]];
+                        const int own_a = p->a >= i0 && p->a < i1;
+                        add_pair(b, own_a ? p->a : p->b, !own_a, &o->xout[c]);
+                    }
+            /* then its own segment, with its cross pairs in their places */
+            const int s0 = o->K[t], s1 = o->seg1[t];
+            const int32_t *xp = o->xpre + s0 + 2 * t;
+            for (int j0 = s0; j0 < s1; j0 += SS_CHUNK) {
+                const int j1 = s1 - j0 < SS_CHUNK ? s1 : j0 + SS_CHUNK;
                 /* a chunk without cross pairs adds its pairs onto the bodies itself */
-                if (o->xpre[j1] == o->xpre[j0]) {
+                if (xp[j1 - s0] == xp[j0 - s0]) {
                     const int n = j1 - j0;
                     const soa_view v = soa_at(&o->soa, j0);
                     bb_chunk(w, law, &o->list[j0], &v, n, x->out, x->used, &x->q, b);
@@ -1826,8 +1893,6 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
     long count = 0;
     const int T = bb_owners(w);
     if (integrated) *integrated = 0;
-    sd_status nst = near_update(w);
-    if (nst) return nst;
     if (w->bb_scratch_n < T) {
         free(w->bb_scratch);
         w->bb_scratch_n = 0;
@@ -1850,6 +1915,8 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
     } else
 #endif
     {
+        sd_status nst = near_update(w);
+        if (nst) return nst;
         count = bb_serial_pass(w, &law, w->bb_scratch);
         if (count < 0) return SD_ERR_NOMEM;
         count += bt_range(w, &law, 0, w->b.n, &((bb_scratch *)w->bb_scratch)[0].wq);
@@ -1857,6 +1924,18 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
     w->contacts = count;
     w->wall_force_stale = 1;
     return SD_OK;
+}
+
+int sd_contact_near_count(const sd_world *w)
+{
+    const sd_owned *o = w->owned;
+    if (o && o->stamp == w->near_version) {
+        int m = 0;
+        for (int t = 0; t < o->T; t++)
+            m += o->seg1[t] - o->K[t];
+        return m;
+    }
+    return w->near_soa_version == w->near_version + 1 ? w->near_n : 0;
 }
 
 /* Loads on the walls, in pair order (serial: few pairs, fixed order), from the wall pairs'

@@ -61,6 +61,7 @@ sd_status sd_world_create(const sd_world_def *def, sd_world **out)
     w->need_rebuild = 1;
     w->mov_stamp = -1;
     w->near_stamp = -1;
+    w->near_mark_rb = -1;
 #ifdef _OPENMP
     if (def->threads > 0) omp_set_num_threads(def->threads);
 #endif
@@ -80,13 +81,13 @@ void sd_world_destroy(sd_world *w)
     free(w->bt_man);
     if (w->owned) {
         free(w->owned->cross);
+        free(w->owned->xo);
         free(w->owned->xout);
         free(w->owned->xact);
         free(w->owned->list);
         free(w->owned->xpre);
         sd_pair_soa_free(&w->owned->soa);
         sd_pair_soa_free(&w->owned->xsoa);
-        free(w->owned->tmp);
     }
     free(w->owned);
     free(w->bb_scratch);
@@ -100,6 +101,7 @@ void sd_world_destroy(sd_world *w)
     free(w->trange);
     free(w->mov);
     free(w->near);
+    free(w->near_mark);
     sd_pair_soa_free(&w->near_soa);
     free(w);
 }

@@ -110,28 +110,37 @@ typedef struct {
     int cap;
 } sd_pair_soa;
 
-/* Body ranges and cross pairs of the parallel body-body pass (contact.c), derived from the
- * pair list: rebuilt with it, never saved. */
+/* Body ranges, near lists and cross pairs of the parallel body-body pass (contact.c), derived
+ * from the pair list: remade with the near pairs, never saved. */
 #define SD_MAX_OWNERS 64
 typedef struct {
-    long stamp; /* timers.rebuilds of the pair list it was made from */
+    long stamp; /* w->near_version it was made as (the near lists of both paths count) */
     int T, n, nbb;
     int nf; /* bodies before the trailing bed (sd_body_is_bed): the passes stop there */
     long nf_stamp;
     const void *pairs;
     int B[SD_MAX_OWNERS + 1]; /* thread t owns bodies B[t] .. B[t+1]-1 */
-    int32_t *cross;           /* pairs whose bodies have different owners */
-    int ncross, cap;
+    /* the candidates (w->bb, ascending by their lower body) whose lower body owner t owns:
+     * K[t] .. K[t+1]-1; owner t filters them itself into its own segment of list */
+    int K[SD_MAX_OWNERS + 1];
+    long rb; /* timers.rebuilds of the candidates it was made from */
+    /* the pairs whose bodies have different owners, in blocks: owner t's candidates that
+     * are, cross[K[t] .. xb[t]-1], ascending; xo[c]: the owner of the other body */
+    int32_t *cross;
+    uint8_t *xo;
+    int xb[SD_MAX_OWNERS];
+    int cap, xo_cap;
     sd_pair_out *xout; /* cross pair c's result (pass 1), read by both its owners (pass 2) */
     uint8_t *xact;     /* 1 when cross pair c touched in this step */
     int xout_cap, xact_cap;
-    /* owner t's pairs, ascending: list[start[t] .. start[t+1]-1]; k for a pair it owns both
-     * sides of, ~c (negative) for cross pair c (cross[c]) touching it */
+    /* owner t's near pairs among its candidates, ascending: list[K[t] .. seg1[t]-1]; k for a
+     * pair it owns both sides of, ~c (negative) for cross pair c (cross[c]). The cross pairs
+     * of lower owners that touch it come before all of these (their lower bodies are lower). */
     int32_t *list;
-    int start[SD_MAX_OWNERS + 1];
+    int seg1[SD_MAX_OWNERS];
     int list_cap;
-    /* cross entries in list[0 .. j): a chunk of the list without any is handed to the pass
-     * as it stands, not copied */
+    /* cross entries in owner t's segment before entry j: xpre[K[t] + 2t + (j - K[t])]; a
+     * chunk of the list without any is handed to the pass as it stands, not copied */
     int32_t *xpre;
     int xpre_cap;
     /* the records of list's own pairs and of the cross pairs, field by field (sd_pair_soa) */
@@ -141,10 +150,6 @@ typedef struct {
     double fo[SD_MAX_OWNERS + 1];
     double tau[SD_MAX_OWNERS];
     int passes; /* passes timed in tau */
-    /* scratch of the parallel near-list filter: each thread's kept pairs at its chunk's
-     * start, then packed into w->near */
-    int32_t *tmp;
-    int tmp_cap;
 } sd_owned;
 
 /* External forces of a step on the moving bodies mov[k0 .. k1) (into ext_force), called just
@@ -212,7 +217,13 @@ struct sd_world {
     long near_soa_version; /* near_version + 1 it was filled for (0: never) */
     long near_stamp, near_version;
     double near_drift, near_skin; /* near_skin: the skin it was made with */
-    double ref_drift;             /* the same bound as near_drift since the last rebuild (pos_ref) */
+    /* near_mark[k]: candidate k was near when the near pairs were last made (both paths), so
+     * only it can hold a spring; valid while near_mark_rb == timers.rebuilds (after a rebuild
+     * any candidate can: the carried springs) */
+    uint8_t *near_mark;
+    int near_mark_cap;
+    long near_mark_rb;
+    double ref_drift; /* the same bound as near_drift since the last rebuild (pos_ref) */
 };
 
 /* The near skin as a fraction of the margin. Any skin gives the same bits; 0.05-0.1 ran
@@ -256,6 +267,9 @@ sd_law sd_law_make(const sd_contact_def *d);
 sd_status sd_contact_compute(sd_world *w, int *integrated);
 /* Sums the last step's wall pairs into w.force if not done yet (lazy: see contact.c). */
 void sd_contact_gather(sd_world *w);
+/* How many body-body pairs the next step tests (the near pairs of whichever pass made them
+ * last: the serial pass's list or the owners' segments). */
+int sd_contact_near_count(const sd_world *w);
 void sd_pair_soa_free(sd_pair_soa *s);
 
 /* The bed roughness (fixed spheres, never made free): nobody reads its load, so nothing is

