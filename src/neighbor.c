@@ -522,8 +522,8 @@ static inline int take_pair(const sd_world *w, int i, int j, double hm, cand_buf
 /* The cell (x, y, z) is the lowest that the cell ranges ri and rj share (where a pair is taken). */
 static inline int lowest_shared_cell(const int32_t *rj, const int32_t *ri, int x, int y, int z)
 {
-    return x == (ri[0] > rj[0] ? ri[0] : rj[0]) && y == (ri[1] > rj[1] ? ri[1] : rj[1]) &&
-           z == (ri[2] > rj[2] ? ri[2] : rj[2]);
+    return (x == (ri[0] > rj[0] ? ri[0] : rj[0])) & (y == (ri[1] > rj[1] ? ri[1] : rj[1])) &
+           (z == (ri[2] > rj[2] ? ri[2] : rj[2])); /* (& not &&: no branch) */
 }
 
 #ifdef SD_SCAN512
@@ -621,14 +621,24 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
                     continue;
                 }
 #endif
-                for (; k < kend; k++) {
-                    int j = items[k];
-                    if (fixed_i && b->fixed[j]) continue;
-                    double reach = bri + b->bound_r[j] + margin;
-                    if (v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach) continue;
-                    /* take the pair only in the lowest cell the two ranges share */
-                    if (!lowest_shared_cell(w->range[j], ri, x, y, z)) continue;
-                    if (take_pair(w, i, j, hm, out)) return 1;
+                /* the tests (within reach; this cell the lowest the two ranges share; not
+                 * two fixed bodies) without a branch on any, a block of entries at a time, then
+                 * the takers in entry order: the same candidates in the same order. The first
+                 * two pass for about a third and a half of the entries, a coin toss to the
+                 * branch predictor (branching on them, the scan ran 5-10 % slower). */
+                int32_t js[64];
+                while (k < kend) {
+                    const int k1 = kend - k < 64 ? kend : k + 64;
+                    int nj = 0;
+                    for (; k < k1; k++) {
+                        const int j = items[k];
+                        const double reach = bri + b->bound_r[j] + margin;
+                        const int in = !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
+                        js[nj] = j;
+                        nj += in & lowest_shared_cell(w->range[j], ri, x, y, z) & !(fixed_i & b->fixed[j]);
+                    }
+                    for (int q = 0; q < nj; q++)
+                        if (take_pair(w, i, js[q], hm, out)) return 1;
                 }
             }
     return 0;
