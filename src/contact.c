@@ -1398,12 +1398,6 @@ static inline int near_test(const sd_world *w, double skin, const sd_pair *p)
     return v3_norm2(v3_madd(d, c.a, -t)) <= reach * reach;
 }
 
-/* near_test of candidates k0 .. k1-1 into keep[k - k0] (1 or 0), then what it means for each:
- * a pair left out has its springs cleared, as the pass would clear them. Only a pair that was
- * near (near_mark, or any after a rebuild: fresh) can hold a spring: the others' slots are not
- * touched, which spares the making a line of the springs for each candidate. The answers
- * first, alone: the loop that stored each one's consequences as it went ran at 18 ns a
- * candidate. */
 #ifdef SD_FILTER512
 /* near_test of candidates k0 .. while 4 remain, the sphere pairs' in AVX2 lanes (the centres
  * as rows, near_test's operations; a log's pair through near_test); returns where it stopped. */
@@ -1432,6 +1426,14 @@ __attribute__((target("avx2"))) static int near_test256(const sd_world *w, doubl
 }
 #endif
 
+/* near_test of candidates k0 .. k1-1 into keep[k - k0] (1 or 0), then what it means for each:
+ * a pair left out has its springs cleared, as the pass would clear them. Only a pair that was
+ * near when the near pairs were last made (near_mark), or any pair after a rebuild (fresh: the
+ * carried springs), can hold a spring, since only the pass sets one and it sees near pairs
+ * only: the other candidates' spring slots are not touched, which spares each remaking a
+ * cache line per candidate. The answers first, alone, then their consequences with one
+ * seldom-taken branch: the loop that did both as it went, branching on a coin toss, took 18 ns
+ * a candidate (docs/performance.md §2-000000000). */
 static void near_keep_range(sd_world *w, double skin, int k0, int k1, int fresh, uint8_t *restrict keep)
 {
     const sd_pair *restrict pairs = w->bb.p;
@@ -1454,8 +1456,9 @@ static void near_keep_range(sd_world *w, double skin, int k0, int k1, int fresh,
     }
 }
 
-/* near_mark sized for the candidates; returns whether this making of the near pairs is the
- * first since the rebuild (near_keep's fresh), or -1 when out of memory. */
+/* near_mark sized for the candidates (its second half: the answers' scratch, keep[] of
+ * near_keep_range at each candidate's place); returns whether this making of the near pairs is
+ * the first since the rebuild (fresh), or -1 when out of memory. */
 static int near_mark_ready(sd_world *w)
 {
     if (sd_grow((void **)&w->near_mark, &w->near_mark_cap, 2 * (w->bb.n + 1), 1)) return -1;
