@@ -523,14 +523,6 @@ static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p)
     s->sqm[j] = p->sqrt_m_eff;
 }
 
-/* Entries j0 .. j1 of s from the records pairs[ks[j]] (an entry k < 0, a cross reference of
- * an owner's list, is left as it is: never read). */
-static void pair_soa_fill(sd_pair_soa *s, const sd_pair *pairs, const int32_t *ks, int j0, int j1)
-{
-    for (int j = j0; j < j1; j++)
-        if (ks[j] >= 0) pair_soa_set(s, j, &pairs[ks[j]]);
-}
-
 static soa_view soa_at(const sd_pair_soa *s, int j0)
 {
     return (soa_view){s->a + j0, s->b + j0, s->off + j0, s->ck + j0, s->sqm + j0};
@@ -1522,12 +1514,7 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
 {
     sd_bodies *b = &w->b;
     long count = 0;
-    const int nn = w->near_n;
-    if (w->near_soa_version != w->near_version + 1) { /* the near list's records, once for each list */
-        if (pair_soa_reserve(&w->near_soa, nn + 1)) return -1;
-        pair_soa_fill(&w->near_soa, w->bb.p, w->near, 0, nn);
-        w->near_soa_version = w->near_version + 1;
-    }
+    const int nn = w->near_n; /* (near_update made the list and its records) */
     for (int i = 0; i < b->n; i++)
         if (!sd_body_is_bed(b, i)) b->force[i] = b->torque[i] = v3(0, 0, 0);
     for (int k0 = 0; k0 < nn; k0 += SS_CHUNK) {
@@ -1921,7 +1908,6 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         sd_status nst = near_update(w);
         if (nst) return nst;
         count = bb_serial_pass(w, &law, w->bb_scratch);
-        if (count < 0) return SD_ERR_NOMEM;
         count += bt_range(w, &law, 0, w->b.n, &((bb_scratch *)w->bb_scratch)[0].wq);
     }
     w->contacts = count;

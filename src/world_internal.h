@@ -214,12 +214,13 @@ struct sd_world {
     /* the records of the near pairs (a, b, off, cap | kind << 16, sqrt_m_eff) in near order,
      * field by field: the touch filter loads them 8 at a time instead of gathering them */
     sd_pair_soa near_soa;
-    long near_soa_version; /* near_version + 1 it was filled for (0: never) */
+    long near_soa_version; /* near_version + 1 when near and near_soa are the current near pairs */
     long near_stamp, near_version;
     double near_drift, near_skin; /* near_skin: the skin it was made with */
     /* near_mark[k]: candidate k was near when the near pairs were last made (both paths), so
      * only it can hold a spring; valid while near_mark_rb == timers.rebuilds (after a rebuild
-     * any candidate can: the carried springs) */
+     * any candidate can: the carried springs). Its second half, near_mark[bb.n + 1 + k], is
+     * the scratch for each candidate's answer while they are remade. */
     uint8_t *near_mark;
     int near_mark_cap;
     long near_mark_rb;
