@@ -1418,7 +1418,7 @@ __attribute__((target("avx2"))) static int near_test256(const sd_world *w, doubl
 }
 #endif
 
-/* near_test of candidates k0 .. k1-1 into keep[k - k0] (1 or 0), then what it means for each:
+/* near_test of candidates k0 .. k1-1 into keep[k - k0] (1 or 0; returned), then what it means for each:
  * a pair left out has its springs cleared, as the pass would clear them. Only a pair that was
  * near when the near pairs were last made (near_mark), or any pair after a rebuild (fresh: the
  * carried springs), can hold a spring, since only the pass sets one and it sees near pairs
@@ -1426,9 +1426,10 @@ __attribute__((target("avx2"))) static int near_test256(const sd_world *w, doubl
  * cache line per candidate. The answers first, alone, then their consequences with one
  * seldom-taken branch: the loop that did both as it went, branching on a coin toss, took 18 ns
  * a candidate (docs/performance.md §2-000000000). */
-static void near_keep_range(sd_world *w, double skin, int k0, int k1, int fresh, uint8_t *restrict keep)
+static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, int fresh)
 {
     const sd_pair *restrict pairs = w->bb.p;
+    uint8_t *restrict keep = w->near_mark + w->bb.n + 1 + k0; /* (near_mark's second half) */
     int k = k0;
 #ifdef SD_FILTER512
     if (simd_level >= SD_SIMD_AVX2) k = near_test256(w, skin, k0, k1, keep);
@@ -1446,6 +1447,7 @@ static void near_keep_range(sd_world *w, double skin, int k0, int k1, int fresh,
         }
         mark[j] = (uint8_t)kp;
     }
+    return keep;
 }
 
 /* near_mark sized for the candidates (its second half: the answers' scratch, keep[] of
@@ -1459,20 +1461,35 @@ static int near_mark_ready(sd_world *w)
     return fresh;
 }
 
-/* The candidates k0 .. k1-1 worth testing (near_update), into out in ascending order, with
- * their records; returns how many. */
-static int near_filter(sd_world *w, double skin, int k0, int k1, int fresh, uint8_t *keep, int32_t *out,
-                       sd_pair_soa *soa)
+/* The candidates worth testing (near_update), into out in ascending order, with their
+ * records; returns how many. */
+static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pair_soa *soa)
 {
-    near_keep_range(w, skin, k0, k1, fresh, keep);
+    const uint8_t *keep = near_keep_range(w, skin, 0, w->bb.n, fresh);
     const sd_pair *pairs = w->bb.p;
     int m = 0;
-    for (int k = k0; k < k1; k++) {
+    for (int k = 0; k < w->bb.n; k++) {
         out[m] = k;
         pair_soa_set(soa, m, &pairs[k]); /* (its records too, while the record is at hand) */
-        m += keep[k - k0];
+        m += keep[k];
     }
     return m;
+}
+
+/* The near pairs (of either pass) still good: no rebuild since, and no surface has drifted
+ * half the near skin (near_update). */
+static int near_still_good(const sd_world *w)
+{
+    return w->near_stamp == w->timers.rebuilds && !w->rebuild_every_step && 2.0 * w->near_drift < 0.999 * w->near_skin;
+}
+
+/* The near pairs have just been made (by either pass) with this skin. */
+static void near_made(sd_world *w, double skin)
+{
+    w->near_version++;
+    w->near_stamp = w->timers.rebuilds;
+    w->near_drift = 0.0;
+    w->near_skin = skin;
 }
 
 static int bb_owners(const sd_world *w);
@@ -1493,20 +1510,15 @@ static sd_status near_update(sd_world *w)
 {
     const int nbb = w->bb.n;
     /* (near_soa_version: not remade since by the owners' path, which keeps its own lists) */
-    if (w->near_stamp == w->timers.rebuilds && w->near_nbb == nbb && w->near && !w->rebuild_every_step &&
-        w->near_soa_version == w->near_version + 1 && 2.0 * w->near_drift < 0.999 * w->near_skin)
-        return SD_OK;
+    if (near_still_good(w) && w->near_nbb == nbb && w->near && w->near_soa_version == w->near_version + 1) return SD_OK;
     const double skin = SD_NEAR_SKIN * w->def.margin;
     if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     const int fresh = near_mark_ready(w);
     if (fresh < 0 || pair_soa_reserve(&w->near_soa, nbb + 1)) return SD_ERR_NOMEM;
-    w->near_n = near_filter(w, skin, 0, nbb, fresh, w->near_mark + nbb + 1, w->near, &w->near_soa);
+    w->near_n = near_filter(w, skin, fresh, w->near, &w->near_soa);
     w->near_nbb = nbb;
-    w->near_stamp = w->timers.rebuilds;
-    w->near_version++;
+    near_made(w, skin);
     w->near_soa_version = w->near_version + 1;
-    w->near_drift = 0.0;
-    w->near_skin = skin;
     return SD_OK;
 }
 
@@ -1615,6 +1627,13 @@ static int uneven(sd_owned *o)
     return 1;
 }
 
+/* Owner t's counts of cross entries (owned.xpre): xp[j - K[t]] before entry j of its segment,
+ * each owner's run two past the last one's (its segment can fill its candidates). */
+static inline int32_t *owned_xpre(const sd_owned *o, int t) { return o->xpre + o->K[t] + 2 * t; }
+
+/* How many chunks of SS_CHUNK owner t's block of cross pairs makes. */
+static inline int owned_xchunks(const sd_owned *o, int t) { return (o->xb[t] - o->K[t] + SS_CHUNK - 1) / SS_CHUNK; }
+
 /* The first candidate at or after k0 whose lower body is at least i (the candidates are
  * generated by their lower body, ascending). */
 static int first_led_by(const sd_world *w, int k0, int i)
@@ -1643,9 +1662,7 @@ static sd_status owned_update(sd_world *w, int T)
     const int n = w->b.n, nbb = w->bb.n;
     sd_owned *o = w->owned;
     const int same = o && o->T == T && o->n == n && o->nbb == nbb && o->pairs == w->bb.p && o->rb == w->timers.rebuilds;
-    if (same && o->stamp == w->near_version && w->near_stamp == w->timers.rebuilds && !w->rebuild_every_step &&
-        2.0 * w->near_drift < 0.999 * w->near_skin && !uneven(o))
-        return SD_OK;
+    if (same && o->stamp == w->near_version && near_still_good(w) && !uneven(o)) return SD_OK;
     if (!(o = owned_get(w))) return SD_ERR_NOMEM;
     if (o->T != T) { /* new: even shares */
         for (int t = 0; t <= T; t++)
@@ -1695,12 +1712,11 @@ static sd_status owned_update(sd_world *w, int T)
         const int tid = omp_get_thread_num(), nthr = omp_get_num_threads();
         for (int t = tid; t < T; t += nthr) {
             const int k0 = o->K[t], k1 = o->K[t + 1];
-            uint8_t *kp = w->near_mark + nbb + 1 + k0;
-            near_keep_range(w, skin, k0, k1, fresh, kp);
+            const uint8_t *kp = near_keep_range(w, skin, k0, k1, fresh);
             /* the near ones into its segment in pair order, each cross pair as ~c; xp[j - k0]
              * counts the cross entries before entry j */
             const unsigned i0 = (unsigned)o->B[t], len = (unsigned)(o->B[t + 1] - o->B[t]);
-            int32_t *xp = o->xpre + k0 + 2 * t;
+            int32_t *xp = owned_xpre(o, t);
             int m = k0, xc = k0;
             xp[0] = 0;
             for (int k = k0; k < k1; k++) {
@@ -1731,10 +1747,7 @@ static sd_status owned_update(sd_world *w, int T)
             o->xb[t] = xc; /* its cross pairs: cross[K[t] .. xb[t]-1] */
         }
     }
-    w->near_version++;
-    w->near_stamp = w->timers.rebuilds;
-    w->near_drift = 0.0;
-    w->near_skin = skin;
+    near_made(w, skin);
     o->stamp = w->near_version;
     o->rb = w->timers.rebuilds;
     o->T = T;
@@ -1755,7 +1768,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
     /* the cross pairs' chunks: each owner's block cut in chunks of SS_CHUNK, taken in turn */
     int nch = 0;
     for (int t = 0; t < T; t++)
-        nch += (o->xb[t] - o->K[t] + SS_CHUNK - 1) / SS_CHUNK;
+        nch += owned_xchunks(o, t);
     long count = 0;
     int moved = 0;
     double v2 = 0.0, dc = 0.0, xf = -INFINITY;
@@ -1771,10 +1784,8 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
 #pragma omp for schedule(dynamic, 1) nowait
         for (int h = 0; h < nch; h++) {
             int t = 0, c = h;
-            while (c >= (o->xb[t] - o->K[t] + SS_CHUNK - 1) / SS_CHUNK) { /* (T blocks: a few steps) */
-                c -= (o->xb[t] - o->K[t] + SS_CHUNK - 1) / SS_CHUNK;
-                t++;
-            }
+            while (c >= owned_xchunks(o, t)) /* (T blocks: a few steps) */
+                c -= owned_xchunks(o, t++);
             c = o->K[t] + c * SS_CHUNK;
             const int n = o->xb[t] - c < SS_CHUNK ? o->xb[t] - c : SS_CHUNK;
             const soa_view v = soa_at(&o->xsoa, c);
@@ -1805,7 +1816,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     }
             /* then its own segment, with its cross pairs in their places */
             const int s0 = o->K[t], s1 = o->seg1[t];
-            const int32_t *xp = o->xpre + s0 + 2 * t;
+            const int32_t *xp = owned_xpre(o, t);
             for (int j0 = s0; j0 < s1; j0 += SS_CHUNK) {
                 const int j1 = s1 - j0 < SS_CHUNK ? s1 : j0 + SS_CHUNK;
                 /* a chunk without cross pairs adds its pairs onto the bodies itself */
