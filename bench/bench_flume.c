@@ -57,29 +57,45 @@ static void quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d, int gr
     sd_world_add_triangle(w, a, c, d, group);
 }
 
-static double phase(sd_world *w, const char *name, long steps, int n)
-{
-    if (steps <= 0) return 0;
-    sd_world_timers t0 = sd_world_get_timers(w);
-    double w0 = sd_now();
-    sd_status st = sd_world_run(w, steps);
-    double wall = sd_now() - w0;
-    sd_world_timers t1 = sd_world_get_timers(w);
-    if (st) fprintf(stderr, "%s: %s\n", name, sd_status_message(st));
-    double ps = (double)n * (double)steps / wall;
-    printf("PHASE %-7s steps %7ld wall %8.3f s  particle-steps/s %.4e  contacts %6ld  | neighbor %.3f contact %.3f "
-           "gather %.3f integrate %.3f rebuilds %ld candidates %d+%d near %d\n",
-           name, steps, wall, ps, sd_world_contact_count(w), t1.neighbor - t0.neighbor, t1.contact - t0.contact,
-           t1.gather - t0.gather, t1.integrate - t0.integrate, t1.rebuilds - t0.rebuilds, w->bb.n, w->bt.n,
-           sd_contact_near_count(w));
-    fflush(stdout);
-    return ps;
-}
-
 static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
+}
+
+static double phase(sd_world *w, const char *name, long steps, int n)
+{
+    if (steps <= 0) return 0;
+    sd_world_timers t0 = sd_world_get_timers(w);
+    /* timed in blocks of BLOCK steps too: the median block, for A/B runs on a shared machine
+     * (the whole phase's rate moves with the machine's slow spells, a block's median less) */
+    enum { BLOCK = 500 };
+    const long nblk = steps / BLOCK;
+    double *blk = nblk > 0 ? malloc((size_t)nblk * sizeof(double)) : NULL;
+    double w0 = sd_now();
+    sd_status st = SD_OK;
+    for (long k = 0; k < nblk && blk && !st; k++) {
+        const double b0 = sd_now();
+        st = sd_world_run(w, BLOCK);
+        blk[k] = sd_now() - b0;
+    }
+    if (!st) st = sd_world_run(w, blk ? steps - nblk * BLOCK : steps);
+    double wall = sd_now() - w0;
+    sd_world_timers t1 = sd_world_get_timers(w);
+    if (st) fprintf(stderr, "%s: %s\n", name, sd_status_message(st));
+    double ps = (double)n * (double)steps / wall, med = 0.0;
+    if (blk) {
+        qsort(blk, (size_t)nblk, sizeof(double), cmp_double);
+        med = (double)n * BLOCK / (nblk % 2 ? blk[nblk / 2] : 0.5 * (blk[nblk / 2 - 1] + blk[nblk / 2]));
+        free(blk);
+    }
+    printf("PHASE %-7s steps %7ld wall %8.3f s  particle-steps/s %.4e  contacts %6ld  | neighbor %.3f contact %.3f "
+           "gather %.3f integrate %.3f rebuilds %ld candidates %d+%d near %d | median of %d-step blocks %.4e\n",
+           name, steps, wall, ps, sd_world_contact_count(w), t1.neighbor - t0.neighbor, t1.contact - t0.contact,
+           t1.gather - t0.gather, t1.integrate - t0.integrate, t1.rebuilds - t0.rebuilds, w->bb.n, w->bt.n,
+           sd_contact_near_count(w), BLOCK, med);
+    fflush(stdout);
+    return ps;
 }
 
 /* Bulk quantities for the cross-check with LAMMPS (bench/crosscheck.sh): mean and 95th
