@@ -160,6 +160,23 @@ int main(void)
         sd_simd_level_set(was);
     }
     {
+        /* the body-body pass's prefetch of the bodies' front (on by default only for scenes
+         * larger than the last-level cache) forced on: a hint, the same bits on 1 and 2 threads,
+         * on the log flume and on the dense bed */
+        const int was = sd_front_prefetch_set(SD_PREFETCH_ON);
+        long cp1 = 0, cp2 = 0, cb = 0;
+        int npb = 0, ncb = 0;
+        const uint64_t hp1 = run(1, &cp1), hp2 = run(2, &cp2), hb = run_bed(2, &cb, &npb, &ncb);
+        sd_front_prefetch_set(was);
+        long cb0 = 0;
+        int npb0 = 0, ncb0 = 0;
+        const uint64_t hb0 = run_bed(2, &cb0, &npb0, &ncb0);
+        printf("front prefetch on: log flume hash %016llx (1 thread), %016llx (2); bed hash %016llx (off: %016llx)\n",
+               (unsigned long long)hp1, (unsigned long long)hp2, (unsigned long long)hb, (unsigned long long)hb0);
+        CHECK(hp1 == h1 && hp2 == h1 && cp1 == c1 && cp2 == c1);
+        CHECK(hb == hb0 && cb == cb0);
+    }
+    {
         /* the sphere-log pairs touching at one point through the law in lanes and through
          * apply_manifold: the log flume above, the same bits */
         long redo0 = 0, redo1 = 0;
