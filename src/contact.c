@@ -1308,6 +1308,17 @@ static int bt_sphere_face(sd_world *w, int i, int from, int to, bt_batch *q, int
 
 /* Body–triangle pairs of the bodies i0 .. i1-1: narrow phase, mesh dedup, law, into each
  * pair's slot (gathered per body in pair order by sd_contact_gather). */
+/* the rows of body j that the contact passes read and write */
+static inline void pf_body(const sd_bodies *b, int j)
+{
+    __builtin_prefetch(&b->pos[j], 0, 3);
+    __builtin_prefetch(&b->vel[j], 0, 3);
+    __builtin_prefetch(&b->omega[j], 0, 3);
+    __builtin_prefetch(&b->radius[j], 0, 3);
+    __builtin_prefetch(&b->force[j], 1, 3);
+    __builtin_prefetch(&b->torque[j], 1, 3);
+}
+
 static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q)
 {
     sd_bodies *b = &w->b;
@@ -1315,8 +1326,13 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q
     int m = 0;
     /* the pairs are grouped by body: walk the pairs, not the bodies (most have none) */
     const int kend = w->csr.bt_start[i1];
+    const int pf = sd_front_prefetch_on(w);
     for (int from = w->csr.bt_start[i0]; from < kend;) {
         const int i = w->bt.p[from].a;
+        /* (the body of the pair 16 ahead: the bodies with wall pairs are a sparse subset,
+         * which the hardware prefetchers do not follow; with the front prefetch, above the
+         * last-level cache only) */
+        if (pf && from + 16 < kend) pf_body(b, w->bt.p[from + 16].a);
         const int to = w->csr.bt_start[i + 1];
         if (b->shape[i] == SD_SHAPE_SPHERE) {
             const int m0 = m;
