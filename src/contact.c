@@ -1578,6 +1578,10 @@ __attribute__((constructor)) static void llc_init(void)
     if (v <= 0) v = sysconf(_SC_LEVEL3_CACHE_SIZE);
 #endif
     llc_size = v > 0 ? v : 32L << 20;
+    /* SD_PREFETCH = on, off or auto (the default) */
+    const char *e = getenv("SD_PREFETCH");
+    if (e && !strcmp(e, "on")) front_prefetch_mode = SD_PREFETCH_ON;
+    if (e && !strcmp(e, "off")) front_prefetch_mode = SD_PREFETCH_OFF;
 }
 
 int sd_front_prefetch_on(const sd_world *w)
