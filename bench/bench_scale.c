@@ -120,9 +120,9 @@ static double run_case(int n, long steps)
     const long nc = sd_world_contact_count(w);
     /* the rebuilds in the timed steps and their time (neighbor), and the cost per contact */
     printf("N %8d  steps %6ld  wall %8.3f s  particle-steps/s %.4e  ns/particle-step %6.1f  contacts/sphere %.2f  "
-           "ns/contact-step %5.1f  rebuilds %ld neighbor %.3f s\n",
+           "ns/contact-step %5.1f  rebuilds %ld neighbor %.3f s  front-prefetch %s\n",
            n, steps, wall, ps, 1e9 / ps, 2.0 * nc / n, 1e9 * wall / ((double)(nc > 0 ? nc : 1) * steps),
-           k1.rebuilds - k0.rebuilds, k1.neighbor - k0.neighbor);
+           k1.rebuilds - k0.rebuilds, k1.neighbor - k0.neighbor, sd_front_prefetch_on(w) ? "on" : "off");
     fflush(stdout);
     sd_world_destroy(w);
     return ps;
