@@ -1330,8 +1330,7 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q
     for (int from = w->csr.bt_start[i0]; from < kend;) {
         const int i = w->bt.p[from].a;
         /* (the body of the pair 16 ahead: the bodies with wall pairs are a sparse subset,
-         * which the hardware prefetchers do not follow; with the front prefetch, above the
-         * last-level cache only) */
+         * which the hardware prefetchers do not follow; when the front prefetch is on) */
         if (pf && from + 16 < kend) pf_body(b, w->bt.p[from + 16].a);
         const int to = w->csr.bt_start[i + 1];
         if (b->shape[i] == SD_SHAPE_SPHERE) {
@@ -1544,13 +1543,17 @@ static sd_status near_update(sd_world *w)
 /* The bodies' front. The pass takes the pairs in lower-body order, so it reaches each body for
  * the first time as the upper body of some pair, a little ahead of the bodies it is at: those
  * rows (centre, radius, velocity, spin, force, torque) are the lines the hardware prefetchers
- * miss, six arrays read at a ragged edge. When the step's data outgrow the last-level cache they
- * come from DRAM, and the pass waits for them: 1e5 and 1e6 spheres cost 1.3-1.9x what 1e4 cost
- * (docs/performance.md §5). So the pass looks PF_CHUNKS chunks ahead, finds the highest body
- * those pairs touch and prefetches the rows from the last such body up to it. With the data in
- * L3 it only costs instructions (2-3 % at 1e4 spheres), hence the size test. */
+ * miss, six arrays read at a ragged edge. When the step's data do not stay in the last-level
+ * cache they come from DRAM, and the pass waits for them: 1e5 and 1e6 spheres cost 1.3-1.9x
+ * what 1e4 cost (docs/performance.md §5). So the pass looks PF_CHUNKS chunks ahead, finds the
+ * highest body those pairs touch and prefetches the rows from the last such body up to it. With
+ * the data in cache it only costs instructions (2-4 % at 1e4 spheres), hence the size test: on
+ * when the bodies times PF_BYTES_PER_BODY exceed a quarter of the last-level cache (which holds
+ * more than this step's data; a VM shares it with others). On our AMD VM (32 MiB) the gain
+ * starts between 15,000 and 20,000 spheres, where the test puts it (16,384). */
 #define PF_CHUNKS 2
 #define PF_BYTES_PER_BODY 512 /* about what one step reads and writes per sphere (bodies, pairs) */
+#define PF_LLC_SHARE 4        /* the data may take 1 / PF_LLC_SHARE of the last-level cache */
 static int front_prefetch_mode = SD_PREFETCH_AUTO;
 
 int sd_front_prefetch_set(int mode)
@@ -1587,7 +1590,7 @@ __attribute__((constructor)) static void llc_init(void)
 int sd_front_prefetch_on(const sd_world *w)
 {
     if (front_prefetch_mode != SD_PREFETCH_AUTO) return front_prefetch_mode;
-    return (long)w->b.n * PF_BYTES_PER_BODY > llc_size;
+    return (long)w->b.n * PF_BYTES_PER_BODY * PF_LLC_SHARE > llc_size;
 }
 
 static inline void pf_rows(const void *p0, const void *p1, int write)

@@ -303,7 +303,7 @@ int sd_simd512_on(void);
 int sd_sc_lanes_set(int on);
 long sd_sc_lanes_count(long *redo);
 /* The body-body pass's prefetch of the bodies it is about to reach for the first time (contact.c):
- * SD_PREFETCH_AUTO (the default: on when the step's data outgrow the last-level cache), _OFF or
+ * SD_PREFETCH_AUTO (the default: on when the step's data outgrow a quarter of the last-level cache), _OFF or
  * _ON. A hint to the memory system only: the same bits either way. For tests and benchmarks, like
  * sd_simd_level_set; returns the previous setting. sd_front_prefetch_on: whether it runs for w. */
 enum { SD_PREFETCH_AUTO = -1, SD_PREFETCH_OFF = 0, SD_PREFETCH_ON = 1 };
