@@ -1306,9 +1306,7 @@ static int bt_sphere_face(sd_world *w, int i, int from, int to, bt_batch *q, int
     return 1;
 }
 
-/* Body–triangle pairs of the bodies i0 .. i1-1: narrow phase, mesh dedup, law, into each
- * pair's slot (gathered per body in pair order by sd_contact_gather). */
-/* the rows of body j that the contact passes read and write */
+/* the rows of body j that the contact passes read and write, prefetched */
 static inline void pf_body(const sd_bodies *b, int j)
 {
     __builtin_prefetch(&b->pos[j], 0, 3);
@@ -1319,6 +1317,8 @@ static inline void pf_body(const sd_bodies *b, int j)
     __builtin_prefetch(&b->torque[j], 1, 3);
 }
 
+/* Body–triangle pairs of the bodies i0 .. i1-1: narrow phase, mesh dedup, law, into each
+ * pair's slot (gathered per body in pair order by sd_contact_gather). */
 static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q)
 {
     sd_bodies *b = &w->b;
