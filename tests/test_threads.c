@@ -161,7 +161,7 @@ int main(void)
     }
     {
         /* the body-body pass's prefetch of the bodies' front (on by default only for scenes
-         * larger than the last-level cache) forced on: a hint, the same bits on 1 and 2 threads,
+         * larger than a quarter of the last-level cache) forced on: a hint, the same bits on 1 and 2 threads,
          * on the log flume and on the dense bed */
         const int was = sd_front_prefetch_set(SD_PREFETCH_ON);
         long cp1 = 0, cp2 = 0, cb = 0;
