@@ -1306,25 +1306,15 @@ static int bt_sphere_face(sd_world *w, int i, int from, int to, bt_batch *q, int
     return 1;
 }
 
-/* The lines of [p0, p1), prefetched for reading or for writing. */
-static inline void pf_rows(const void *p0, const void *p1, int write)
+/* the rows of body j that the contact passes read and write, prefetched */
+static inline void pf_body(const sd_bodies *b, int j)
 {
-    for (const char *c = (const char *)((uintptr_t)p0 & ~(uintptr_t)63); c < (const char *)p1; c += 64)
-        if (write)
-            __builtin_prefetch(c, 1, 3);
-        else
-            __builtin_prefetch(c, 0, 3);
-}
-
-/* The rows that the contact passes read and write of bodies lo .. hi, prefetched. */
-static inline void pf_bodies(const sd_bodies *b, int lo, int hi)
-{
-    pf_rows(b->pos + lo, b->pos + hi + 1, 0);
-    pf_rows(b->radius + lo, b->radius + hi + 1, 0);
-    pf_rows(b->vel + lo, b->vel + hi + 1, 0);
-    pf_rows(b->omega + lo, b->omega + hi + 1, 0);
-    pf_rows(b->force + lo, b->force + hi + 1, 1);
-    pf_rows(b->torque + lo, b->torque + hi + 1, 1);
+    __builtin_prefetch(&b->pos[j], 0, 3);
+    __builtin_prefetch(&b->vel[j], 0, 3);
+    __builtin_prefetch(&b->omega[j], 0, 3);
+    __builtin_prefetch(&b->radius[j], 0, 3);
+    __builtin_prefetch(&b->force[j], 1, 3);
+    __builtin_prefetch(&b->torque[j], 1, 3);
 }
 
 /* Body–triangle pairs of the bodies i0 .. i1-1: narrow phase, mesh dedup, law, into each
@@ -1341,7 +1331,7 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q
         const int i = w->bt.p[from].a;
         /* (the body of the pair 16 ahead: the bodies with wall pairs are a sparse subset,
          * which the hardware prefetchers do not follow; when the front prefetch is on) */
-        if (pf && from + 16 < kend) pf_bodies(b, w->bt.p[from + 16].a, w->bt.p[from + 16].a);
+        if (pf && from + 16 < kend) pf_body(b, w->bt.p[from + 16].a);
         const int to = w->csr.bt_start[i + 1];
         if (b->shape[i] == SD_SHAPE_SPHERE) {
             const int m0 = m;
@@ -1603,6 +1593,15 @@ int sd_front_prefetch_on(const sd_world *w)
     return (long)w->b.n * PF_BYTES_PER_BODY * PF_LLC_SHARE > llc_size;
 }
 
+static inline void pf_rows(const void *p0, const void *p1, int write)
+{
+    for (const char *c = (const char *)((uintptr_t)p0 & ~(uintptr_t)63); c < (const char *)p1; c += 64)
+        if (write)
+            __builtin_prefetch(c, 1, 3);
+        else
+            __builtin_prefetch(c, 0, 3);
+}
+
 /* Entries j0 .. j1 of the records (a, b): the rows of the bodies below lim beyond *front that
  * they touch (at most 4 per entry back from the highest), and *front moved on to it. */
 static void pf_front(const sd_bodies *b, const int32_t *pa, const int32_t *pb, int j0, int j1, int lim, int *front)
@@ -1613,7 +1612,13 @@ static void pf_front(const sd_bodies *b, const int32_t *pa, const int32_t *pb, i
         hi = m > hi && m < lim ? m : hi;
     }
     if (hi <= *front) return;
-    pf_bodies(b, *front + 1 > hi - 4 * (j1 - j0) ? *front + 1 : hi - 4 * (j1 - j0), hi);
+    const int lo = *front + 1 > hi - 4 * (j1 - j0) ? *front + 1 : hi - 4 * (j1 - j0);
+    pf_rows(b->pos + lo, b->pos + hi + 1, 0);
+    pf_rows(b->radius + lo, b->radius + hi + 1, 0);
+    pf_rows(b->vel + lo, b->vel + hi + 1, 0);
+    pf_rows(b->omega + lo, b->omega + hi + 1, 0);
+    pf_rows(b->force + lo, b->force + hi + 1, 1);
+    pf_rows(b->torque + lo, b->torque + hi + 1, 1);
     *front = hi;
 }
 
