@@ -1306,7 +1306,9 @@ static int bt_sphere_face(sd_world *w, int i, int from, int to, bt_batch *q, int
     return 1;
 }
 
-/* the rows of body j that the contact passes read and write, prefetched */
+/* the rows of body j that the contact passes read and write, prefetched (six plain prefetches:
+ * the same rows through pf_front's line loops lost the front prefetch's whole gain at 1e5,
+ * docs/performance.md §2-00000000000) */
 static inline void pf_body(const sd_bodies *b, int j)
 {
     __builtin_prefetch(&b->pos[j], 0, 3);
