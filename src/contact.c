@@ -978,8 +978,20 @@ static __attribute__((noinline)) int pair_general(const sd_world *w, const sd_la
                                                   struct sc_lanes *q, int msc, sd_pair_out *out, int *used)
 {
     sd_manifold m;
-    narrow_bb(&w->b, p, &m);
     sd_hist *h = &w->bb.hist[p->off];
+    if (p->kind == SD_PAIR_CC) {
+        /* two logs (or a log and a pipe): the axis that showed them apart last time first */
+        sd_vec3 sep = h->feature == SD_HIST_SEP_AXIS ? h->shear : v3(0.0, 0.0, 0.0);
+        const sd_cyl ca = sd_body_cyl(&w->b, p->a), cb = sd_body_cyl(&w->b, p->b);
+        sd_geom_cyl_cyl_sep(&ca, &cb, &m, &sep);
+        used[i] = apply_manifold(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, &out[i]);
+        if (m.n == 0 && (sep.x != 0.0 || sep.y != 0.0 || sep.z != 0.0)) {
+            h->feature = SD_HIST_SEP_AXIS;
+            h->shear = sep;
+        }
+        return 0;
+    }
+    narrow_bb(&w->b, p, &m);
     if (p->kind == SD_PAIR_SC && m.n == 1 && p->cap == 1 && sc_lanes_on) {
         sc_lane_fill(w, p, &m, h, i, q, msc);
         return 1;

@@ -223,8 +223,9 @@ static void sec_pairs(writer *wr, const sd_world *w, const void *ctx)
     }
     for (int k = 0; k < l->nh; k++) {
         /* the shear of an empty slot is never read (and may be uninitialised): write zero */
+        /* (a kept separating axis, SD_HIST_SEP_AXIS, is not state: written as an empty slot) */
         int32_t f = l->hist[k].feature;
-        put_i32(wr, f);
+        put_i32(wr, f >= 0 ? f : -1);
         put_vec3(wr, f >= 0 ? l->hist[k].shear : v3(0.0, 0.0, 0.0));
     }
 }

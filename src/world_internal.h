@@ -67,9 +67,13 @@ typedef struct {
 enum { SD_PAIR_SS = 0, SD_PAIR_SC, SD_PAIR_CC, SD_PAIR_ST, SD_PAIR_CT, SD_PAIR_KINDS };
 
 typedef struct {
-    int32_t feature; /* -1: empty */
+    int32_t feature; /* -1: empty; SD_HIST_SEP_AXIS: see below */
     sd_vec3 shear;   /* tangential spring force P_s on A, N */
 } sd_hist;
+/* The first slot of a log-log pair found apart may keep, in its shear, the unit axis that
+ * showed it (sd_geom_cyl_cyl_sep), for the next step to try first: an empty slot to every
+ * other reader (they all take feature >= 0 as a contact), and not carried over a rebuild. */
+#define SD_HIST_SEP_AXIS (-2)
 
 typedef struct {
     sd_vec3 f_a; /* force on A */

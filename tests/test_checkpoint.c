@@ -120,8 +120,11 @@ static int pairs_equal(const sd_pairlist *a, const sd_pairlist *b)
             memcmp(&p->sqrt_m_eff, &q->sqrt_m_eff, sizeof(double)) != 0)
             return 0;
     }
-    for (int k = 0; k < a->nh; k++) /* the shear of an empty slot (feature -1) is never read */
-        if (a->hist[k].feature != b->hist[k].feature ||
+    /* the shear of an empty slot (feature < 0) is never read as a spring; a slot that keeps a
+     * separating axis (SD_HIST_SEP_AXIS, a hint that changes no answer) is empty, and is written
+     * to the file as one */
+    for (int k = 0; k < a->nh; k++)
+        if ((a->hist[k].feature < 0 ? -1 : a->hist[k].feature) != (b->hist[k].feature < 0 ? -1 : b->hist[k].feature) ||
             (a->hist[k].feature >= 0 && memcmp(&a->hist[k].shear, &b->hist[k].shear, sizeof(sd_vec3)) != 0))
             return 0;
     return 1;

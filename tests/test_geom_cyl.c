@@ -3,9 +3,11 @@
  * Each hand-built configuration is checked as built, after random rigid motions of the whole
  * configuration, and (cylinder-cylinder) with the pair swapped. Units: metres. */
 #include <stdint.h>
+#include <string.h>
 
 #include "check.h"
 #include "core/rng.h"
+#include "geom/cyl_common.h"
 #include "geom/geom.h"
 #include "geom_ref.h"
 
@@ -45,8 +47,8 @@ static int manifold_finite(const sd_manifold *m)
 {
     if (m->n < 0 || m->n > SD_MANIFOLD_MAX) return 0;
     for (int i = 0; i < m->n; i++) {
-        const double v[] = {m->normal[i].x, m->normal[i].y, m->normal[i].z, m->point[i].x, m->point[i].y,
-                            m->point[i].z, m->overlap[i]};
+        const double v[] = {m->normal[i].x, m->normal[i].y, m->normal[i].z, m->point[i].x,
+                            m->point[i].y,  m->point[i].z,  m->overlap[i]};
         for (int k = 0; k < 7; k++)
             if (!isfinite(v[k])) return 0;
         if (fabs(v3_norm(m->normal[i]) - 1.0) > 1e-12) return 0;
@@ -92,8 +94,7 @@ static int find_point(const sd_manifold *m, sd_vec3 p)
 
 /* m must equal e mapped through x (normals times sgn). Contacts are matched by feature id,
  * or, with by_point (the swapped pair, whose ids differ), by the nearest point. */
-static void check_expect(const char *what, const sd_manifold *m, const expect *e, xform x, double sgn,
-                         int by_point)
+static void check_expect(const char *what, const sd_manifold *m, const expect *e, xform x, double sgn, int by_point)
 {
     int failures_before = check_failures;
     CHECK(manifold_finite(m));
@@ -450,7 +451,7 @@ static void test_cyl_tri(void)
     {
         sd_tri wall;
         sd_tri_init(&wall, v3(0, -1, -1), v3(0, 1, -1), v3(0, 0, 1)); /* plane x = 0 */
-        sd_cyl a = mkcyl(v3(hl - d, 0.0, 0.1), v3(1, 0, 0), r, hl); /* end disk flat on the wall */
+        sd_cyl a = mkcyl(v3(hl - d, 0.0, 0.1), v3(1, 0, 0), r, hl);   /* end disk flat on the wall */
         e = one(CTF(1, SD_TRI_FACE), v3(1, 0, 0), d, v3(-0.5 * d, 0.0, 0.1));
         ct_case("log end against wall", a, &wall, &e);
     }
@@ -567,11 +568,119 @@ static void test_random_invariance(void)
     }
 }
 
+/* ---- log-log: the side-side shortcut and the carried separating axis ---- */
+
+/* how far apart the projections of a and b on the unit direction n are (negative: overlap) */
+static double sep_margin(const sd_cyl *a, const sd_cyl *b, sd_vec3 n)
+{
+    return fabs(v3_dot(v3_sub(a->c, b->c), n)) - (sd_cyl_extent(a, n) + sd_cyl_extent(b, n));
+}
+
+static sd_vec3 rand_unit(void)
+{
+    for (;;) {
+        sd_vec3 v = v3(urange(-1, 1), urange(-1, 1), urange(-1, 1));
+        double n = v3_norm(v);
+        if (n > 0.1 && n < 1.0) return v3_scale(v, 1.0 / n);
+    }
+}
+
+static int same_manifold(const sd_manifold *x, const sd_manifold *y)
+{
+    if (x->n != y->n) return 0;
+    for (int i = 0; i < x->n; i++)
+        if (memcmp(&x->normal[i], &y->normal[i], sizeof(sd_vec3)) ||
+            memcmp(&x->point[i], &y->point[i], sizeof(sd_vec3)) ||
+            memcmp(&x->overlap[i], &y->overlap[i], sizeof(double)) || x->feature[i] != y->feature[i])
+            return 0;
+    return 1;
+}
+
+/* sd_geom_cyl_cyl skips its separating-axis tests when the side-side contact S is deeper than
+ * tol with both feet farther than tol inside their segments: then a ball of radius tol/2 lies
+ * in both solids, so no direction can separate them. Checked here on every direction the tests
+ * try and on random ones, over random crossings of two logs and of a log and a pipe. */
+static void test_cyl_cyl_deep_side(void)
+{
+    int deep = 0;
+    for (int it = 0; it < 20000; it++) {
+        const int pipe = it & 1;
+        sd_cyl a = mkcyl(v3(urange(-0.02, 0.02), urange(-0.02, 0.02), urange(-0.02, 0.02)), rand_unit(), 0.005, 0.05);
+        sd_cyl b = mkcyl(v3(0, 0, 0), rand_unit(), pipe ? 0.009 : 0.005, pipe ? 0.1 : 0.05);
+        const double tol = 1e-9 * (a.r + a.hl + b.r + b.hl);
+        double s, t;
+        if (!sd_line_line(a.c, a.a, b.c, b.a, &s, &t) || !(fabs(s) <= a.hl && fabs(t) <= b.hl)) continue;
+        const sd_vec3 pa = v3_madd(a.c, a.a, s), pb = v3_madd(b.c, b.a, t);
+        const double ov = a.r + b.r - v3_norm(v3_sub(pa, pb));
+        if (!(ov > tol && a.hl - fabs(s) > tol && b.hl - fabs(t) > tol)) continue;
+        deep++;
+        const sd_vec3 dirs[5] = {v3_sub(pa, pb), v3_cross(a.a, b.a), a.a, b.a, v3_sub(a.c, b.c)};
+        for (int k = 0; k < 5 + 16; k++) {
+            sd_vec3 n = k < 5 ? dirs[k] : rand_unit();
+            const double nn = v3_norm(n);
+            if (!(nn > 1e-12)) continue;
+            n = v3_scale(n, 1.0 / nn);
+            CHECK(sep_margin(&a, &b, n) < -0.5 * tol);
+        }
+        sd_manifold m;
+        sd_geom_cyl_cyl(&a, &b, &m);
+        CHECK(find_feature(&m, 0) >= 0);
+    }
+    CHECK(deep > 2000);
+}
+
+/* The separating axis carried from call to call (sd_geom_cyl_cyl_sep) changes no answer: a log
+ * drifting and turning past another log or a pipe in small steps gets, at every step, the
+ * manifold of sd_geom_cyl_cyl bit for bit, with its own axis carried along and with a random
+ * axis handed in instead; and the carried axis is used. */
+static void test_cyl_cyl_sep_axis(void)
+{
+    long calls = 0, kept = 0, apart = 0, touching = 0;
+    for (int run = 0; run < 400; run++) {
+        const int pipe = run & 1;
+        sd_cyl b = mkcyl(v3(0, 0, 0), rand_unit(), pipe ? 0.009 : 0.005, pipe ? 0.1 : 0.05);
+        sd_cyl a = mkcyl(v3(urange(-0.03, 0.03), urange(-0.03, 0.03), urange(-0.03, 0.03)), rand_unit(), 0.005, 0.05);
+        const sd_vec3 v = v3_scale(rand_unit(), urange(0.05, 0.5)), w = v3_scale(rand_unit(), urange(0.0, 20.0));
+        const double dt = 2e-4;
+        sd_vec3 sep = v3(0, 0, 0);
+        for (int step = 0; step < 300; step++) {
+            a.c = v3_madd(a.c, v, dt);
+            a.a = v3_normalize(v3_madd(a.a, v3_cross(w, a.a), dt));
+            sd_manifold m1, m2, m3;
+            const int n1 = sd_geom_cyl_cyl(&a, &b, &m1);
+            const sd_vec3 in = sep;
+            sd_geom_cyl_cyl_sep(&a, &b, &m2, &sep);
+            CHECK(same_manifold(&m1, &m2));
+            sd_vec3 any = rand_unit();
+            sd_geom_cyl_cyl_sep(&a, &b, &m3, &any);
+            CHECK(same_manifold(&m1, &m3));
+            calls++;
+            touching += n1 > 0;
+            if (sep.x != 0.0 || sep.y != 0.0 || sep.z != 0.0) {
+                apart++;
+                CHECK(n1 == 0);
+                CHECK_NEAR(v3_norm(sep), 1.0, 1e-12);
+                CHECK(sep_margin(&a, &b, sep) >= 0.0); /* it does separate them */
+                kept += sep.x == in.x && sep.y == in.y && sep.z == in.z;
+            }
+        }
+    }
+    /* a fair share of contacts; of the apart steps, most are the capsules apart (no axis
+     * kept), and of those shown apart by an axis, most by the carried one */
+    CHECK(touching > calls / 20);
+    CHECK(apart > 1000);
+    CHECK(kept > apart / 2);
+    printf("carried axis: %ld calls, %ld touching, %ld shown apart by an axis, %ld of them by the carried one\n", calls,
+           touching, apart, kept);
+}
+
 int main(void)
 {
     test_sphere_cyl();
     test_cyl_cyl();
     test_cyl_tri();
     test_random_invariance();
+    test_cyl_cyl_deep_side();
+    test_cyl_cyl_sep_axis();
     return check_report("test_geom_cyl");
 }

@@ -17,6 +17,8 @@
  * direction); near-duplicates (close points, similar normals) are merged, keeping the deepest.
  * feature: 0 side-side; A's disk -/+: 1/2 against B's side, 3/4 against an end face of B;
  * B's disk -/+: 5/6 against A's side, 7/8 against an end face of A; 9 deep-overlap fallback. */
+#include <stddef.h>
+
 #include "cyl_common.h"
 
 typedef struct {
@@ -158,31 +160,36 @@ static sd_vec3 cc_project(const sd_cyl *c, sd_vec3 x)
     return v3_add(v3_madd(c->c, c->a, t), w);
 }
 
-int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
+/* The separating-axis margin of a unit direction n: how far the projections of a and b on n
+ * are apart (negative when they overlap); dc = a.c - b.c. */
+static double cc_sep_margin(const sd_cyl *a, const sd_cyl *b, sd_vec3 dc, sd_vec3 n)
+{
+    return fabs(v3_dot(dc, n)) - (sd_cyl_extent(a, n) + sd_cyl_extent(b, n));
+}
+
+int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m) { return sd_geom_cyl_cyl_sep(a, b, m, NULL); }
+
+int sd_geom_cyl_cyl_sep(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 *sep)
 {
     m->n = 0;
     sd_vec3 dc = v3_sub(a->c, b->c);
-    if (sd_cyl_cyl_apart(a, b)) return 0;
     double tol = 1e-9 * (a->r + a->hl + b->r + b->hl);
+    /* a separating axis kept from an earlier call: apart by more than 4 tol along it, no
+     * feature pair below can be accepted (each needs a point within tol of both solids), so
+     * the answer is the one the whole test would give */
+    if (sep) {
+        if ((sep->x != 0.0 || sep->y != 0.0 || sep->z != 0.0) && cc_sep_margin(a, b, dc, *sep) > 4.0 * tol) return 0;
+        *sep = v3(0.0, 0.0, 0.0);
+    }
+    if (sd_cyl_cyl_apart(a, b)) return 0;
+    /* cheap exact rejection first: each cylinder lies inside the capsule around its axis
+     * segment, so axis segments farther apart than r_a + r_b cannot touch */
+    sd_vec3 qa, qb;
+    cc_seg_seg(a, b, &qa, &qb);
+    const sd_vec3 gap = v3_sub(qa, qb);
     {
-        /* cheap exact rejections first: each cylinder lies inside the capsule around its axis
-         * segment, so axis segments farther apart than r_a + r_b cannot touch; then a few
-         * separating axes (segment gap direction, a x b, a, b, centre line) */
-        sd_vec3 qa, qb;
-        cc_seg_seg(a, b, &qa, &qb);
-        sd_vec3 gap = v3_sub(qa, qb);
         double g2 = v3_norm2(gap), rr = a->r + b->r;
         if (g2 >= rr * rr) return 0;
-        sd_vec3 axes[5] = {gap, v3_cross(a->a, b->a), a->a, b->a, dc};
-        for (int k = 0; k < 5; k++) {
-            double nn = v3_norm(axes[k]);
-            if (!(nn > 1e-12)) continue;
-            /* the overlaps along +n and -n (cc_sat_overlap both ways): the extents do not
-             * depend on the sign of n, bit for bit */
-            const sd_vec3 n = v3_scale(axes[k], 1.0 / nn);
-            const double e = sd_cyl_extent(a, n) + sd_cyl_extent(b, n), x = v3_dot(dc, n);
-            if (e - x <= 0.0 || e + x <= 0.0) return 0;
-        }
     }
 
     sd_vec3 cn[5], cp[5];
@@ -191,6 +198,7 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
 
     /* S: side-side, common perpendicular of the axes (eqs 28-31) */
     double s, t;
+    int s_deep = 0;
     if (sd_line_line(a->c, a->a, b->c, b->a, &s, &t) && fabs(s) <= a->hl && fabs(t) <= b->hl) {
         sd_vec3 pa = v3_madd(a->c, a->a, s), pb = v3_madd(b->c, b->a, t);
         sd_vec3 d = v3_sub(pa, pb);
@@ -210,8 +218,28 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
             cp[nc] = v3_madd(v3_scale(v3_add(pa, pb), 0.5), n, 0.5 * (b->r - a->r));
             cid[nc] = 0;
             nc++;
+            /* the point on pa-pb at ra - tol/2 from pa is inside both solids by tol/2 or more:
+             * the two overlap, and no axis below can separate them */
+            s_deep = ov > tol && a->hl - fabs(s) > tol && b->hl - fabs(t) > tol;
         }
     }
+    if (!s_deep) {
+        /* a few separating axes (segment gap direction, a x b, a, b, centre line), exact */
+        sd_vec3 axes[5] = {gap, v3_cross(a->a, b->a), a->a, b->a, dc};
+        for (int k = 0; k < 5; k++) {
+            double nn = v3_norm(axes[k]);
+            if (!(nn > 1e-12)) continue;
+            /* the overlaps along +n and -n (cc_sat_overlap both ways): the extents do not
+             * depend on the sign of n, bit for bit */
+            const sd_vec3 n = v3_scale(axes[k], 1.0 / nn);
+            const double e = sd_cyl_extent(a, n) + sd_cyl_extent(b, n), x = v3_dot(dc, n);
+            if (e - x <= 0.0 || e + x <= 0.0) {
+                if (sep) *sep = n;
+                return 0;
+            }
+        }
+    }
+
     /* end disks of A into B, then of B into A (normal flipped to point from B to A) */
     for (int k = 0; k < 4; k++) {
         double e = (k & 1) ? 1.0 : -1.0;
@@ -238,8 +266,13 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
     if (nc == 0) {
         sd_vec3 pa, pb;
         cc_seg_seg(a, b, &pa, &pb);
-        sd_vec3 w[7] = {v3_scale(v3_add(pa, pb), 0.5), pa, pb, sd_cyl_end(a, -1.0), sd_cyl_end(a, 1.0),
-                        sd_cyl_end(b, -1.0), sd_cyl_end(b, 1.0)};
+        sd_vec3 w[7] = {v3_scale(v3_add(pa, pb), 0.5),
+                        pa,
+                        pb,
+                        sd_cyl_end(a, -1.0),
+                        sd_cyl_end(a, 1.0),
+                        sd_cyl_end(b, -1.0),
+                        sd_cyl_end(b, 1.0)};
         int found = -1;
         for (int k = 0; k < 7 && found < 0; k++)
             if (cc_inside(a, w[k]) && cc_inside(b, w[k])) found = k;
@@ -252,7 +285,10 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
                  * is a separating axis once the iterates settle; exact test, then done */
                 const sd_vec3 n = v3_sub(xa, xb);
                 const double nn = v3_norm(n);
-                if (nn > 1e-12 * (a->r + b->r) && cc_sat_overlap(a, b, v3_scale(n, 1.0 / nn)) <= 0.0) return 0;
+                if (nn > 1e-12 * (a->r + b->r) && cc_sat_overlap(a, b, v3_scale(n, 1.0 / nn)) <= 0.0) {
+                    if (sep) *sep = v3_scale(n, 1.0 / nn);
+                    return 0;
+                }
                 /* a fixed point: the remaining iterations would not move it */
                 if (xb.x == x.x && xb.y == x.y && xb.z == x.z) break;
                 x = xb;
@@ -271,10 +307,26 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
                     found = 0;
                 }
             }
+            /* no witness: apart (no contact either way), though no axis tried showed it; for
+             * the next call, the step between the iterates or one of the two outward normals,
+             * if it does (a log's end near another's rim, the iterates slow to settle) */
+            if (found < 0 && sep) {
+                const sd_vec3 xa = cc_project(a, x), xb = cc_project(b, xa);
+                const sd_vec3 cand[4] = {v3_sub(xa, xb), nxb, nxa, v3_sub(nxb, nxa)};
+                for (int k = 0; k < 4; k++) {
+                    const double nn = v3_norm(cand[k]);
+                    if (!(nn > 1e-300)) continue;
+                    const sd_vec3 n = v3_scale(cand[k], 1.0 / nn);
+                    if (cc_sep_margin(a, b, dc, n) > 4.0 * tol) {
+                        *sep = n;
+                        break;
+                    }
+                }
+            }
         }
         if (found >= 0) {
-            sd_vec3 dirs[8] = {v3_sub(pa, pb), dc, a->a, b->a, v3_cross(a->a, b->a), nxb, v3_neg(nxa),
-                               v3_sub(nxb, nxa)};
+            sd_vec3 dirs[8] = {v3_sub(pa, pb),       dc,  a->a,        b->a,
+                               v3_cross(a->a, b->a), nxb, v3_neg(nxa), v3_sub(nxb, nxa)};
             double best = INFINITY;
             sd_vec3 bn = v3(0.0, 0.0, 0.0);
             for (int k = 0; k < 8; k++) {
@@ -299,7 +351,8 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m)
     }
     /* deepest first (ties by feature id), merge near-duplicates, keep at most 4 */
     int order[5];
-    for (int i = 0; i < nc; i++) order[i] = i;
+    for (int i = 0; i < nc; i++)
+        order[i] = i;
     for (int i = 1; i < nc; i++) {
         int j = i, x = order[i];
         while (j > 0 && (cov[order[j - 1]] < cov[x] || (cov[order[j - 1]] == cov[x] && cid[order[j - 1]] > cid[x]))) {

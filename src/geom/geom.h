@@ -135,6 +135,11 @@ static inline void sd_sphere_tri_face(sd_vec3 c, double r, const sd_tri *t, doub
 }
 int sd_geom_sphere_cyl(sd_vec3 c, double r, const sd_cyl *b, sd_manifold *m);
 int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m);
+/* The same, with a separating axis carried from one call to the next (sep, a unit vector, or
+ * zero for none): tested first, and replaced by the axis that shows the two apart, or zero.
+ * The answer is that of sd_geom_cyl_cyl bit for bit: the kept axis must show them apart by
+ * more than 4e-9 of their summed sizes, where no feature pair can be accepted. */
+int sd_geom_cyl_cyl_sep(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 *sep);
 /* feature = (cylinder feature << SD_TRI_FEATURE_BITS) | triangle feature code. */
 int sd_geom_cyl_tri(const sd_cyl *a, const sd_tri *t, sd_manifold *m);
 
