@@ -138,6 +138,7 @@ typedef struct {
         double tbx[SS_CHUNK], tby[SS_CHUNK], tbz[SS_CHUNK];
         double redo[SS_CHUNK];
         int32_t feature[SS_CHUNK], i[SS_CHUNK]; /* the contact's feature, the pair's place */
+        long n_run, n_redo; /* lanes run, and sent back, since the last fold (for the tests) */
     } sc;
 } ss_batch;
 
@@ -1042,9 +1043,9 @@ static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, i
     long redo = 0;
     for (int j = 0; j < m; j++)
         redo += q->redo[j] != 0.0;
-    /* (counts for the tests: one relaxed add a chunk) */
-    __atomic_fetch_add(&sc_lanes_run, m, __ATOMIC_RELAXED);
-    if (redo) __atomic_fetch_add(&sc_lanes_redo, redo, __ATOMIC_RELAXED);
+    /* (counts for the tests, in this thread's scratch; folded after the pass) */
+    q->n_run += m;
+    q->n_redo += redo;
     for (int j = 0; j < m; j++) {
         const int i = q->i[j];
         const sd_pair *p = &w->bb.p[ks[i]];
@@ -2014,6 +2015,18 @@ static int bb_owners(const sd_world *w)
     return 1;
 }
 
+/* The threads' lane counts into the process's totals, after the pass: no shared write in the
+ * hot loop (relaxed adds here only because two worlds may step in two threads at once). */
+static void sc_lanes_fold(void *scratch, int T)
+{
+    for (int t = 0; t < T; t++) {
+        struct sc_lanes *q = &((bb_scratch *)scratch)[t].q.sc;
+        if (q->n_run) __atomic_fetch_add(&sc_lanes_run, q->n_run, __ATOMIC_RELAXED);
+        if (q->n_redo) __atomic_fetch_add(&sc_lanes_redo, q->n_redo, __ATOMIC_RELAXED);
+        q->n_run = q->n_redo = 0;
+    }
+}
+
 sd_status sd_contact_compute(sd_world *w, int *integrated)
 {
     sd_law law = sd_law_make(&w->def.contact);
@@ -2026,6 +2039,8 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         w->bb_scratch = malloc((size_t)T * sizeof(bb_scratch));
         if (!w->bb_scratch) return SD_ERR_NOMEM;
         w->bb_scratch_n = T;
+        for (int t = 0; t < T; t++)
+            ((bb_scratch *)w->bb_scratch)[t].q.sc.n_run = ((bb_scratch *)w->bb_scratch)[t].q.sc.n_redo = 0;
     }
 #ifdef _OPENMP
     if (T > 1) {
@@ -2047,6 +2062,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         count = bb_serial_pass(w, &law, w->bb_scratch);
         count += bt_range(w, &law, 0, w->b.n, &((bb_scratch *)w->bb_scratch)[0].wq);
     }
+    sc_lanes_fold(w->bb_scratch, T);
     w->contacts = count;
     w->wall_force_stale = 1;
     return SD_OK;
