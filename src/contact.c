@@ -138,7 +138,7 @@ typedef struct {
         double tbx[SS_CHUNK], tby[SS_CHUNK], tbz[SS_CHUNK];
         double redo[SS_CHUNK];
         int32_t feature[SS_CHUNK], i[SS_CHUNK]; /* the contact's feature, the pair's place */
-        long n_run, n_redo; /* lanes run, and sent back, since the last fold (for the tests) */
+        long n_run, n_redo;                     /* lanes run, and sent back, since the last fold (for the tests) */
     } sc;
 } ss_batch;
 
