@@ -177,12 +177,18 @@ static sd_vec3 cc_support(const sd_cyl *c, sd_vec3 d)
     return wn > 0.0 ? v3_madd(p, w, c->r / wn) : p;
 }
 
+/* A vertex of the GJK simplex: w = pa - pb, a point of A - B, with the points of A and B it
+ * came from (a common point of A and B is read off them when the origin is enclosed). */
+typedef struct {
+    sd_vec3 w, pa;
+} gjk_vert;
+
 /* Closest point v to the origin of the triangle s[0..2] (Ericson, Real-Time Collision
  * Detection, 5.1.5, with the query point at the origin); s and *n reduced to the vertices that
  * span v. Returns 0 for a degenerate triangle. */
-static int gjk_triangle(sd_vec3 *s, int *n, sd_vec3 *v)
+static int gjk_triangle(gjk_vert *s, int *n, sd_vec3 *v)
 {
-    const sd_vec3 a = s[0], b = s[1], c = s[2];
+    const sd_vec3 a = s[0].w, b = s[1].w, c = s[2].w;
     const sd_vec3 ab = v3_sub(b, a), ac = v3_sub(c, a);
     const double d1 = -v3_dot(ab, a), d2 = -v3_dot(ac, a);
     if (d1 <= 0.0 && d2 <= 0.0) {
@@ -192,7 +198,7 @@ static int gjk_triangle(sd_vec3 *s, int *n, sd_vec3 *v)
     }
     const double d3 = -v3_dot(ab, b), d4 = -v3_dot(ac, b);
     if (d3 >= 0.0 && d4 <= d3) {
-        s[0] = b;
+        s[0] = s[1];
         *n = 1;
         *v = b;
         return 1;
@@ -200,14 +206,13 @@ static int gjk_triangle(sd_vec3 *s, int *n, sd_vec3 *v)
     const double vc = d1 * d4 - d3 * d2;
     if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
         if (!(d1 - d3 > 0.0)) return 0;
-        s[1] = b;
         *n = 2;
         *v = v3_madd(a, ab, d1 / (d1 - d3));
         return 1;
     }
     const double d5 = -v3_dot(ab, c), d6 = -v3_dot(ac, c);
     if (d6 >= 0.0 && d5 <= d6) {
-        s[0] = c;
+        s[0] = s[2];
         *n = 1;
         *v = c;
         return 1;
@@ -215,7 +220,7 @@ static int gjk_triangle(sd_vec3 *s, int *n, sd_vec3 *v)
     const double vb = d5 * d2 - d1 * d6;
     if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
         if (!(d2 - d6 > 0.0)) return 0;
-        s[1] = c;
+        s[1] = s[2];
         *n = 2;
         *v = v3_madd(a, ac, d2 / (d2 - d6));
         return 1;
@@ -224,8 +229,8 @@ static int gjk_triangle(sd_vec3 *s, int *n, sd_vec3 *v)
     if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
         const double den = (d4 - d3) + (d5 - d6);
         if (!(den > 0.0)) return 0;
-        s[0] = b;
-        s[1] = c;
+        s[0] = s[1];
+        s[1] = s[2];
         *n = 2;
         *v = v3_madd(b, v3_sub(c, b), (d4 - d3) / den);
         return 1;
@@ -237,45 +242,61 @@ static int gjk_triangle(sd_vec3 *s, int *n, sd_vec3 *v)
     return 1;
 }
 
-/* Closest point v to the origin of the simplex s[0..*n-1] (1 to 4 points), s reduced to the
- * points that span it. Returns 0 when the simplex is degenerate or holds the origin. */
-static int gjk_closest(sd_vec3 *s, int *n, sd_vec3 *v)
+static double det3(sd_vec3 a, sd_vec3 b, sd_vec3 c) { return v3_dot(a, v3_cross(b, c)); }
+
+/* Closest point v to the origin of the simplex s[0..*n-1] (1 to 4 points, s[*n-1] the newest),
+ * s reduced to the points that span it. Returns 1, or 2 with a common point x of A and B when
+ * the tetrahedron holds the origin, or 0 when the simplex is degenerate. */
+static int gjk_closest(gjk_vert *s, int *n, sd_vec3 *v, sd_vec3 *x)
 {
     if (*n == 1) {
-        *v = s[0];
+        *v = s[0].w;
         return 1;
     }
     if (*n == 2) {
-        const sd_vec3 ab = v3_sub(s[1], s[0]);
-        const double t = -v3_dot(s[0], ab), dd = v3_norm2(ab);
+        const sd_vec3 ab = v3_sub(s[1].w, s[0].w);
+        const double t = -v3_dot(s[0].w, ab), dd = v3_norm2(ab);
         if (t <= 0.0) {
             *n = 1;
-            *v = s[0];
+            *v = s[0].w;
         } else if (t >= dd) {
             s[0] = s[1];
             *n = 1;
-            *v = s[0];
+            *v = s[0].w;
         } else {
-            *v = v3_madd(s[0], ab, t / dd);
+            *v = v3_madd(s[0].w, ab, t / dd);
         }
         return 1;
     }
     if (*n == 3) return gjk_triangle(s, n, v);
-    /* tetrahedron: the nearest of the faces whose plane has the origin on the far side from
-     * the fourth vertex (Ericson 5.1.6); none: the origin is inside */
-    static const int face[4][4] = {{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {1, 3, 2, 0}};
+    /* tetrahedron: the origin's barycentric coordinates; all >= 0, it is inside, and the same
+     * weights of the points of A (each a point of A, so their mean is in A) give a point that
+     * is also the same mean of the points of B: a common point */
+    const sd_vec3 e1 = v3_sub(s[1].w, s[0].w), e2 = v3_sub(s[2].w, s[0].w), e3 = v3_sub(s[3].w, s[0].w),
+                  o = v3_neg(s[0].w);
+    const double vol = det3(e1, e2, e3);
+    if (fabs(vol) > 1e-300) {
+        const double l1 = det3(o, e2, e3) / vol, l2 = det3(e1, o, e3) / vol, l3 = det3(e1, e2, o) / vol,
+                     l0 = 1.0 - l1 - l2 - l3;
+        if (l0 >= 0.0 && l1 >= 0.0 && l2 >= 0.0 && l3 >= 0.0) {
+            *x = v3_add(v3_add(v3_scale(s[0].pa, l0), v3_scale(s[1].pa, l1)),
+                        v3_add(v3_scale(s[2].pa, l2), v3_scale(s[3].pa, l3)));
+            return 2;
+        }
+    }
+    /* outside: the new point s[3] came from the origin's side of the old triangle's plane (it
+     * is the support along -v), so the old face does not face the origin: the nearest of the
+     * three faces through s[3] */
+    static const int face[3][3] = {{0, 1, 3}, {1, 2, 3}, {2, 0, 3}};
     double best = INFINITY;
-    sd_vec3 bs[3], bv = v3(0.0, 0.0, 0.0);
+    gjk_vert bs[3];
+    sd_vec3 bv = v3(0.0, 0.0, 0.0);
     int bn = 0;
-    for (int f = 0; f < 4; f++) {
-        const sd_vec3 a = s[face[f][0]], b = s[face[f][1]], c = s[face[f][2]], d = s[face[f][3]];
-        const sd_vec3 nrm = v3_cross(v3_sub(b, a), v3_sub(c, a));
-        const double so = -v3_dot(a, nrm), sd = v3_dot(v3_sub(d, a), nrm);
-        if (!(fabs(sd) > 0.0)) return 0; /* flat */
-        if (so * sd >= 0.0) continue;
-        sd_vec3 t[3] = {a, b, c}, q;
+    for (int f = 0; f < 3; f++) {
+        gjk_vert t[3] = {s[face[f][0]], s[face[f][1]], s[face[f][2]]};
+        sd_vec3 q;
         int m = 3;
-        if (!gjk_triangle(t, &m, &q)) return 0;
+        if (!gjk_triangle(t, &m, &q)) continue;
         const double q2 = v3_norm2(q);
         if (q2 < best) {
             best = q2;
@@ -302,14 +323,15 @@ int sd_geom_cc_gjk_set(int on)
     return was;
 }
 
-/* A separating axis of two solid cylinders by GJK on their difference A - B: v, the point of
- * the current simplex nearest the origin, tends to the nearest point of A - B, whose direction
- * separates the two when they are apart. Returns 1 with the unit axis once it shows them apart
- * by more than 4 tol (the test of a carried axis), 0 when it does not within 32 steps, or the
- * simplex degenerates or closes round the origin: then the caller goes on as without it. */
-static int cc_gjk_sep(const sd_cyl *a, const sd_cyl *b, sd_vec3 dc, double tol, sd_vec3 *axis)
+/* GJK on A - B: v, the point of the current simplex nearest the origin, tends to the nearest
+ * point of A - B, whose direction separates the two when they are apart. Returns 1 with the
+ * unit axis once it shows them apart by more than 4 tol (the test of a carried axis); 2 with a
+ * point x of both solids once a tetrahedron of the simplex holds the origin; 0 when neither
+ * within 32 steps, or the simplex degenerates. */
+static int cc_gjk(const sd_cyl *a, const sd_cyl *b, sd_vec3 dc, double tol, sd_vec3 *axis, sd_vec3 *x)
 {
-    sd_vec3 s[4], v = dc;
+    gjk_vert s[4];
+    sd_vec3 v = dc;
     int n = 0;
     for (int it = 0; it < 32; it++) {
         const double v2 = v3_norm2(v);
@@ -320,13 +342,58 @@ static int cc_gjk_sep(const sd_cyl *a, const sd_cyl *b, sd_vec3 dc, double tol, 
             return 1;
         }
         /* the point of A - B farthest along -v */
-        const sd_vec3 w = v3_sub(cc_support(a, v3_neg(v)), cc_support(b, v));
+        const sd_vec3 pa = cc_support(a, v3_neg(v)), w = v3_sub(pa, cc_support(b, v));
         /* no progress towards the origin: v is (to rounding) the nearest point already */
         if (n > 0 && v2 - v3_dot(v, w) <= 1e-14 * v2) return 0;
-        s[n++] = w;
-        if (!gjk_closest(s, &n, &v)) return 0;
+        s[n].w = w;
+        s[n].pa = pa;
+        n++;
+        const int r = gjk_closest(s, &n, &v, x);
+        if (r != 1) return r;
     }
     return 0;
+}
+
+/* From the unit direction *n (along dc) with separating-axis overlap *ov, a pattern search on
+ * the sphere for a nearby direction of smaller overlap: the best of eight steps of h (along two
+ * tangents and their diagonals, which follow the creases where an extent has a kink), h halved
+ * when none helps, down to 1e-7 rad (the depth then to ~1e-15 m); at most 800 trials. The
+ * tangents come from the two axes (a x b, else dc), not from the world's frame, and the best of
+ * the eight is taken, not the first: the same search for the pair in either order and in any
+ * frame. */
+static void cc_min_overlap(const sd_cyl *a, const sd_cyl *b, sd_vec3 dc, sd_vec3 *n, double *ov)
+{
+    const sd_vec3 ab = v3_cross(a->a, b->a);
+    sd_vec3 bn = *n;
+    double best = *ov, h = 0.25;
+    for (int trial = 0; trial < 800 && h > 1e-7; trial += 8) {
+        sd_vec3 t1 = v3_madd(ab, bn, -v3_dot(ab, bn));
+        if (!(v3_norm2(t1) > 1e-12)) t1 = v3_madd(dc, bn, -v3_dot(dc, bn));
+        t1 = v3_norm2(t1) > 1e-300 ? v3_normalize(t1) : v3_any_perp(bn);
+        const sd_vec3 t2 = v3_cross(bn, t1);
+        const double c = 0.7071067811865476;
+        const sd_vec3 d1 = v3_scale(v3_add(t1, t2), c), d2 = v3_scale(v3_sub(t1, t2), c);
+        const sd_vec3 step[8] = {t1, t2, v3_neg(t1), v3_neg(t2), d1, d2, v3_neg(d1), v3_neg(d2)};
+        double o4 = best;
+        sd_vec3 m4 = bn;
+        for (int k = 0; k < 8; k++) {
+            sd_vec3 m = v3_normalize(v3_madd(bn, step[k], h));
+            if (v3_dot(m, dc) < 0.0) m = v3_neg(m);
+            const double o = cc_sat_overlap(a, b, m);
+            if (o < o4) {
+                o4 = o;
+                m4 = m;
+            }
+        }
+        if (o4 < best) {
+            best = o4;
+            bn = m4;
+        } else {
+            h *= 0.5;
+        }
+    }
+    *n = bn;
+    *ov = best;
 }
 
 int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m) { return sd_geom_cyl_cyl_sep(a, b, m, NULL); }
@@ -426,11 +493,16 @@ int sd_geom_cyl_cyl_sep(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec
      * empty). If one is found, report one contact at it along the best of a few separating
      * directions, with the separating-axis overlap along it (an upper bound of the depth). */
     if (nc == 0) {
-        /* most pairs that get here are apart by a small gap near an end or a rim, where no
-         * fixed axis shows it and the alternating projections below converge slowly: GJK first */
+        /* GJK first: it shows most pairs that get here apart (a small gap near an end or a
+         * rim, where no fixed axis shows it), and finds a common point of the rest, among them
+         * two end rims crossing each other, where the alternating projections below creep
+         * and find none (docs/physics.md) */
+        int g = 0;
+        sd_vec3 gx = v3(0.0, 0.0, 0.0);
         if (cc_gjk_on) {
             sd_vec3 u;
-            if (cc_gjk_sep(a, b, dc, tol, &u)) {
+            g = cc_gjk(a, b, dc, tol, &u, &gx);
+            if (g == 1) {
                 if (sep) *sep = u;
                 return 0;
             }
@@ -448,6 +520,13 @@ int sd_geom_cyl_cyl_sep(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec
         for (int k = 0; k < 7 && found < 0; k++)
             if (cc_inside(a, w[k]) && cc_inside(b, w[k])) found = k;
         sd_vec3 nxa = a->a, nxb = b->a; /* outward normals at the witness search point */
+        if (found < 0 && g == 2) {
+            int fa, fb;
+            sd_cyl_signed_dist(a, gx, dc, &nxa, &fa);
+            sd_cyl_signed_dist(b, gx, v3_neg(dc), &nxb, &fb);
+            w[0] = gx;
+            found = 0;
+        }
         if (found < 0) {
             sd_vec3 x = w[0];
             for (int it = 0; it < 64; it++) {
@@ -496,11 +575,22 @@ int sd_geom_cyl_cyl_sep(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec
             }
         }
         if (found >= 0) {
-            sd_vec3 dirs[8] = {v3_sub(pa, pb),       dc,  a->a,        b->a,
-                               v3_cross(a->a, b->a), nxb, v3_neg(nxa), v3_sub(nxb, nxa)};
+            /* two end rims crossing: the normal is across both rims' tangents there */
+            const sd_vec3 x = w[found];
+            const sd_vec3 ra = v3_madd(v3_sub(x, a->c), a->a, -v3_dot(v3_sub(x, a->c), a->a));
+            const sd_vec3 rb = v3_madd(v3_sub(x, b->c), b->a, -v3_dot(v3_sub(x, b->c), b->a));
+            sd_vec3 dirs[9] = {v3_sub(pa, pb),
+                               dc,
+                               a->a,
+                               b->a,
+                               v3_cross(a->a, b->a),
+                               nxb,
+                               v3_neg(nxa),
+                               v3_sub(nxb, nxa),
+                               v3_cross(v3_cross(a->a, ra), v3_cross(b->a, rb))};
             double best = INFINITY;
             sd_vec3 bn = v3(0.0, 0.0, 0.0);
-            for (int k = 0; k < 8; k++) {
+            for (int k = 0; k < 9; k++) {
                 double nn = v3_norm(dirs[k]);
                 if (!(nn > 1e-300)) continue;
                 sd_vec3 n = v3_scale(dirs[k], 1.0 / nn);
@@ -511,6 +601,10 @@ int sd_geom_cyl_cyl_sep(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec
                     bn = n;
                 }
             }
+            /* then down the separating-axis overlap to its nearest minimum: the depth of the
+             * overlap and the direction that ends it (the fixed directions above bound it from
+             * above, by 10-1000x for two rims crossing, docs/physics.md) */
+            if (best > 0.0 && best < INFINITY) cc_min_overlap(a, b, dc, &bn, &best);
             if (best > 0.0 && best < INFINITY) {
                 cn[nc] = bn;
                 cov[nc] = best;
