@@ -22,7 +22,8 @@ static void test_reduced_flume(void)
     int code = sd_run_scenario(&s, &o, &r);
     CHECK(code == 0);
     CHECK(r.p_v >= 0.0 && r.p_v <= 1.0);
-    for (int k = 0; k < s.n_classes; k++) CHECK(r.p_v_class[k] >= 0.0 && r.p_v_class[k] <= 1.0);
+    for (int k = 0; k < s.n_classes; k++)
+        CHECK(r.p_v_class[k] >= 0.0 && r.p_v_class[k] <= 1.0);
     CHECK(r.p_v_logs >= 0.0 && r.p_v_logs <= 1.0);
     /* phases happened in order */
     CHECK(r.phase_end[0] > 0.29 && r.phase_end[0] < 0.31);
@@ -47,8 +48,8 @@ static void test_reduced_flume(void)
             long contacts;
             int elements, passed;
             char phase[32];
-            if (sscanf(line, "%lf,%31[^,],%lf,%lf,%lf,%ld,%lf,%lf,%lf,%d,%d", &t, phase, &front, &vol, &ke, &contacts, &dam,
-                       &pv, &hd, &elements, &passed) != 11) {
+            if (sscanf(line, "%lf,%31[^,],%lf,%lf,%lf,%ld,%lf,%lf,%lf,%d,%d", &t, phase, &front, &vol, &ke, &contacts,
+                       &dam, &pv, &hd, &elements, &passed) != 11) {
                 bad++;
                 continue;
             }
@@ -149,6 +150,40 @@ static void test_capture_depth(void)
     sd_scenario_free(&s);
 }
 
+/* The settled rule's "crossing": only moving elements just past the trap plane that move on
+ * downstream; one lodged there at rest, one moving upstream of the plane, one beyond the 2 cm
+ * band and a fixed one do not count. */
+static void test_crossing(void)
+{
+    sd_scenario s;
+    sd_scenario_default(&s);
+    sd_world *w;
+    CHECK(sd_world_create(&s.world, &w) == SD_OK);
+    const double xt = s.x_dam + 0.009;
+    sd_sphere_def sp = sd_sphere_def_default();
+    sp.radius = 0.0075;
+    sp.density = 1900;
+    sp.pos = v3(xt + 0.006, 0.0075, 0.0075); /* lodged at the foot of a column, at rest */
+    sp.vel = v3(3e-5, 0.0, 0.0);
+    sd_world_add_sphere(w, &sp);
+    sp.pos = v3(xt - 0.001, 0.1, 0.0075); /* upstream of the plane, moving fast */
+    sp.vel = v3(0.5, 0.0, 0.0);
+    sd_world_add_sphere(w, &sp);
+    sp.pos = v3(xt + 0.03, 0.1, 0.0075); /* past the band: already on its way out */
+    sd_world_add_sphere(w, &sp);
+    sp.pos = v3(xt + 0.01, 0.2, 0.0075); /* fixed in the band */
+    sp.fixed = 1;
+    sd_world_add_sphere(w, &sp);
+    CHECK(sd_run_crossing(w, xt) == 0);
+    sp.fixed = 0;
+    sp.pos = v3(xt + 0.01, 0.25, 0.0075); /* in the band, moving on at 2 mm/s: crossing */
+    sp.vel = v3(0.002, 0.0, 0.0);
+    sd_world_add_sphere(w, &sp);
+    CHECK(sd_run_crossing(w, xt) == 1);
+    sd_world_destroy(w);
+    sd_scenario_free(&s);
+}
+
 /* SPEC §8 layout: 4 columns at y = 0.048, 0.116, 0.184, 0.252 m; top beam underside 0.118 m;
  * intermediate beam underside at ℓ_V = 30, 40, 50 mm, none for ℓ/d_max = 5.9. */
 static void test_dam_layout(void)
@@ -163,9 +198,11 @@ static void test_dam_layout(void)
         sd_build_dam_layout(&s, y, &nc, z, &nb);
         CHECK(nc == 4);
         const double want[4] = {0.048, 0.116, 0.184, 0.252};
-        for (int i = 0; i < 4 && i < nc; i++) CHECK_NEAR(y[i], want[i], 1e-12);
+        for (int i = 0; i < 4 && i < nc; i++)
+            CHECK_NEAR(y[i], want[i], 1e-12);
         /* clear spacing between columns = ℓ_H */
-        for (int i = 1; i < nc; i++) CHECK_NEAR(y[i] - y[i - 1] - s.pipe_diam, s.l_h, 1e-12);
+        for (int i = 1; i < nc; i++)
+            CHECK_NEAR(y[i] - y[i - 1] - s.pipe_diam, s.l_h, 1e-12);
         if (lv[k] > 0) {
             CHECK(nb == 2);
             CHECK_NEAR(z[0] - 0.009, lv[k], 1e-12); /* underside of the intermediate beam */
@@ -191,6 +228,7 @@ int main(void)
     test_dam_layout();
     test_floating_log();
     test_capture_depth();
+    test_crossing();
     test_reduced_flume();
     return check_report("test_flume");
 }
