@@ -16,7 +16,8 @@
  * case. Of the E and F candidates of one disk the shallower is kept (least penetration
  * direction); near-duplicates (close points, similar normals) are merged, keeping the deepest.
  * feature: 0 side-side; A's disk -/+: 1/2 against B's side, 3/4 against an end face of B;
- * B's disk -/+: 5/6 against A's side, 7/8 against an end face of A; 9 deep-overlap fallback. */
+ * B's disk -/+: 5/6 against A's side, 7/8 against an end face of A; 9 last resort (rims crossing, deep irregular
+ * overlaps). */
 #include <stddef.h>
 
 #include "cyl_common.h"
@@ -486,12 +487,12 @@ int sd_geom_cyl_cyl_sep(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec
         cov[nc] = c.ov;
         nc++;
     }
-    /* Fallback for deep, irregular overlaps that no feature pair above describes (e.g. the
-     * end of one log deep in the side of another near its end): look for a witness point
-     * inside both solids (closest points of the axis segments, end centres, then alternating
-     * projections onto the two solids, which converge into the intersection when it is not
-     * empty). If one is found, report one contact at it along the best of a few separating
-     * directions, with the separating-axis overlap along it (an upper bound of the depth). */
+    /* Last resort, for overlaps that no feature pair above describes (two end rims crossing;
+     * the end of one log deep in the side of another near its end): a witness point inside
+     * both solids (from GJK, else the closest points of the axis segments, end centres, then
+     * alternating projections onto the two solids). If one is found, one contact at it: the
+     * least separating-axis overlap of a few directions, searched down to its nearest minimum
+     * (the depth of the overlap) by cc_min_overlap. */
     if (nc == 0) {
         /* GJK first: it shows most pairs that get here apart (a small gap near an end or a
          * rim, where no fixed axis shows it), and finds a common point of the rest, among them
@@ -576,9 +577,8 @@ int sd_geom_cyl_cyl_sep(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec
         }
         if (found >= 0) {
             /* two end rims crossing: the normal is across both rims' tangents there */
-            const sd_vec3 x = w[found];
-            const sd_vec3 ra = v3_madd(v3_sub(x, a->c), a->a, -v3_dot(v3_sub(x, a->c), a->a));
-            const sd_vec3 rb = v3_madd(v3_sub(x, b->c), b->a, -v3_dot(v3_sub(x, b->c), b->a));
+            const sd_vec3 xa = v3_sub(w[found], a->c), xb = v3_sub(w[found], b->c);
+            const sd_vec3 ra = v3_madd(xa, a->a, -v3_dot(xa, a->a)), rb = v3_madd(xb, b->a, -v3_dot(xb, b->a));
             sd_vec3 dirs[9] = {v3_sub(pa, pb),
                                dc,
                                a->a,
