@@ -138,7 +138,7 @@ typedef struct {
         double tbx[SS_CHUNK], tby[SS_CHUNK], tbz[SS_CHUNK];
         double redo[SS_CHUNK];
         int32_t feature[SS_CHUNK], i[SS_CHUNK]; /* the contact's feature, the pair's place */
-        long n_run, n_redo;                     /* lanes run, and sent back, since the last fold (for the tests) */
+        long n_run, n_redo, n_geom; /* lanes run, sent back, and filled by sc_geom256 since the last fold (tests) */
     } sc;
 } ss_batch;
 
@@ -957,6 +957,17 @@ static void sc_lane_fill(const sd_world *w, const sd_pair *p, const sd_manifold 
 }
 
 static int sc_lanes_on = 1;
+static int sc_geom_on = 1; /* sc_geom256 (sd_sc_geom_set) */
+static long sc_geom_run;
+
+long sd_sc_geom_count(void) { return __atomic_load_n(&sc_geom_run, __ATOMIC_RELAXED); }
+
+int sd_sc_geom_set(int on)
+{
+    const int was = sc_geom_on;
+    sc_geom_on = on != 0;
+    return was;
+}
 static long sc_lanes_run, sc_lanes_redo;
 
 int sd_sc_lanes_set(int on)
@@ -1069,6 +1080,169 @@ static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, i
     }
 }
 
+#ifdef SD_FILTER512
+/* Step 2 of bb_chunk for the sphere-log pairs sg[0 .. n) (chunk entries; one spring slot each,
+ * none apart by the touch filter's test) in AVX2, 4 at a time: sd_geom_sphere_cyl's contact on
+ * the log's side, an end face or an end rim, and sc_lane_fill, with their operations in their
+ * order (same bits), lane by lane into q from msc on. A pair whose centre is on the axis or
+ * inside the log, or that does not touch after all (near a rim), goes through pair_general as
+ * before. Returns the lanes filled. The scalar path spent ~12 % of the settled packing's step
+ * here (docs/performance.md §2-00000000000000). */
+__attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const sd_law *law, const int32_t *ks,
+                                                      const int *sg, int n, struct sc_lanes *q, int msc,
+                                                      sd_pair_out *out, int *used)
+{
+    const sd_bodies *b = &w->b;
+    const double *pos = &b->pos[0].x, *axis = &b->axis[0].x, *vel = &b->vel[0].x, *om = &b->omega[0].x;
+    const double *rad = b->radius, *hlen = b->hl;
+    const sd_pair *pairs = w->bb.p;
+    const sd_hist *hist = w->bb.hist;
+    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), mone = _mm256_set1_pd(-1.0),
+                  sign = _mm256_set1_pd(-0.0), tiny = _mm256_set1_pd(1e-280), mhalf = _mm256_set1_pd(-0.5);
+    int g = 0;
+    for (; g + 4 <= n; g += 4) {
+        const sd_pair *p[4];
+        int sa[4], lc[4];
+        for (int l = 0; l < 4; l++) {
+            p[l] = &pairs[ks[sg[g + l]]];
+            sa[l] = p[l]->a, lc[l] = p[l]->b;
+        }
+        __m256d r[4];
+        sd_transpose4(SD_XYZ_LOAD(pos, sa[0]), SD_XYZ_LOAD(pos, sa[1]), SD_XYZ_LOAD(pos, sa[2]),
+                      SD_XYZ_LOAD(pos, sa[3]), r);
+        const __m256d cx = r[0], cy = r[1], cz = r[2];
+        sd_transpose4(SD_XYZ_LOAD(pos, lc[0]), SD_XYZ_LOAD(pos, lc[1]), SD_XYZ_LOAD(pos, lc[2]),
+                      SD_XYZ_LOAD(pos, lc[3]), r);
+        const __m256d bx = r[0], by = r[1], bz = r[2];
+        sd_transpose4(SD_XYZ_LOAD(axis, lc[0]), SD_XYZ_LOAD(axis, lc[1]), SD_XYZ_LOAD(axis, lc[2]),
+                      SD_XYZ_LOAD(axis, lc[3]), r);
+        const __m256d ax = r[0], ay = r[1], az = r[2];
+        const __m256d rs = _mm256_setr_pd(rad[sa[0]], rad[sa[1]], rad[sa[2]], rad[sa[3]]);
+        const __m256d rc = _mm256_setr_pd(rad[lc[0]], rad[lc[1]], rad[lc[2]], rad[lc[3]]);
+        const __m256d hl = _mm256_setr_pd(hlen[lc[0]], hlen[lc[1]], hlen[lc[2]], hlen[lc[3]]);
+        /* sd_cyl_signed_dist: d = c - centre, t = d.a, w = d + (-t) a, rho = |w| */
+        const __m256d dx = _mm256_sub_pd(cx, bx), dy = _mm256_sub_pd(cy, by), dz = _mm256_sub_pd(cz, bz);
+        const __m256d t =
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, ax), _mm256_mul_pd(dy, ay)), _mm256_mul_pd(dz, az));
+        const __m256d mt = _mm256_xor_pd(t, sign);
+        const __m256d wx = _mm256_add_pd(dx, _mm256_mul_pd(mt, ax)), wy = _mm256_add_pd(dy, _mm256_mul_pd(mt, ay)),
+                      wz = _mm256_add_pd(dz, _mm256_mul_pd(mt, az));
+        const __m256d rho2 =
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(wx, wx), _mm256_mul_pd(wy, wy)), _mm256_mul_pd(wz, wz));
+        const __m256d rho = _mm256_sqrt_pd(rho2);
+        const __m256d e = _mm256_blendv_pd(mone, one, _mm256_cmp_pd(t, zero, _CMP_GE_OQ));
+        const __m256d axd = _mm256_sub_pd(_mm256_andnot_pd(sign, t), hl); /* fabs(t) - hl */
+        const __m256d rd = _mm256_sub_pd(rho, rc);
+        const __m256d inv = _mm256_div_pd(one, rho);
+        const __m256d radx = _mm256_mul_pd(wx, inv), rady = _mm256_mul_pd(wy, inv), radz = _mm256_mul_pd(wz, inv);
+        const __m256d ax_in = _mm256_cmp_pd(axd, zero, _CMP_LE_OQ), ax_out = _mm256_cmp_pd(axd, zero, _CMP_GT_OQ);
+        const __m256d rd_in = _mm256_cmp_pd(rd, zero, _CMP_LE_OQ), rd_out = _mm256_cmp_pd(rd, zero, _CMP_GT_OQ);
+        const __m256d side = _mm256_and_pd(ax_in, rd_out), end = _mm256_and_pd(rd_in, ax_out),
+                      rim = _mm256_and_pd(ax_out, rd_out);
+        /* beyond the rim: radial (rd / dist) + a (e ax / dist), dist = sqrt(rd^2 + ax^2); only
+         * where a lane is there (a sphere on a log's side or end face: nearly all) */
+        __m256d nx = zero, ny = zero, nz = zero, sd = zero;
+        if (_mm256_movemask_pd(rim)) {
+            const __m256d dist = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(rd, rd), _mm256_mul_pd(axd, axd)));
+            const __m256d k1 = _mm256_div_pd(rd, dist), k2 = _mm256_div_pd(_mm256_mul_pd(e, axd), dist);
+            nx = _mm256_add_pd(_mm256_mul_pd(radx, k1), _mm256_mul_pd(ax, k2));
+            ny = _mm256_add_pd(_mm256_mul_pd(rady, k1), _mm256_mul_pd(ay, k2));
+            nz = _mm256_add_pd(_mm256_mul_pd(radz, k1), _mm256_mul_pd(az, k2));
+            sd = dist;
+        }
+        const __m256d eax = _mm256_mul_pd(ax, e), eay = _mm256_mul_pd(ay, e), eaz = _mm256_mul_pd(az, e);
+        nx = _mm256_blendv_pd(_mm256_blendv_pd(nx, eax, end), radx, side);
+        ny = _mm256_blendv_pd(_mm256_blendv_pd(ny, eay, end), rady, side);
+        nz = _mm256_blendv_pd(_mm256_blendv_pd(nz, eaz, end), radz, side);
+        sd = _mm256_blendv_pd(_mm256_blendv_pd(sd, axd, end), rd, side);
+        /* the lanes done here: a contact (sd < r) on the side, an end face or a rim, off the axis */
+        const int ok = _mm256_movemask_pd(_mm256_and_pd(
+            _mm256_and_pd(_mm256_or_pd(_mm256_or_pd(side, end), rim), _mm256_cmp_pd(rho2, tiny, _CMP_GT_OQ)),
+            _mm256_cmp_pd(sd, rs, _CMP_LT_OQ)));
+        /* sd_geom_sphere_cyl: overlap, the surface point c + (-sd) n, the point + (-0.5 ov) n */
+        const __m256d ov = _mm256_sub_pd(rs, sd), msd = _mm256_xor_pd(sd, sign), mh = _mm256_mul_pd(mhalf, ov);
+        const __m256d ptx = _mm256_add_pd(_mm256_add_pd(cx, _mm256_mul_pd(msd, nx)), _mm256_mul_pd(mh, nx)),
+                      pty = _mm256_add_pd(_mm256_add_pd(cy, _mm256_mul_pd(msd, ny)), _mm256_mul_pd(mh, ny)),
+                      ptz = _mm256_add_pd(_mm256_add_pd(cz, _mm256_mul_pd(msd, nz)), _mm256_mul_pd(mh, nz));
+        const int sidem = _mm256_movemask_pd(side), endm = _mm256_movemask_pd(end),
+                  negm = _mm256_movemask_pd(_mm256_cmp_pd(e, zero, _CMP_LT_OQ));
+        if (ok == 15) { /* (nearly always) four lanes at once */
+            const int j = msc;
+            _mm256_storeu_pd(q->nx + j, nx), _mm256_storeu_pd(q->ny + j, ny), _mm256_storeu_pd(q->nz + j, nz);
+            _mm256_storeu_pd(q->ov + j, ov);
+            _mm256_storeu_pd(q->px + j, ptx), _mm256_storeu_pd(q->py + j, pty), _mm256_storeu_pd(q->pz + j, ptz);
+            _mm256_storeu_pd(q->rax + j, _mm256_sub_pd(ptx, cx)), _mm256_storeu_pd(q->ray + j, _mm256_sub_pd(pty, cy));
+            _mm256_storeu_pd(q->raz + j, _mm256_sub_pd(ptz, cz));
+            _mm256_storeu_pd(q->rbx + j, _mm256_sub_pd(ptx, bx)), _mm256_storeu_pd(q->rby + j, _mm256_sub_pd(pty, by));
+            _mm256_storeu_pd(q->rbz + j, _mm256_sub_pd(ptz, bz));
+            sd_transpose4(SD_XYZ_LOAD(vel, sa[0]), SD_XYZ_LOAD(vel, sa[1]), SD_XYZ_LOAD(vel, sa[2]),
+                          SD_XYZ_LOAD(vel, sa[3]), r);
+            _mm256_storeu_pd(q->vax + j, r[0]), _mm256_storeu_pd(q->vay + j, r[1]), _mm256_storeu_pd(q->vaz + j, r[2]);
+            sd_transpose4(SD_XYZ_LOAD(om, sa[0]), SD_XYZ_LOAD(om, sa[1]), SD_XYZ_LOAD(om, sa[2]),
+                          SD_XYZ_LOAD(om, sa[3]), r);
+            _mm256_storeu_pd(q->wax + j, r[0]), _mm256_storeu_pd(q->way + j, r[1]), _mm256_storeu_pd(q->waz + j, r[2]);
+            sd_transpose4(SD_XYZ_LOAD(vel, lc[0]), SD_XYZ_LOAD(vel, lc[1]), SD_XYZ_LOAD(vel, lc[2]),
+                          SD_XYZ_LOAD(vel, lc[3]), r);
+            _mm256_storeu_pd(q->vbx + j, r[0]), _mm256_storeu_pd(q->vby + j, r[1]), _mm256_storeu_pd(q->vbz + j, r[2]);
+            sd_transpose4(SD_XYZ_LOAD(om, lc[0]), SD_XYZ_LOAD(om, lc[1]), SD_XYZ_LOAD(om, lc[2]),
+                          SD_XYZ_LOAD(om, lc[3]), r);
+            _mm256_storeu_pd(q->wbx + j, r[0]), _mm256_storeu_pd(q->wby + j, r[1]), _mm256_storeu_pd(q->wbz + j, r[2]);
+            for (int l = 0; l < 4; l++) {
+                const int f = sidem >> l & 1 ? 0 : (negm >> l & 1 ? 1 : 2) + (endm >> l & 1 ? 0 : 2);
+                const sd_hist *h = &hist[p[l]->off];
+                const int same = h->feature == f;
+                q->sqm[j + l] = p[l]->sqrt_m_eff;
+                q->sx[j + l] = same ? h->shear.x : 0.0, q->sy[j + l] = same ? h->shear.y : 0.0;
+                q->sz[j + l] = same ? h->shear.z : 0.0;
+                q->feature[j + l] = f;
+                q->i[j + l] = sg[g + l];
+            }
+            msc += 4;
+            q->n_geom += 4;
+            continue;
+        }
+        double L[13][4];
+        _mm256_storeu_pd(L[0], nx), _mm256_storeu_pd(L[1], ny), _mm256_storeu_pd(L[2], nz);
+        _mm256_storeu_pd(L[3], ov);
+        _mm256_storeu_pd(L[4], ptx), _mm256_storeu_pd(L[5], pty), _mm256_storeu_pd(L[6], ptz);
+        _mm256_storeu_pd(L[7], _mm256_sub_pd(ptx, cx)), _mm256_storeu_pd(L[8], _mm256_sub_pd(pty, cy));
+        _mm256_storeu_pd(L[9], _mm256_sub_pd(ptz, cz));
+        _mm256_storeu_pd(L[10], _mm256_sub_pd(ptx, bx)), _mm256_storeu_pd(L[11], _mm256_sub_pd(pty, by));
+        _mm256_storeu_pd(L[12], _mm256_sub_pd(ptz, bz));
+        for (int l = 0; l < 4; l++) {
+            const int i = sg[g + l];
+            if (!(ok >> l & 1)) {
+                msc += pair_general(w, law, p[l], i, q, msc, out, used);
+                continue;
+            }
+            /* sc_lane_fill */
+            const int j = msc++;
+            q->n_geom++;
+            const int a = sa[l], c = lc[l];
+            /* feature: 0 side, 1 / 2 end face at -hl / +hl, 3 / 4 rim there */
+            const int f = sidem >> l & 1 ? 0 : (negm >> l & 1 ? 1 : 2) + (endm >> l & 1 ? 0 : 2);
+            q->nx[j] = L[0][l], q->ny[j] = L[1][l], q->nz[j] = L[2][l], q->ov[j] = L[3][l];
+            q->px[j] = L[4][l], q->py[j] = L[5][l], q->pz[j] = L[6][l];
+            q->rax[j] = L[7][l], q->ray[j] = L[8][l], q->raz[j] = L[9][l];
+            q->rbx[j] = L[10][l], q->rby[j] = L[11][l], q->rbz[j] = L[12][l];
+            q->vax[j] = vel[3 * a], q->vay[j] = vel[3 * a + 1], q->vaz[j] = vel[3 * a + 2];
+            q->wax[j] = om[3 * a], q->way[j] = om[3 * a + 1], q->waz[j] = om[3 * a + 2];
+            q->vbx[j] = vel[3 * c], q->vby[j] = vel[3 * c + 1], q->vbz[j] = vel[3 * c + 2];
+            q->wbx[j] = om[3 * c], q->wby[j] = om[3 * c + 1], q->wbz[j] = om[3 * c + 2];
+            q->sqm[j] = p[l]->sqrt_m_eff;
+            const sd_hist *h = &hist[p[l]->off];
+            const int same = h->feature == f;
+            q->sx[j] = same ? h->shear.x : 0.0, q->sy[j] = same ? h->shear.y : 0.0, q->sz[j] = same ? h->shear.z : 0.0;
+            q->feature[j] = f;
+            q->i[j] = i;
+        }
+    }
+    for (; g < n; g++)
+        msc += pair_general(w, law, &pairs[ks[sg[g]]], sg[g], q, msc, out, used);
+    return msc;
+}
+#endif
+
 /* The pairs ks[0 .. n) (n <= SS_CHUNK): forces into out[i], contact points into used[i]. Each
  * pair's result depends on that pair alone, so any split into chunks gives the same bits.
  * With acc, the chunk also adds each pair in contact onto its two bodies, in chunk order (the
@@ -1097,10 +1271,26 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
     /* 2. the other shapes, through the manifold */
     {
         int msc = 0;
-        for (int g = 0; g < ng; g++) {
-            const int i = gen[g];
-            msc += pair_general(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
-        }
+#ifdef SD_FILTER512
+        if (simd_level >= SD_SIMD_AVX2 && sc_lanes_on && sc_geom_on) {
+            /* the sphere-log pairs in lanes (sc_geom256), the others first, one by one: each
+             * pair's result is its own, whatever the order (same bits) */
+            int sg[SS_CHUNK], nsg = 0;
+            for (int g = 0; g < ng; g++) {
+                const int i = gen[g];
+                const sd_pair *p = &pairs[ks[i]];
+                if (p->kind == SD_PAIR_SC && p->cap == 1)
+                    sg[nsg++] = i;
+                else
+                    msc += pair_general(w, law, p, i, &q->sc, msc, out, used);
+            }
+            msc = sc_geom256(w, law, ks, sg, nsg, &q->sc, msc, out, used);
+        } else
+#endif
+            for (int g = 0; g < ng; g++) {
+                const int i = gen[g];
+                msc += pair_general(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
+            }
         if (msc > 0) sc_flush(w, law, &q->sc, msc, ks, out, used);
     }
     /* 3. the rest of what the law needs of the touching spheres */
@@ -2023,7 +2213,8 @@ static void sc_lanes_fold(void *scratch, int T)
         struct sc_lanes *q = &((bb_scratch *)scratch)[t].q.sc;
         if (q->n_run) __atomic_fetch_add(&sc_lanes_run, q->n_run, __ATOMIC_RELAXED);
         if (q->n_redo) __atomic_fetch_add(&sc_lanes_redo, q->n_redo, __ATOMIC_RELAXED);
-        q->n_run = q->n_redo = 0;
+        if (q->n_geom) __atomic_fetch_add(&sc_geom_run, q->n_geom, __ATOMIC_RELAXED);
+        q->n_run = q->n_redo = q->n_geom = 0;
     }
 }
 
@@ -2040,7 +2231,8 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         if (!w->bb_scratch) return SD_ERR_NOMEM;
         w->bb_scratch_n = T;
         for (int t = 0; t < T; t++)
-            ((bb_scratch *)w->bb_scratch)[t].q.sc.n_run = ((bb_scratch *)w->bb_scratch)[t].q.sc.n_redo = 0;
+            ((bb_scratch *)w->bb_scratch)[t].q.sc.n_run = ((bb_scratch *)w->bb_scratch)[t].q.sc.n_redo =
+                ((bb_scratch *)w->bb_scratch)[t].q.sc.n_geom = 0;
     }
 #ifdef _OPENMP
     if (T > 1) {

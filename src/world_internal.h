@@ -305,6 +305,11 @@ int sd_simd512_on(void);
  * returns the previous setting. sd_sc_lanes_count: the lanes run so far, and of them the ones
  * sent back to the scalar law (*redo). */
 int sd_sc_lanes_set(int on);
+/* The sphere-log contacts' geometry in AVX2 lanes where the CPU has it (1, the default) or
+ * pair by pair (0); the same bits either way. Returns the previous setting. */
+int sd_sc_geom_set(int on);
+/* Sphere-log lanes filled by the AVX2 geometry since the start (for the tests). */
+long sd_sc_geom_count(void);
 long sd_sc_lanes_count(long *redo);
 /* The body-body pass's prefetch of the bodies it is about to reach for the first time (contact.c):
  * SD_PREFETCH_AUTO (the default: on when the step's data outgrow a quarter of the last-level cache), _OFF or

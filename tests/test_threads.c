@@ -111,6 +111,58 @@ static uint64_t run_bed(int threads, long *contacts, int *pairs, int *cross)
     return h;
 }
 
+/* One log (r 5 mm, 100 mm long, along x) and one sphere (r 5 mm) per case, the cases far
+ * apart, no gravity, spinning and sliding so that the law has work: the sphere on the log's
+ * side, on each end face, beyond each end rim, near a rim without touching, inside the log, and
+ * on its axis. Runs `steps` steps; returns the state hash and, in seen, a bit per sphere-log
+ * contact feature held at the end (1 << feature). */
+static uint64_t run_sc_cases(int steps, int *seen)
+{
+#ifdef _OPENMP
+    omp_set_num_threads(1);
+#endif
+    static const double at[8][3] = {
+        {0.0, 0.0, 0.0095},      /* side (feature 0) */
+        {-0.0545, 0.001, 0.0},   /* end face at -hl (1) */
+        {0.0545, 0.0, 0.002},    /* end face at +hl (2) */
+        {-0.053, 0.007, 0.0},    /* beyond the rim at -hl (3) */
+        {0.053, 0.0, -0.007},    /* beyond the rim at +hl (4) */
+        {0.054, 0.0, 0.009},     /* near the +hl rim, 5.66 mm from it: no contact */
+        {0.02, 0.0, 0.003},      /* centre inside the log */
+        {0.01, 0.0, 0.0},        /* centre on the axis */
+    };
+    sd_world_def d = sd_world_def_default();
+    d.gravity = v3(0, 0, 0);
+    sd_world *w;
+    if (sd_world_create(&d, &w)) return 0;
+    for (int c = 0; c < 8; c++) {
+        const double y0 = 0.3 * c;
+        sd_cylinder_def cy = sd_cylinder_def_default();
+        cy.pos = v3(0.0, y0, 0.0);
+        cy.axis = v3(1.0, 0.0, 0.0);
+        cy.radius = 0.005;
+        cy.length = 0.1;
+        cy.density = 800.0;
+        cy.omega = v3(0.5, 0.2 * c, -0.3);
+        sd_world_add_cylinder(w, &cy);
+        sd_sphere_def sp = sd_sphere_def_default();
+        sp.pos = v3(at[c][0], y0 + at[c][1], at[c][2]);
+        sp.radius = 0.005;
+        sp.density = 1900.0;
+        sp.vel = v3(0.01 * (c + 1), -0.004, 0.002);
+        sp.omega = v3(1.0, -2.0, 0.5 * c);
+        sd_world_add_sphere(w, &sp);
+    }
+    CHECK(sd_world_run(w, steps) == SD_OK);
+    *seen = 0;
+    for (int k = 0; k < w->bb.n; k++)
+        if (w->bb.p[k].kind == SD_PAIR_SC && w->bb.hist[w->bb.p[k].off].feature >= 0)
+            *seen |= 1 << w->bb.hist[w->bb.p[k].off].feature;
+    const uint64_t h = sd_world_state_hash(w);
+    sd_world_destroy(w);
+    return h;
+}
+
 int main(void)
 {
     {
@@ -192,6 +244,32 @@ int main(void)
         CHECK(lanes0 > 1000);    /* the lanes really ran above */
         CHECK(lanes1 == lanes0); /* and not with them off */
         CHECK(hg == h1 && cg == c1);
+    }
+    {
+        /* the sphere-log contacts' geometry in AVX2 lanes (contact.c sc_geom256: side, end face
+         * and rim in lanes, the rest pair by pair) against sd_geom_sphere_cyl pair by pair: every
+         * case, and the log flume above, the same bits */
+        const long g0 = sd_sc_geom_count();
+        int seen_on = 0, seen_off = 0;
+        const uint64_t hc_on = run_sc_cases(40, &seen_on);
+        const long g1 = sd_sc_geom_count();
+        const int was = sd_sc_geom_set(0);
+        const uint64_t hc_off = run_sc_cases(40, &seen_off);
+        long cg = 0;
+        const uint64_t hg = run(1, &cg);
+        const long g2 = sd_sc_geom_count();
+        sd_sc_geom_set(was);
+        printf("sphere-log geometry in lanes: %ld lanes in the runs above, %ld on the cases (features held "
+               "0x%x); pair by pair: cases hash %016llx against %016llx, log flume %016llx\n",
+               g0, g1 - g0, seen_on, (unsigned long long)hc_off, (unsigned long long)hc_on, (unsigned long long)hg);
+        CHECK(hc_on != 0 && hc_on == hc_off);
+        CHECK(seen_on == 0x1f && seen_off == 0x1f); /* side, both end faces, both rims */
+        CHECK(hg == h1 && cg == c1);
+        CHECK(g2 == g1); /* none with the lanes' geometry off */
+        if (sd_simd_level() >= SD_SIMD_AVX2) {
+            CHECK(g0 > 1000);          /* the lanes' geometry ran on the log flume */
+            CHECK(g1 - g0 >= 5 * 40); /* and on the five touching cases, every step */
+        }
     }
     {
         sd_run_result a = run_driver(1), b = run_driver(2);
