@@ -2,9 +2,11 @@
  * (a LAMMPS-format data file of 4619 spheres of the paper's four sizes at rest in the 0.3 m x
  * 0.3 m reservoir, as written by bench/run.sh or `bench_flume --write-settled`) tiled side by
  * side over the floor and cut to N spheres (the N with the smallest y), in an open box of
- * triangles, gravity vertical. The bed depth, the local structure and the contact count per
- * sphere are those of the flume's dense bed at every N, so the cost per particle-step should
- * not depend on N. After a short warm-up, `steps` steps are timed.
+ * triangles, gravity vertical. The bed depth and the local structure are those of the flume's
+ * dense bed at every N, but not the contact count per sphere: a small bed is mostly edge (the
+ * cut, and the walls, whose contacts are not counted), and the count grows with N (2.85 at
+ * 1e3, 3.7-3.8 at 1e4, 4.0 at 1e5, 4.4 at 1e6 on 2026-11-27), so the cost per contact-step is
+ * printed beside the cost per particle-step. After a short warm-up, `steps` steps are timed.
  * usage: bench_scale SETTLED.data [steps] [--threads N] [--big] [--only N]
  *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/50); --only N runs
  *   that one size for `steps` steps (for profiling). */
