@@ -436,6 +436,9 @@ static inline int log_pair_apart(const sd_bodies *b, const sd_pair *p)
     return 0;
 }
 
+static int sc_lanes_on = 1; /* sphere-log pairs through the law in lanes (sd_sc_lanes_set) */
+static int sc_geom_on = 1;  /* their geometry in AVX2 lanes, sc_geom256 (sd_sc_geom_set) */
+
 /* The touch filter's step for a log's pair (entry i of the chunk): apart, it gets what the
  * manifold path gives for no contact (empty slots, no force); else it goes on to the manifold
  * path, listed in gen. */
@@ -836,9 +839,16 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
 #undef PACK_PD
 #undef PACK_I32
         m += __builtin_popcount((unsigned)t);
+        /* (a sphere-log pair's apart test is left to sc_geom256, which does it in lanes,
+         * where the geometry's lanes run) */
+        const int defer = sc_lanes_on && sc_geom_on;
         for (int o = ~ss & 15; o; o &= o - 1) {
             const int j = i + __builtin_ctz((unsigned)o);
-            filter_log_pair(w, &w->bb.p[ks[j]], j, used, gen, ngp);
+            const sd_pair *p = &w->bb.p[ks[j]];
+            if (defer && p->kind == SD_PAIR_SC)
+                gen[(*ngp)++] = j;
+            else
+                filter_log_pair(w, p, j, used, gen, ngp);
         }
     }
     *mp = m;
@@ -956,8 +966,6 @@ static void sc_lane_fill(const sd_world *w, const sd_pair *p, const sd_manifold 
     q->i[j] = i;
 }
 
-static int sc_lanes_on = 1;
-static int sc_geom_on = 1; /* sc_geom256 (sd_sc_geom_set) */
 static long sc_geom_run;
 
 long sd_sc_geom_count(void) { return __atomic_load_n(&sc_geom_run, __ATOMIC_RELAXED); }
@@ -1099,6 +1107,65 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
     const sd_hist *hist = w->bb.hist;
     const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), mone = _mm256_set1_pd(-1.0),
                   sign = _mm256_set1_pd(-0.0), tiny = _mm256_set1_pd(1e-280), mhalf = _mm256_set1_pd(-0.5);
+    /* 1. the touch filter's apart test (sd_sphere_cyl_apart, its operations), which
+     * ss_filter256 leaves to this pass: apart, a pair gets what filter_log_pair gives it (no
+     * contact, its slot emptied); the others, in order, into sg2. (A pair the scalar filter
+     * already found not apart is found so again.) */
+    int sg2[SS_CHUNK], n2 = 0;
+    {
+        int g = 0;
+        for (; g + 4 <= n; g += 4) {
+            int sa[4], lc[4];
+            for (int l = 0; l < 4; l++) {
+                const sd_pair *p = &pairs[ks[sg[g + l]]];
+                sa[l] = p->a, lc[l] = p->b;
+            }
+            __m256d r[4];
+            sd_transpose4(SD_XYZ_LOAD(pos, sa[0]), SD_XYZ_LOAD(pos, sa[1]), SD_XYZ_LOAD(pos, sa[2]),
+                          SD_XYZ_LOAD(pos, sa[3]), r);
+            const __m256d cx = r[0], cy = r[1], cz = r[2];
+            sd_transpose4(SD_XYZ_LOAD(pos, lc[0]), SD_XYZ_LOAD(pos, lc[1]), SD_XYZ_LOAD(pos, lc[2]),
+                          SD_XYZ_LOAD(pos, lc[3]), r);
+            const __m256d dx = _mm256_sub_pd(cx, r[0]), dy = _mm256_sub_pd(cy, r[1]), dz = _mm256_sub_pd(cz, r[2]);
+            sd_transpose4(SD_XYZ_LOAD(axis, lc[0]), SD_XYZ_LOAD(axis, lc[1]), SD_XYZ_LOAD(axis, lc[2]),
+                          SD_XYZ_LOAD(axis, lc[3]), r);
+            const __m256d ax = r[0], ay = r[1], az = r[2];
+            const __m256d rs = _mm256_setr_pd(rad[sa[0]], rad[sa[1]], rad[sa[2]], rad[sa[3]]);
+            const __m256d rc = _mm256_setr_pd(rad[lc[0]], rad[lc[1]], rad[lc[2]], rad[lc[3]]);
+            const __m256d hl = _mm256_setr_pd(hlen[lc[0]], hlen[lc[1]], hlen[lc[2]], hlen[lc[3]]);
+            const __m256d t =
+                _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, ax), _mm256_mul_pd(dy, ay)), _mm256_mul_pd(dz, az));
+            const __m256d mt = _mm256_xor_pd(t, sign);
+            const __m256d wx = _mm256_add_pd(dx, _mm256_mul_pd(mt, ax)), wy = _mm256_add_pd(dy, _mm256_mul_pd(mt, ay)),
+                          wz = _mm256_add_pd(dz, _mm256_mul_pd(mt, az));
+            const __m256d rho2 =
+                _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(wx, wx), _mm256_mul_pd(wy, wy)), _mm256_mul_pd(wz, wz));
+            const __m256d rr = _mm256_add_pd(rc, rs);
+            const int apart = _mm256_movemask_pd(
+                _mm256_or_pd(_mm256_cmp_pd(_mm256_sub_pd(_mm256_andnot_pd(sign, t), hl), rs, _CMP_GE_OQ),
+                             _mm256_cmp_pd(rho2, _mm256_mul_pd(rr, rr), _CMP_GE_OQ)));
+            for (int l = 0; l < 4; l++) {
+                const int i = sg[g + l];
+                if (apart >> l & 1) {
+                    used[i] = 0;
+                    w->bb.hist[pairs[ks[i]].off].feature = -1; /* (one slot) */
+                } else
+                    sg2[n2++] = i;
+            }
+        }
+        for (; g < n; g++) {
+            const int i = sg[g];
+            const sd_pair *p = &pairs[ks[i]];
+            if (log_pair_apart(b, p)) {
+                used[i] = 0;
+                w->bb.hist[p->off].feature = -1;
+            } else
+                sg2[n2++] = i;
+        }
+    }
+    sg = sg2;
+    n = n2;
+    /* 2. the contacts */
     int g = 0;
     for (; g + 4 <= n; g += 4) {
         const sd_pair *p[4];

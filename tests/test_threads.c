@@ -113,15 +113,16 @@ static uint64_t run_bed(int threads, long *contacts, int *pairs, int *cross)
 
 /* One log (r 5 mm, 100 mm long, along x) and one sphere (r 5 mm) per case, the cases far
  * apart, no gravity, spinning and sliding so that the law has work: the sphere on the log's
- * side, on each end face, beyond each end rim, near a rim without touching, inside the log, and
- * on its axis. Runs `steps` steps; returns the state hash and, in seen, a bit per sphere-log
+ * side, on each end face, beyond each end rim, near a rim without touching, inside the log, on
+ * its axis, and 0.2 mm clear of an end face and of the side (near pairs that the apart test,
+ * done in lanes there, turns away). Runs `steps` steps; returns the state hash and, in seen, a bit per sphere-log
  * contact feature held at the end (1 << feature). */
 static uint64_t run_sc_cases(int steps, int *seen)
 {
 #ifdef _OPENMP
     omp_set_num_threads(1);
 #endif
-    static const double at[8][3] = {
+    static const double at[10][3] = {
         {0.0, 0.0, 0.0095},      /* side (feature 0) */
         {-0.0545, 0.001, 0.0},   /* end face at -hl (1) */
         {0.0545, 0.0, 0.002},    /* end face at +hl (2) */
@@ -130,12 +131,14 @@ static uint64_t run_sc_cases(int steps, int *seen)
         {0.054, 0.0, 0.009},     /* near the +hl rim, 5.66 mm from it: no contact */
         {0.02, 0.0, 0.003},      /* centre inside the log */
         {0.01, 0.0, 0.0},        /* centre on the axis */
+        {0.0552, 0.0, 0.0},      /* 0.2 mm beyond the +hl end face: a near pair, apart */
+        {0.0, 0.0102, 0.0},      /* 0.2 mm off the side: a near pair, apart */
     };
     sd_world_def d = sd_world_def_default();
     d.gravity = v3(0, 0, 0);
     sd_world *w;
     if (sd_world_create(&d, &w)) return 0;
-    for (int c = 0; c < 8; c++) {
+    for (int c = 0; c < 10; c++) {
         const double y0 = 0.3 * c;
         sd_cylinder_def cy = sd_cylinder_def_default();
         cy.pos = v3(0.0, y0, 0.0);
