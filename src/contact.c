@@ -1089,6 +1089,41 @@ static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, i
 }
 
 #ifdef SD_FILTER512
+/* Four sphere-log pairs in lanes: the spheres' centres (c) and radii (rs), the logs' centres
+ * (b), axes (a), radii (rc) and half-lengths (hl), d = c - b and t = d.a, and w = d + (-t) a with
+ * rho2 = |w|^2 (sd_sphere_cyl_apart's and sd_cyl_signed_dist's first operations, in their
+ * order). */
+typedef struct {
+    __m256d cx, cy, cz, bx, by, bz, ax, ay, az, rs, rc, hl, t, wx, wy, wz, rho2;
+} sc_quad;
+
+__attribute__((target("avx2"))) static inline void sc_quad_load(const sd_bodies *b, const int sa[4], const int lc[4],
+                                                               sc_quad *s)
+{
+    const double *pos = &b->pos[0].x, *axis = &b->axis[0].x, *rad = b->radius, *hlen = b->hl;
+    __m256d r[4];
+    sd_transpose4(SD_XYZ_LOAD(pos, sa[0]), SD_XYZ_LOAD(pos, sa[1]), SD_XYZ_LOAD(pos, sa[2]), SD_XYZ_LOAD(pos, sa[3]),
+                  r);
+    s->cx = r[0], s->cy = r[1], s->cz = r[2];
+    sd_transpose4(SD_XYZ_LOAD(pos, lc[0]), SD_XYZ_LOAD(pos, lc[1]), SD_XYZ_LOAD(pos, lc[2]), SD_XYZ_LOAD(pos, lc[3]),
+                  r);
+    s->bx = r[0], s->by = r[1], s->bz = r[2];
+    sd_transpose4(SD_XYZ_LOAD(axis, lc[0]), SD_XYZ_LOAD(axis, lc[1]), SD_XYZ_LOAD(axis, lc[2]),
+                  SD_XYZ_LOAD(axis, lc[3]), r);
+    s->ax = r[0], s->ay = r[1], s->az = r[2];
+    s->rs = _mm256_setr_pd(rad[sa[0]], rad[sa[1]], rad[sa[2]], rad[sa[3]]);
+    s->rc = _mm256_setr_pd(rad[lc[0]], rad[lc[1]], rad[lc[2]], rad[lc[3]]);
+    s->hl = _mm256_setr_pd(hlen[lc[0]], hlen[lc[1]], hlen[lc[2]], hlen[lc[3]]);
+    const __m256d dx = _mm256_sub_pd(s->cx, s->bx), dy = _mm256_sub_pd(s->cy, s->by), dz = _mm256_sub_pd(s->cz, s->bz);
+    s->t = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, s->ax), _mm256_mul_pd(dy, s->ay)), _mm256_mul_pd(dz, s->az));
+    const __m256d mt = _mm256_xor_pd(s->t, _mm256_set1_pd(-0.0));
+    s->wx = _mm256_add_pd(dx, _mm256_mul_pd(mt, s->ax));
+    s->wy = _mm256_add_pd(dy, _mm256_mul_pd(mt, s->ay));
+    s->wz = _mm256_add_pd(dz, _mm256_mul_pd(mt, s->az));
+    s->rho2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(s->wx, s->wx), _mm256_mul_pd(s->wy, s->wy)),
+                            _mm256_mul_pd(s->wz, s->wz));
+}
+
 /* Step 2 of bb_chunk for the sphere-log pairs sg[0 .. n) (chunk entries; one spring slot each,
  * none apart by the touch filter's test) in AVX2, 4 at a time: sd_geom_sphere_cyl's contact on
  * the log's side, an end face or an end rim, and sc_lane_fill, with their operations in their
@@ -1101,8 +1136,7 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
                                                       sd_pair_out *out, int *used)
 {
     const sd_bodies *b = &w->b;
-    const double *pos = &b->pos[0].x, *axis = &b->axis[0].x, *vel = &b->vel[0].x, *om = &b->omega[0].x;
-    const double *rad = b->radius, *hlen = b->hl;
+    const double *vel = &b->vel[0].x, *om = &b->omega[0].x;
     const sd_pair *pairs = w->bb.p;
     const sd_hist *hist = w->bb.hist;
     const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), mone = _mm256_set1_pd(-1.0),
@@ -1110,7 +1144,9 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
     /* 1. the touch filter's apart test (sd_sphere_cyl_apart, its operations), which
      * ss_filter256 leaves to this pass: apart, a pair gets what filter_log_pair gives it (no
      * contact, its slot emptied); the others, in order, into sg2. (A pair the scalar filter
-     * already found not apart is found so again.) */
+     * already found not apart is found so again.) A pass of its own, though 2 loads the same
+     * rows again (from L1): done inside 2, an apart lane would send half the groups down the
+     * lane-by-lane path. */
     int sg2[SS_CHUNK], n2 = 0;
     {
         int g = 0;
@@ -1120,30 +1156,12 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
                 const sd_pair *p = &pairs[ks[sg[g + l]]];
                 sa[l] = p->a, lc[l] = p->b;
             }
-            __m256d r[4];
-            sd_transpose4(SD_XYZ_LOAD(pos, sa[0]), SD_XYZ_LOAD(pos, sa[1]), SD_XYZ_LOAD(pos, sa[2]),
-                          SD_XYZ_LOAD(pos, sa[3]), r);
-            const __m256d cx = r[0], cy = r[1], cz = r[2];
-            sd_transpose4(SD_XYZ_LOAD(pos, lc[0]), SD_XYZ_LOAD(pos, lc[1]), SD_XYZ_LOAD(pos, lc[2]),
-                          SD_XYZ_LOAD(pos, lc[3]), r);
-            const __m256d dx = _mm256_sub_pd(cx, r[0]), dy = _mm256_sub_pd(cy, r[1]), dz = _mm256_sub_pd(cz, r[2]);
-            sd_transpose4(SD_XYZ_LOAD(axis, lc[0]), SD_XYZ_LOAD(axis, lc[1]), SD_XYZ_LOAD(axis, lc[2]),
-                          SD_XYZ_LOAD(axis, lc[3]), r);
-            const __m256d ax = r[0], ay = r[1], az = r[2];
-            const __m256d rs = _mm256_setr_pd(rad[sa[0]], rad[sa[1]], rad[sa[2]], rad[sa[3]]);
-            const __m256d rc = _mm256_setr_pd(rad[lc[0]], rad[lc[1]], rad[lc[2]], rad[lc[3]]);
-            const __m256d hl = _mm256_setr_pd(hlen[lc[0]], hlen[lc[1]], hlen[lc[2]], hlen[lc[3]]);
-            const __m256d t =
-                _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, ax), _mm256_mul_pd(dy, ay)), _mm256_mul_pd(dz, az));
-            const __m256d mt = _mm256_xor_pd(t, sign);
-            const __m256d wx = _mm256_add_pd(dx, _mm256_mul_pd(mt, ax)), wy = _mm256_add_pd(dy, _mm256_mul_pd(mt, ay)),
-                          wz = _mm256_add_pd(dz, _mm256_mul_pd(mt, az));
-            const __m256d rho2 =
-                _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(wx, wx), _mm256_mul_pd(wy, wy)), _mm256_mul_pd(wz, wz));
-            const __m256d rr = _mm256_add_pd(rc, rs);
+            sc_quad u;
+            sc_quad_load(b, sa, lc, &u);
+            const __m256d rr = _mm256_add_pd(u.rc, u.rs);
             const int apart = _mm256_movemask_pd(
-                _mm256_or_pd(_mm256_cmp_pd(_mm256_sub_pd(_mm256_andnot_pd(sign, t), hl), rs, _CMP_GE_OQ),
-                             _mm256_cmp_pd(rho2, _mm256_mul_pd(rr, rr), _CMP_GE_OQ)));
+                _mm256_or_pd(_mm256_cmp_pd(_mm256_sub_pd(_mm256_andnot_pd(sign, u.t), u.hl), u.rs, _CMP_GE_OQ),
+                             _mm256_cmp_pd(u.rho2, _mm256_mul_pd(rr, rr), _CMP_GE_OQ)));
             for (int l = 0; l < 4; l++) {
                 const int i = sg[g + l];
                 if (apart >> l & 1) {
@@ -1174,32 +1192,15 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
             p[l] = &pairs[ks[sg[g + l]]];
             sa[l] = p[l]->a, lc[l] = p[l]->b;
         }
+        sc_quad u;
+        sc_quad_load(b, sa, lc, &u);
+        const __m256d cx = u.cx, cy = u.cy, cz = u.cz, bx = u.bx, by = u.by, bz = u.bz, ax = u.ax, ay = u.ay,
+                      az = u.az, rs = u.rs, t = u.t, wx = u.wx, wy = u.wy, wz = u.wz, rho2 = u.rho2;
         __m256d r[4];
-        sd_transpose4(SD_XYZ_LOAD(pos, sa[0]), SD_XYZ_LOAD(pos, sa[1]), SD_XYZ_LOAD(pos, sa[2]),
-                      SD_XYZ_LOAD(pos, sa[3]), r);
-        const __m256d cx = r[0], cy = r[1], cz = r[2];
-        sd_transpose4(SD_XYZ_LOAD(pos, lc[0]), SD_XYZ_LOAD(pos, lc[1]), SD_XYZ_LOAD(pos, lc[2]),
-                      SD_XYZ_LOAD(pos, lc[3]), r);
-        const __m256d bx = r[0], by = r[1], bz = r[2];
-        sd_transpose4(SD_XYZ_LOAD(axis, lc[0]), SD_XYZ_LOAD(axis, lc[1]), SD_XYZ_LOAD(axis, lc[2]),
-                      SD_XYZ_LOAD(axis, lc[3]), r);
-        const __m256d ax = r[0], ay = r[1], az = r[2];
-        const __m256d rs = _mm256_setr_pd(rad[sa[0]], rad[sa[1]], rad[sa[2]], rad[sa[3]]);
-        const __m256d rc = _mm256_setr_pd(rad[lc[0]], rad[lc[1]], rad[lc[2]], rad[lc[3]]);
-        const __m256d hl = _mm256_setr_pd(hlen[lc[0]], hlen[lc[1]], hlen[lc[2]], hlen[lc[3]]);
-        /* sd_cyl_signed_dist: d = c - centre, t = d.a, w = d + (-t) a, rho = |w| */
-        const __m256d dx = _mm256_sub_pd(cx, bx), dy = _mm256_sub_pd(cy, by), dz = _mm256_sub_pd(cz, bz);
-        const __m256d t =
-            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, ax), _mm256_mul_pd(dy, ay)), _mm256_mul_pd(dz, az));
-        const __m256d mt = _mm256_xor_pd(t, sign);
-        const __m256d wx = _mm256_add_pd(dx, _mm256_mul_pd(mt, ax)), wy = _mm256_add_pd(dy, _mm256_mul_pd(mt, ay)),
-                      wz = _mm256_add_pd(dz, _mm256_mul_pd(mt, az));
-        const __m256d rho2 =
-            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(wx, wx), _mm256_mul_pd(wy, wy)), _mm256_mul_pd(wz, wz));
         const __m256d rho = _mm256_sqrt_pd(rho2);
         const __m256d e = _mm256_blendv_pd(mone, one, _mm256_cmp_pd(t, zero, _CMP_GE_OQ));
-        const __m256d axd = _mm256_sub_pd(_mm256_andnot_pd(sign, t), hl); /* fabs(t) - hl */
-        const __m256d rd = _mm256_sub_pd(rho, rc);
+        const __m256d axd = _mm256_sub_pd(_mm256_andnot_pd(sign, t), u.hl); /* fabs(t) - hl */
+        const __m256d rd = _mm256_sub_pd(rho, u.rc);
         const __m256d inv = _mm256_div_pd(one, rho);
         const __m256d radx = _mm256_mul_pd(wx, inv), rady = _mm256_mul_pd(wy, inv), radz = _mm256_mul_pd(wz, inv);
         const __m256d ax_in = _mm256_cmp_pd(axd, zero, _CMP_LE_OQ), ax_out = _mm256_cmp_pd(axd, zero, _CMP_GT_OQ);
