@@ -1089,6 +1089,21 @@ static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, i
 }
 
 #ifdef SD_FILTER512
+/* The vec3 rows i[0..3] of the array p (3 doubles each) as lanes x, y, z (r[0..2]). */
+__attribute__((target("avx2"))) static inline void rows4(const double *p, const int i[4], __m256d r[4])
+{
+    sd_transpose4(SD_XYZ_LOAD(p, i[0]), SD_XYZ_LOAD(p, i[1]), SD_XYZ_LOAD(p, i[2]), SD_XYZ_LOAD(p, i[3]), r);
+}
+
+/* Rows i[0..3] of p into the lane arrays x, y, z at j. */
+__attribute__((target("avx2"))) static inline void rows4_store(const double *p, const int i[4], double *x, double *y,
+                                                               double *z, int j)
+{
+    __m256d r[4];
+    rows4(p, i, r);
+    _mm256_storeu_pd(x + j, r[0]), _mm256_storeu_pd(y + j, r[1]), _mm256_storeu_pd(z + j, r[2]);
+}
+
 /* Four sphere-log pairs in lanes: the spheres' centres (c) and radii (rs), the logs' centres
  * (b), axes (a), radii (rc) and half-lengths (hl), d = c - b and t = d.a, and w = d + (-t) a with
  * rho2 = |w|^2 (sd_sphere_cyl_apart's and sd_cyl_signed_dist's first operations, in their
@@ -1102,14 +1117,11 @@ __attribute__((target("avx2"))) static inline void sc_quad_load(const sd_bodies 
 {
     const double *pos = &b->pos[0].x, *axis = &b->axis[0].x, *rad = b->radius, *hlen = b->hl;
     __m256d r[4];
-    sd_transpose4(SD_XYZ_LOAD(pos, sa[0]), SD_XYZ_LOAD(pos, sa[1]), SD_XYZ_LOAD(pos, sa[2]), SD_XYZ_LOAD(pos, sa[3]),
-                  r);
+    rows4(pos, sa, r);
     s->cx = r[0], s->cy = r[1], s->cz = r[2];
-    sd_transpose4(SD_XYZ_LOAD(pos, lc[0]), SD_XYZ_LOAD(pos, lc[1]), SD_XYZ_LOAD(pos, lc[2]), SD_XYZ_LOAD(pos, lc[3]),
-                  r);
+    rows4(pos, lc, r);
     s->bx = r[0], s->by = r[1], s->bz = r[2];
-    sd_transpose4(SD_XYZ_LOAD(axis, lc[0]), SD_XYZ_LOAD(axis, lc[1]), SD_XYZ_LOAD(axis, lc[2]),
-                  SD_XYZ_LOAD(axis, lc[3]), r);
+    rows4(axis, lc, r);
     s->ax = r[0], s->ay = r[1], s->az = r[2];
     s->rs = _mm256_setr_pd(rad[sa[0]], rad[sa[1]], rad[sa[2]], rad[sa[3]]);
     s->rc = _mm256_setr_pd(rad[lc[0]], rad[lc[1]], rad[lc[2]], rad[lc[3]]);
@@ -1197,7 +1209,6 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
         sc_quad_load(b, sa, lc, &u);
         const __m256d cx = u.cx, cy = u.cy, cz = u.cz, bx = u.bx, by = u.by, bz = u.bz, ax = u.ax, ay = u.ay,
                       az = u.az, rs = u.rs, t = u.t, wx = u.wx, wy = u.wy, wz = u.wz, rho2 = u.rho2;
-        __m256d r[4];
         const __m256d rho = _mm256_sqrt_pd(rho2);
         const __m256d e = _mm256_blendv_pd(mone, one, _mm256_cmp_pd(t, zero, _CMP_GE_OQ));
         const __m256d axd = _mm256_sub_pd(_mm256_andnot_pd(sign, t), u.hl); /* fabs(t) - hl */
@@ -1244,18 +1255,10 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
             _mm256_storeu_pd(q->raz + j, _mm256_sub_pd(ptz, cz));
             _mm256_storeu_pd(q->rbx + j, _mm256_sub_pd(ptx, bx)), _mm256_storeu_pd(q->rby + j, _mm256_sub_pd(pty, by));
             _mm256_storeu_pd(q->rbz + j, _mm256_sub_pd(ptz, bz));
-            sd_transpose4(SD_XYZ_LOAD(vel, sa[0]), SD_XYZ_LOAD(vel, sa[1]), SD_XYZ_LOAD(vel, sa[2]),
-                          SD_XYZ_LOAD(vel, sa[3]), r);
-            _mm256_storeu_pd(q->vax + j, r[0]), _mm256_storeu_pd(q->vay + j, r[1]), _mm256_storeu_pd(q->vaz + j, r[2]);
-            sd_transpose4(SD_XYZ_LOAD(om, sa[0]), SD_XYZ_LOAD(om, sa[1]), SD_XYZ_LOAD(om, sa[2]),
-                          SD_XYZ_LOAD(om, sa[3]), r);
-            _mm256_storeu_pd(q->wax + j, r[0]), _mm256_storeu_pd(q->way + j, r[1]), _mm256_storeu_pd(q->waz + j, r[2]);
-            sd_transpose4(SD_XYZ_LOAD(vel, lc[0]), SD_XYZ_LOAD(vel, lc[1]), SD_XYZ_LOAD(vel, lc[2]),
-                          SD_XYZ_LOAD(vel, lc[3]), r);
-            _mm256_storeu_pd(q->vbx + j, r[0]), _mm256_storeu_pd(q->vby + j, r[1]), _mm256_storeu_pd(q->vbz + j, r[2]);
-            sd_transpose4(SD_XYZ_LOAD(om, lc[0]), SD_XYZ_LOAD(om, lc[1]), SD_XYZ_LOAD(om, lc[2]),
-                          SD_XYZ_LOAD(om, lc[3]), r);
-            _mm256_storeu_pd(q->wbx + j, r[0]), _mm256_storeu_pd(q->wby + j, r[1]), _mm256_storeu_pd(q->wbz + j, r[2]);
+            rows4_store(vel, sa, q->vax, q->vay, q->vaz, j);
+            rows4_store(om, sa, q->wax, q->way, q->waz, j);
+            rows4_store(vel, lc, q->vbx, q->vby, q->vbz, j);
+            rows4_store(om, lc, q->wbx, q->wby, q->wbz, j);
             for (int l = 0; l < 4; l++) {
                 const int f = sidem >> l & 1 ? 0 : (negm >> l & 1 ? 1 : 2) + (endm >> l & 1 ? 0 : 2);
                 const sd_hist *h = &hist[p[l]->off];
