@@ -25,6 +25,15 @@ void sd_grid_free(sd_grid *g)
     memset(g, 0, sizeof(*g));
 }
 
+void sd_bed_cache_free(sd_bed_cache *c)
+{
+    free(c->range);
+    free(c->cells);
+    free(c->off);
+    free(c->items);
+    memset(c, 0, sizeof(*c));
+}
+
 static void body_box(const sd_bodies *b, int i, double half_margin, sd_vec3 *lo, sd_vec3 *hi)
 {
     sd_vec3 c = b->pos[i];
@@ -70,13 +79,29 @@ static void cell_range(const sd_grid *g, sd_vec3 lo, sd_vec3 hi, int32_t r[6])
 
 /* Size the grid over [lo, hi] with cells of at least `cell`, enlarged if the count would
  * exceed max_cells (an element flung far away must not make the grid explode). */
-static sd_status grid_layout(sd_grid *g, sd_vec3 lo, sd_vec3 hi, double cell, long max_cells)
+/* The grid's origin on one axis: the anchor less whole cells, as few as cover lo. */
+static double snap_origin(double lo, double anchor, double cell)
+{
+    return lo >= anchor ? anchor : anchor - ceil((anchor - lo) / cell) * cell;
+}
+
+/* With an anchor (the low corner of the bed's boxes, which never move), the origin is the
+ * anchor less whole cells: bodies moving about near the low faces of the box (the flow along
+ * the side walls) no longer shift every cell of the grid by micrometres at each rebuild, and
+ * the bed keeps its cells (the bed cache). */
+static sd_status grid_layout(sd_grid *g, sd_vec3 lo, sd_vec3 hi, double cell, long max_cells, const sd_vec3 *anchor)
 {
     sd_vec3 ext = v3_sub(hi, lo);
     /* a body flung to infinity (or NaN) would make the grid unbounded: report the blow-up */
     if (!(isfinite(ext.x) && isfinite(ext.y) && isfinite(ext.z)) || !(cell > 0.0) || !isfinite(cell))
         return SD_ERR_NONFINITE;
+    const sd_vec3 lo0 = lo;
     for (;;) {
+        if (anchor) {
+            lo = v3(snap_origin(lo0.x, anchor->x, cell), snap_origin(lo0.y, anchor->y, cell),
+                    snap_origin(lo0.z, anchor->z, cell));
+            ext = v3_sub(hi, lo);
+        }
         double nx = floor(ext.x / cell) + 1, ny = floor(ext.y / cell) + 1, nz = floor(ext.z / cell) + 1;
         if (nx * ny * nz <= (double)max_cells) {
             g->nx = (int)nx;
@@ -98,11 +123,15 @@ static sd_status grid_layout(sd_grid *g, sd_vec3 lo, sd_vec3 hi, double cell, lo
  * entries are reg0[i] .. reg0[i+1]-1 in the order z, y, x of its range, and slot[r] is where
  * entry r went in items (so the items after it in that cell are exactly those above i). */
 static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const uint8_t *skip, int32_t *reg0,
-                           int32_t **slot, int *slot_cap)
+                           int32_t **slot, int *slot_cap, const sd_bed_cache *bed)
 {
     int ncell = g->nx * g->ny * g->nz;
     long total = 0;
-    for (int i = 0; i < n; i++) {
+    /* with the bed's cache, bodies nd .. n-1 (the bed) go in from its lists, after the others
+     * in each cell as their higher indices put them (no entry of theirs in reg0 / slot: the
+     * scans never start from the bed) */
+    const int nd = bed ? bed->nb0 : n;
+    for (int i = 0; i < nd; i++) {
         if (reg0) reg0[i] = (int32_t)total;
         if (skip && skip[i]) continue;
         const int32_t *r = range[i];
@@ -112,15 +141,21 @@ static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const u
                     g->cell_start[(z * g->ny + y) * g->nx + x + 1]++;
         total += (long)(r[3] - r[0] + 1) * (r[4] - r[1] + 1) * (r[5] - r[2] + 1);
     }
-    if (reg0) reg0[n] = (int32_t)total;
+    if (reg0)
+        for (int i = nd; i <= n; i++)
+            reg0[i] = (int32_t)total;
+    if (bed)
+        for (int q = 0; q < bed->ncells; q++)
+            g->cell_start[bed->cells[q] + 1] += bed->off[q + 1] - bed->off[q];
     for (int c = 0; c < ncell; c++)
         g->cell_start[c + 1] += g->cell_start[c];
-    if (sd_grow((void **)&g->items, &g->cap_items, (int)total + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    const long all = total + (bed ? bed->nitems : 0);
+    if (sd_grow((void **)&g->items, &g->cap_items, (int)all + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     if (slot && sd_grow((void **)slot, slot_cap, (int)total + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     /* fill using cell_start as a cursor, then shift back */
     int32_t *sl = slot ? *slot : NULL;
     long e = 0;
-    for (int i = 0; i < n; i++) {
+    for (int i = 0; i < nd; i++) {
         if (skip && skip[i]) continue;
         const int32_t *r = range[i];
         for (int z = r[2]; z <= r[5]; z++)
@@ -131,6 +166,12 @@ static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const u
                     if (sl) sl[e++] = at;
                 }
     }
+    if (bed)
+        for (int q = 0; q < bed->ncells; q++) {
+            const int c = bed->cells[q], m = bed->off[q + 1] - bed->off[q];
+            memcpy(g->items + g->cell_start[c], bed->items + bed->off[q], (size_t)m * sizeof(int32_t));
+            g->cell_start[c] += m;
+        }
     for (int c = ncell; c > 0; c--)
         g->cell_start[c] = g->cell_start[c - 1];
     g->cell_start[0] = 0;
@@ -373,7 +414,7 @@ static sd_status rebuild_triangle_grid(sd_world *w, double cell)
         any = 1;
     }
     if (!any) lo = hi = v3(0, 0, 0);
-    sd_status st = grid_layout(&w->tgrid, lo, hi, cell, 2000000);
+    sd_status st = grid_layout(&w->tgrid, lo, hi, cell, 2000000, NULL);
     if (st) return st;
     if (sd_grow((void **)&w->trange, &w->trange_cap, wl->n + 1, sizeof(*w->trange))) return SD_ERR_NOMEM;
     for (int t = 0; t < wl->n; t++) {
@@ -385,7 +426,7 @@ static sd_status rebuild_triangle_grid(sd_world *w, double cell)
     if (!skip) return SD_ERR_NOMEM;
     for (int t = 0; t < wl->n; t++)
         skip[t] = !wl->active[t];
-    st = grid_fill(&w->tgrid, wl->n, (const int32_t(*)[6])w->trange, skip, NULL, NULL, NULL);
+    st = grid_fill(&w->tgrid, wl->n, (const int32_t(*)[6])w->trange, skip, NULL, NULL, NULL, NULL);
     free(skip);
     if (st) return st;
     st = sd_walls_weld(wl);
@@ -394,12 +435,14 @@ static sd_status rebuild_triangle_grid(sd_world *w, double cell)
 }
 
 /* Re-sort the store by the grid cell of each centre (stable counting sort), so that
- * neighbours in space are neighbours in memory; the history was already taken out by gid. */
-static sd_status sort_bodies_by_cell(sd_world *w)
+ * neighbours in space are neighbours in memory; the history was already taken out by gid.
+ * Bodies 0 .. n-1 only: the caller knows the rest (the bed, in the bed cache's layout) to be
+ * in order already, after every other body. */
+static sd_status sort_bodies_by_cell(sd_world *w, int n)
 {
     sd_bodies *b = &w->b;
     const sd_grid *g = &w->grid;
-    int n = b->n, ncell = g->nx * g->ny * g->nz;
+    int ncell = g->nx * g->ny * g->nz;
     int32_t *cell = malloc((size_t)(n + 1) * sizeof(int32_t));
     int32_t *count = calloc(2 * (size_t)ncell + 1, sizeof(int32_t));
     int32_t *perm = malloc((size_t)(n + 1) * sizeof(int32_t));
@@ -683,6 +726,116 @@ static int bt_scan(const sd_world *w, int i, double hm, cand_buf *out)
     return 0;
 }
 
+static int bed_cache_on = 1;
+
+int sd_bed_cache_set(int on)
+{
+    const int was = bed_cache_on;
+    bed_cache_on = on != 0;
+    return was;
+}
+
+/* The bed's cache still holds for the grid just laid out: the same origin, cells and columns
+ * (its ranges and its centres' cells come out the same), the bed below the top layer (nz may
+ * change: the bed's ranges do not reach it). */
+static int bed_cache_fits(const sd_bed_cache *c, const sd_grid *g)
+{
+    return g->cell == c->cell && g->nx == c->nx && g->ny == c->ny && g->lo.x == c->lo.x && g->lo.y == c->lo.y &&
+           g->lo.z == c->lo.z && c->ztop < g->nz - 1;
+}
+
+/* The bed cache from the grid just laid out and filled (w->range current): the trailing bed
+ * nb0 .. n-1, if every body before it is not bed (what the sort leaves: otherwise no cache). */
+static sd_status bed_cache_make(sd_world *w, double hm)
+{
+    const sd_bodies *b = &w->b;
+    const sd_grid *g = &w->grid;
+    sd_bed_cache *c = &w->bed;
+    c->made = 0;
+    int nb0 = b->n;
+    while (nb0 > 0 && sd_body_is_bed(b, nb0 - 1))
+        nb0--;
+    if (nb0 == b->n) return SD_OK;
+    for (int i = 0; i < nb0; i++)
+        if (sd_body_is_bed(b, i)) return SD_OK;
+    const int nbed = b->n - nb0;
+    sd_vec3 blo = v3(1e300, 1e300, 1e300), bhi = v3(-1e300, -1e300, -1e300);
+    int zmax = 0;
+    long nitems = 0;
+    for (int i = nb0; i < b->n; i++) {
+        sd_vec3 l, h;
+        body_box(b, i, hm, &l, &h);
+        blo = v3(fmin(blo.x, l.x), fmin(blo.y, l.y), fmin(blo.z, l.z));
+        bhi = v3(fmax(bhi.x, h.x), fmax(bhi.y, h.y), fmax(bhi.z, h.z));
+        const int32_t *r = w->range[i];
+        zmax = r[5] > zmax ? r[5] : zmax; /* (the centre's layer, its place in the sort, is within) */
+        nitems += (long)(r[3] - r[0] + 1) * (r[4] - r[1] + 1) * (r[5] - r[2] + 1);
+    }
+    /* the bed's cells: counted over the layers it reaches, then listed ascending */
+    if (zmax >= g->nz - 1) return SD_OK; /* the bed reaches the top layer: its ranges depend on nz */
+    const int nc = g->nx * g->ny * (zmax + 1);
+    int32_t *cnt = calloc((size_t)nc + 1, sizeof(int32_t));
+    void *range = realloc(c->range, (size_t)nbed * sizeof(*c->range));
+    if (range) c->range = range;
+    if (!cnt || !range) {
+        free(cnt);
+        return SD_ERR_NOMEM;
+    }
+    memcpy(c->range, w->range + nb0, (size_t)nbed * sizeof(*c->range));
+    for (int i = nb0; i < b->n; i++) {
+        const int32_t *r = w->range[i];
+        for (int z = r[2]; z <= r[5]; z++)
+            for (int y = r[1]; y <= r[4]; y++)
+                for (int x = r[0]; x <= r[3]; x++)
+                    cnt[(z * g->ny + y) * g->nx + x]++;
+    }
+    int ncells = 0;
+    for (int q = 0; q < nc; q++)
+        ncells += cnt[q] > 0;
+    void *cells = realloc(c->cells, (size_t)(ncells + 1) * sizeof(int32_t));
+    if (cells) c->cells = cells;
+    void *off = realloc(c->off, (size_t)(ncells + 2) * sizeof(int32_t));
+    if (off) c->off = off;
+    void *items = realloc(c->items, (size_t)(nitems + 1) * sizeof(int32_t));
+    if (items) c->items = items;
+    if (!cells || !off || !items) {
+        free(cnt);
+        return SD_ERR_NOMEM;
+    }
+    /* cnt becomes each cell's cursor into items */
+    int k = 0, at = 0;
+    for (int q = 0; q < nc; q++) {
+        if (!cnt[q]) continue;
+        c->cells[k] = q;
+        c->off[k] = at;
+        at += cnt[q];
+        cnt[q] = c->off[k++];
+    }
+    c->off[k] = at;
+    for (int i = nb0; i < b->n; i++) {
+        const int32_t *r = w->range[i];
+        for (int z = r[2]; z <= r[5]; z++)
+            for (int y = r[1]; y <= r[4]; y++)
+                for (int x = r[0]; x <= r[3]; x++)
+                    c->items[cnt[(z * g->ny + y) * g->nx + x]++] = i;
+    }
+    free(cnt);
+    c->ncells = ncells;
+    c->nitems = (int)nitems;
+    c->blo = blo;
+    c->bhi = bhi;
+    c->lo = g->lo;
+    c->ztop = zmax;
+    c->cell = g->cell;
+    c->nx = g->nx;
+    c->ny = g->ny;
+    c->n = b->n;
+    c->nb0 = nb0;
+    c->version = w->body_version;
+    c->made = 1;
+    return SD_OK;
+}
+
 sd_status sd_neighbor_rebuild(sd_world *w)
 {
     sd_bodies *b = &w->b;
@@ -690,6 +843,19 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     if (st) return st;
     w->keys_collected = 0;
     double hm = 0.5 * w->def.margin;
+
+    /* the bed as the last full rebuild left it, while no body came or went: its boxes, ranges
+     * and grid entries are taken from there if the grid keeps its layout (same bits) */
+    const sd_bed_cache *bc = &w->bed;
+    const int bed0 = bed_cache_on && bc->made && bc->version == w->body_version && bc->n == b->n;
+    const int nb = bed0 ? bc->nb0 : b->n;
+    /* the bed's low corner, the grid's anchor: from the cache, else found with the box */
+    double ax = 1e300, ay = 1e300, az = 1e300;
+    int nbed = 0;
+    if (bed0) {
+        ax = bc->blo.x, ay = bc->blo.y, az = bc->blo.z;
+        nbed = b->n - bc->nb0;
+    }
 
     /* cell size: the largest sphere diameter plus the margin; cylinders span several cells */
     double dmax = 0.0;
@@ -706,31 +872,50 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     }
 
     double lx = 1e300, ly = 1e300, lz = 1e300, hx = -1e300, hy = -1e300, hz = -1e300;
-#pragma omp parallel for schedule(static) reduction(min : lx, ly, lz) reduction(max : hx, hy, hz) if (par)
-    for (int i = 0; i < b->n; i++) {
+    if (bed0) {
+        lx = bc->blo.x, ly = bc->blo.y, lz = bc->blo.z;
+        hx = bc->bhi.x, hy = bc->bhi.y, hz = bc->bhi.z;
+    }
+#pragma omp parallel for schedule(static) reduction(min : lx, ly, lz, ax, ay, az) reduction(max : hx, hy, hz) \
+    reduction(+ : nbed) if (par)
+    for (int i = 0; i < nb; i++) {
         sd_vec3 l, h;
         body_box(b, i, hm, &l, &h);
         lx = fmin(lx, l.x), ly = fmin(ly, l.y), lz = fmin(lz, l.z);
         hx = fmax(hx, h.x), hy = fmax(hy, h.y), hz = fmax(hz, h.z);
+        if (sd_body_is_bed(b, i)) {
+            ax = fmin(ax, l.x), ay = fmin(ay, l.y), az = fmin(az, l.z);
+            nbed++;
+        }
     }
     sd_vec3 lo = v3(lx, ly, lz), hi = v3(hx, hy, hz);
     if (b->n == 0) lo = hi = v3(0, 0, 0);
+    const sd_vec3 anchor = v3(ax, ay, az);
     long max_cells = 8L * b->n + 4096;
-    st = grid_layout(&w->grid, lo, hi, cell, max_cells);
+    st = grid_layout(&w->grid, lo, hi, cell, max_cells, nbed ? &anchor : NULL);
     if (st) return st;
-    if ((st = sort_bodies_by_cell(w))) return st;
+    const sd_grid *g = &w->grid;
+    const int bed = bed0 && bed_cache_fits(bc, g);
+    const int nr = bed ? bc->nb0 : b->n; /* the bodies whose cells and ranges are made here */
+    if ((st = sort_bodies_by_cell(w, nr))) return st;
     w->mov_stamp = -1; /* the store was reordered */
     if ((st = sd_world_moving_update(w))) return st;
     if (sd_grow((void **)&w->range, &w->range_cap, b->n + 1, sizeof(*w->range))) return SD_ERR_NOMEM;
-#pragma omp parallel for schedule(static) if (b->n > w->def.parallel_min)
-    for (int i = 0; i < b->n; i++) {
+#pragma omp parallel for schedule(static) if (nr > w->def.parallel_min)
+    for (int i = 0; i < nr; i++) {
         sd_vec3 l, h;
         body_box(b, i, hm, &l, &h);
         cell_range(&w->grid, l, h, w->range[i]);
     }
+    if (bed) memcpy(w->range + nr, bc->range, (size_t)(b->n - nr) * sizeof(*w->range));
     if (sd_grow((void **)&w->reg0, &w->reg0_cap, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL, w->reg0, &w->slot, &w->slot_cap);
+    st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL, w->reg0, &w->slot, &w->slot_cap,
+                   bed ? bc : NULL);
     if (st) return st;
+    if (bed)
+        w->bed.used++;
+    else if ((st = bed_cache_make(w, hm)))
+        return st;
 
     /* candidates, generated in body order: the bodies cut into K chunks of about the same
      * number of moving bodies, scanned by T threads as they come free, each chunk into its

@@ -96,6 +96,7 @@ void sd_world_destroy(sd_world *w)
     free(w->old_hist);
     free(w->old_keys);
     free(w->range);
+    sd_bed_cache_free(&w->bed);
     free(w->reg0);
     free(w->slot);
     free(w->trange);
@@ -120,6 +121,7 @@ static int add_body(sd_world *w, int shape, sd_vec3 pos, sd_vec3 vel, sd_vec3 om
     if (sd_grow((void **)&w->gid_map, &w->gid_cap, w->next_gid + 1, sizeof(int32_t))) return -SD_ERR_NOMEM;
     int i = b->n++;
     int gid = w->next_gid++;
+    w->body_version++;
     w->gid_map[gid] = i;
     b->gid[i] = gid;
     b->shape[i] = (uint8_t)shape;
@@ -225,6 +227,7 @@ sd_status sd_world_remove_body(sd_world *w, int gid)
     int i = w->gid_map[gid];
     int last = w->b.n - 1;
     sd_bodies_swap_remove(&w->b, i);
+    w->body_version++;
     if (i != last) w->gid_map[w->b.gid[i]] = i;
     w->gid_map[gid] = -1;
     w->need_rebuild = 1;

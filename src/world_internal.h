@@ -160,6 +160,25 @@ typedef struct {
  * before they move, by the thread that moves them, a block of up to 128 bodies at a time. */
 typedef void (*sd_ext_force_fn)(void *ctx, struct sd_world *w, const int32_t *mov, int k0, int k1);
 
+/* The bed bodies nb0 .. n-1 as the last full rebuild placed them in the body grid (lo, cell,
+ * nx, ny; the grid's nz may change, the bed's cells do not): the union of their boxes (its low
+ * corner anchors the grid's origin), their
+ * cell ranges, and their entries cell by cell (cells[c] ascending, entries off[c] ..
+ * off[c+1]-1 of items, ascending as grid_fill writes them). */
+typedef struct {
+    int made;
+    long version;
+    int n, nb0;
+    double cell;
+    int nx, ny;
+    sd_vec3 lo, blo, bhi;
+    int ztop; /* the bed's highest layer, below the top one (its ranges do not depend on nz) */
+    int32_t (*range)[6];
+    int32_t *cells, *off, *items;
+    int ncells, nitems;
+    long used; /* rebuilds that took the bed from here (for the tests) */
+} sd_bed_cache;
+
 struct sd_world {
     sd_world_def def;
     sd_ext_force_fn ext_fn; /* NULL: ext_force kept as it is (set by the driver, not saved) */
@@ -229,6 +248,11 @@ struct sd_world {
     int near_mark_cap;
     long near_mark_rb;
     double ref_drift; /* the same bound as near_drift since the last rebuild (pos_ref) */
+    /* derived, never saved: what the rebuilds know of the bed roughness (the fixed spheres,
+     * sorted after everything else), which never moves: valid while bodies are neither added
+     * nor removed (body_version) and the body grid keeps its layout (neighbor.c) */
+    long body_version;
+    sd_bed_cache bed;
 };
 
 /* The near skin as a fraction of the margin. Any skin gives the same bits; 0.05-0.1 ran
@@ -259,6 +283,10 @@ int sd_neighbor_needs_rebuild(const sd_world *w);
  * store changes order); the next rebuild puts it back. */
 sd_status sd_neighbor_collect_history(sd_world *w);
 void sd_grid_free(sd_grid *g);
+void sd_bed_cache_free(sd_bed_cache *c);
+/* Whether rebuilds take the bed from its cache (default on; off: every rebuild places it
+ * afresh, the same bits, for the tests); returns the previous setting. */
+int sd_bed_cache_set(int on);
 
 /* contact_law.c */
 typedef struct {

@@ -450,6 +450,93 @@ static void test_history(void)
     sd_world_destroy(b);
 }
 
+/* The bed cache (neighbor.c): a floor of fixed spheres (the bed) under spheres dropped on it,
+ * stepped with the cache and without: the same state at every check, the candidates exact
+ * right after a rebuild, and the cache used for most rebuilds, also across a body removed, a
+ * body added and one flying off past the bed's corner (the grid's origin moved by whole
+ * cells, then the columns changed). */
+static sd_world *bed_world(void)
+{
+    sd_world *w = new_world();
+    w->def.gravity = v3(0, 0, -9.81);
+    const double L = 0.08;
+    add_tris(w, L, 0);
+    rng_state = 0x9E3779B97F4A7C15ULL;
+    for (int i = 0; i < 16; i++)
+        for (int j = 0; j < 16; j++) {
+            sd_sphere_def s = sd_sphere_def_default();
+            s.radius = 0.002 + 0.0005 * urand();
+            s.pos = v3(0.0025 + 0.005 * i, 0.0025 + 0.005 * j, 0.002);
+            s.fixed = 1;
+            CHECK(sd_world_add_sphere(w, &s) >= 0);
+        }
+    for (int k = 0; k < 120; k++) {
+        sd_sphere_def s = sd_sphere_def_default();
+        s.radius = 0.0015 + 0.002 * urand();
+        s.pos = v3(0.006 + (L - 0.012) * urand(), 0.006 + (L - 0.012) * urand(), 0.008 + 0.03 * urand());
+        s.vel = v3(0.2 * (urand() - 0.5), 0.2 * (urand() - 0.5), -0.5 * urand());
+        CHECK(sd_world_add_sphere(w, &s) >= 0);
+    }
+    return w;
+}
+
+static void test_bed_cache(void)
+{
+    sd_world *w[2];
+    const int was = sd_bed_cache_set(1);
+    for (int c = 0; c < 2; c++)
+        w[c] = bed_world();
+    long checks = 0, differ = 0, strict = 0;
+    int gone = -1;
+    for (int st = 1; st <= 1500; st++) {
+        for (int c = 0; c < 2; c++) {
+            sd_bed_cache_set(c == 0);
+            if (st == 400) CHECK(sd_world_remove_body(w[c], w[c]->b.gid[w[c]->b.n / 3]) == SD_OK);
+            if (st == 700) {
+                sd_sphere_def s = sd_sphere_def_default();
+                s.radius = 0.003;
+                s.pos = v3(0.04, 0.04, 0.03);
+                CHECK(sd_world_add_sphere(w[c], &s) >= 0);
+                /* one more that leaves past the bed's low corner, then beyond the columns */
+                s.radius = 0.002;
+                s.pos = v3(0.01, 0.01, 0.02);
+                s.vel = v3(-20.0, -10.0, 0.0);
+                gone = sd_world_add_sphere(w[c], &s);
+                CHECK(gone >= 0);
+            }
+            CHECK(sd_world_step(w[c]) == SD_OK);
+        }
+        if (st % 50 == 0) {
+            checks++;
+            differ += sd_world_state_hash(w[0]) != sd_world_state_hash(w[1]);
+        }
+        if (st % 300 == 0) { /* a rebuild now, in both worlds, then the exact candidates */
+            for (int c = 0; c < 2; c++) {
+                sd_bed_cache_set(c == 0);
+                CHECK(sd_neighbor_rebuild(w[c]) == SD_OK);
+            }
+            check_candidates(w[0], 1, "bed cache, after a rebuild");
+            strict++;
+        }
+    }
+    sd_bed_cache_set(was);
+    sd_body_state bs;
+    CHECK(sd_world_body(w[0], gone, &bs) == SD_OK);
+    const long rb = sd_world_get_timers(w[0]).rebuilds;
+    printf("bed cache: %ld rebuilds, %ld from the cache (%ld in the world without it), %ld of %ld checks differ, "
+           "strict candidate checks %ld, the flying sphere at (%.3f, %.3f), grid origin (%.4f, %.4f, %.4f)\n",
+           rb, w[0]->bed.used, w[1]->bed.used, differ, checks, strict, bs.pos.x, bs.pos.y, w[0]->grid.lo.x,
+           w[0]->grid.lo.y, w[0]->grid.lo.z);
+    CHECK(differ == 0);
+    CHECK(checks == 30);
+    CHECK(w[1]->bed.used == 0);
+    CHECK(w[0]->bed.used > rb / 2 && w[0]->bed.used < rb - 3); /* it was made afresh at least 4 times */
+    CHECK(bs.pos.x < -0.05 && bs.pos.y < -0.03); /* it got past the bed's corner */
+    CHECK(strict == 5);
+    for (int c = 0; c < 2; c++)
+        sd_world_destroy(w[c]);
+}
+
 int main(void)
 {
     test_static(1);
@@ -457,6 +544,7 @@ int main(void)
     test_dynamic();
     test_near_slow();
     test_history();
+    test_bed_cache();
     printf("near-list checks of the owners' segments (two or more threads): %ld\n", near_by_owners);
 #ifdef _OPENMP
     if (omp_get_max_threads() > 1) CHECK(near_by_owners > 1000);
