@@ -31,6 +31,7 @@ void sd_bed_cache_free(sd_bed_cache *c)
     free(c->cells);
     free(c->off);
     free(c->items);
+    free(c->flags);
     memset(c, 0, sizeof(*c));
 }
 
@@ -122,8 +123,13 @@ static sd_status grid_layout(sd_grid *g, sd_vec3 lo, sd_vec3 hi, double cell, lo
 /* Counting sort of items into cells given each item's range. With reg0 and slot: item i's
  * entries are reg0[i] .. reg0[i+1]-1 in the order z, y, x of its range, and slot[r] is where
  * entry r went in items (so the items after it in that cell are exactly those above i). */
+static inline uint8_t range_begins(const int32_t *r, int x, int y, int z)
+{
+    return (uint8_t)((x == r[0]) | (y == r[1]) << 1 | (z == r[2]) << 2);
+}
+
 static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const uint8_t *skip, int32_t *reg0,
-                           int32_t **slot, int *slot_cap, const sd_bed_cache *bed)
+                           int32_t **slot, int *slot_cap, uint8_t **flag, int *flag_cap, const sd_bed_cache *bed)
 {
     int ncell = g->nx * g->ny * g->nz;
     long total = 0;
@@ -152,6 +158,8 @@ static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const u
     const long all = total + (bed ? bed->nitems : 0);
     if (sd_grow((void **)&g->items, &g->cap_items, (int)all + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     if (slot && sd_grow((void **)slot, slot_cap, (int)total + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    if (flag && sd_grow((void **)flag, flag_cap, (int)all + 1, sizeof(uint8_t))) return SD_ERR_NOMEM;
+    uint8_t *fl = flag ? *flag : NULL;
     /* fill using cell_start as a cursor, then shift back */
     int32_t *sl = slot ? *slot : NULL;
     long e = 0;
@@ -164,12 +172,14 @@ static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const u
                     const int at = g->cell_start[(z * g->ny + y) * g->nx + x]++;
                     g->items[at] = i;
                     if (sl) sl[e++] = at;
+                    if (fl) fl[at] = range_begins(r, x, y, z);
                 }
     }
     if (bed)
         for (int q = 0; q < bed->ncells; q++) {
             const int c = bed->cells[q], m = bed->off[q + 1] - bed->off[q];
             memcpy(g->items + g->cell_start[c], bed->items + bed->off[q], (size_t)m * sizeof(int32_t));
+            if (fl) memcpy(fl + g->cell_start[c], bed->flags + bed->off[q], (size_t)m);
             g->cell_start[c] += m;
         }
     for (int c = ncell; c > 0; c--)
@@ -426,7 +436,7 @@ static sd_status rebuild_triangle_grid(sd_world *w, double cell)
     if (!skip) return SD_ERR_NOMEM;
     for (int t = 0; t < wl->n; t++)
         skip[t] = !wl->active[t];
-    st = grid_fill(&w->tgrid, wl->n, (const int32_t(*)[6])w->trange, skip, NULL, NULL, NULL, NULL);
+    st = grid_fill(&w->tgrid, wl->n, (const int32_t(*)[6])w->trange, skip, NULL, NULL, NULL, NULL, NULL, NULL);
     free(skip);
     if (st) return st;
     st = sd_walls_weld(wl);
@@ -664,12 +674,41 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
                     continue;
                 }
 #endif
-                /* the tests (within reach; this cell the lowest the two ranges share; not
-                 * two fixed bodies) without a branch on any, a block of entries at a time, then
-                 * the takers in entry order: the same candidates in the same order. The first
-                 * two pass for about a third and a half of the entries, a coin toss to the
-                 * branch predictor (branching on them, the scan ran 5-10 % slower). */
                 int32_t js[64];
+                if (!use_mi) {
+                    /* the entries whose pair is taken in this cell first, from the flags
+                     * alone (a byte each, in entry order): along each axis where this cell is
+                     * past the start of i's range, j's must start here. About half the entries
+                     * are left; then within reach and not two fixed bodies; then the takers, in
+                     * entry order: the same candidates in the same order */
+                    const unsigned need = (unsigned)((x > ri[0]) | (y > ri[1]) << 1 | (z > ri[2]) << 2);
+                    const uint8_t *fl = w->gflag;
+                    while (k < kend) {
+                        const int k1 = kend - k < 64 ? kend : k + 64;
+                        int nj = 0;
+                        for (; k < k1; k++) {
+                            js[nj] = items[k];
+                            nj += (fl[k] & need) == need;
+                        }
+                        int nt = 0;
+                        for (int q = 0; q < nj; q++) {
+                            const int j = js[q];
+                            const double reach = bri + b->bound_r[j] + margin;
+                            const int in = !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
+                            js[nt] = j;
+                            nt += in & !(fixed_i & b->fixed[j]);
+                        }
+                        for (int q = 0; q < nt; q++)
+                            if (take_pair(w, i, js[q], hm, out)) return 1;
+                    }
+                    continue;
+                }
+                /* a fixed body through the moving bodies' lists (no flags there): the tests
+                 * (within reach; this cell the lowest the two ranges share; not two fixed
+                 * bodies) without a branch on any, a block of entries at a time, then the
+                 * takers in entry order. The first two pass for about a third and a half of
+                 * the entries, a coin toss to the branch predictor (branching on them, the
+                 * scan ran 5-10 % slower). */
                 while (k < kend) {
                     const int k1 = kend - k < 64 ? kend : k + 64;
                     int nj = 0;
@@ -798,7 +837,9 @@ static sd_status bed_cache_make(sd_world *w, double hm)
     if (off) c->off = off;
     void *items = realloc(c->items, (size_t)(nitems + 1) * sizeof(int32_t));
     if (items) c->items = items;
-    if (!cells || !off || !items) {
+    void *flags = realloc(c->flags, (size_t)(nitems + 1));
+    if (flags) c->flags = flags;
+    if (!cells || !off || !items || !flags) {
         free(cnt);
         return SD_ERR_NOMEM;
     }
@@ -816,8 +857,11 @@ static sd_status bed_cache_make(sd_world *w, double hm)
         const int32_t *r = w->range[i];
         for (int z = r[2]; z <= r[5]; z++)
             for (int y = r[1]; y <= r[4]; y++)
-                for (int x = r[0]; x <= r[3]; x++)
-                    c->items[cnt[(z * g->ny + y) * g->nx + x]++] = i;
+                for (int x = r[0]; x <= r[3]; x++) {
+                    const int e = cnt[(z * g->ny + y) * g->nx + x]++;
+                    c->items[e] = i;
+                    c->flags[e] = range_begins(r, x, y, z);
+                }
     }
     free(cnt);
     c->ncells = ncells;
@@ -909,8 +953,8 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     }
     if (bed) memcpy(w->range + nr, bc->range, (size_t)(b->n - nr) * sizeof(*w->range));
     if (sd_grow((void **)&w->reg0, &w->reg0_cap, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL, w->reg0, &w->slot, &w->slot_cap,
-                   bed ? bc : NULL);
+    st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL, w->reg0, &w->slot, &w->slot_cap, &w->gflag,
+                   &w->gflag_cap, bed ? bc : NULL);
     if (st) return st;
     if (bed)
         w->bed.used++;

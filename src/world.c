@@ -99,6 +99,7 @@ void sd_world_destroy(sd_world *w)
     sd_bed_cache_free(&w->bed);
     free(w->reg0);
     free(w->slot);
+    free(w->gflag);
     free(w->trange);
     free(w->mov);
     free(w->near);

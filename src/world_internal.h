@@ -175,6 +175,7 @@ typedef struct {
     int ztop; /* the bed's highest layer, below the top one (its ranges do not depend on nz) */
     int32_t (*range)[6];
     int32_t *cells, *off, *items;
+    uint8_t *flags; /* the items' gflag */
     int ncells, nitems;
     long used; /* rebuilds that took the bed from here (for the tests) */
 } sd_bed_cache;
@@ -216,6 +217,11 @@ struct sd_world {
      * entry e in the grid's items (neighbor.c grid_fill; scratch, not saved) */
     int32_t *reg0, *slot;
     int reg0_cap, slot_cap;
+    /* gflag[k]: the body of grid entry k has its range begin at the entry's cell along x (bit
+     * 0), y (bit 1), z (bit 2): a pair is taken in a cell only where each axis begins one of
+     * the two ranges (the lowest cell they share) */
+    uint8_t *gflag;
+    int gflag_cap;
     int32_t (*trange)[6]; /* per-triangle cell range in the triangle grid */
     int trange_cap;
     /* derived, never saved: the indices of the moving bodies, ascending, for the per-body
