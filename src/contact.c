@@ -1453,6 +1453,7 @@ typedef struct {
     double tx[BT_CHUNK], ty[BT_CHUNK], tz[BT_CHUNK]; /* torque on it */
     double redo[BT_CHUNK];
     int32_t k[BT_CHUNK]; /* the pair */
+    long skipped;        /* bodies passed over by bt_range, not near a wall (for the tests) */
 } bt_batch;
 
 SD_SIMD_CLONES
@@ -1596,20 +1597,23 @@ static inline void pf_body(const sd_bodies *b, int j)
 
 /* Body–triangle pairs of the bodies i0 .. i1-1: narrow phase, mesh dedup, law, into each
  * pair's slot (gathered per body in pair order by sd_contact_gather). */
-static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q)
+static int wall_near_on = 1; /* sd_wall_near_set */
+
+static long bt_range(sd_world *w, const sd_law *law, const int32_t *list, int nl, long skipped, bt_batch *q)
 {
     sd_bodies *b = &w->b;
     long count = 0;
     int m = 0;
-    /* the pairs are grouped by body: walk the pairs, not the bodies (most have none) */
-    const int kend = w->csr.bt_start[i1];
+    /* the bodies near a wall (wall_near_range, made with the near pairs, which the callers have
+     * just made current), each with its pairs (grouped by body): the others would get exactly
+     * nothing (no contact, their pairs' slots already empty), the same bits */
     const int pf = sd_front_prefetch_on(w);
-    for (int from = w->csr.bt_start[i0]; from < kend;) {
-        const int i = w->bt.p[from].a;
-        /* (the body of the pair 16 ahead: the bodies with wall pairs are a sparse subset,
-         * which the hardware prefetchers do not follow; when the front prefetch is on) */
-        if (pf && from + 16 < kend) pf_body(b, w->bt.p[from + 16].a);
-        const int to = w->csr.bt_start[i + 1];
+    for (int l = 0; l < nl; l++) {
+        const int i = list[l];
+        /* (the body 4 ahead: the bodies with wall pairs are a sparse subset, which the
+         * hardware prefetchers do not follow; when the front prefetch is on) */
+        if (pf && l + 4 < nl) pf_body(b, list[l + 4]);
+        const int from = w->csr.bt_start[i], to = w->csr.bt_start[i + 1];
         if (b->shape[i] == SD_SHAPE_SPHERE) {
             const int m0 = m;
             if (bt_sphere_face(w, i, from, to, q, &m)) {
@@ -1618,7 +1622,6 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q
                     bt_flush(w, law, q, m);
                     m = 0;
                 }
-                from = to;
                 continue;
             }
         }
@@ -1658,9 +1661,9 @@ static long bt_range(sd_world *w, const sd_law *law, int i0, int i1, bt_batch *q
         }
         b->force[i] = f;
         b->torque[i] = t;
-        from = to;
     }
     if (m > 0) bt_flush(w, law, q, m);
+    q->skipped += skipped;
     return count;
 }
 
@@ -1771,6 +1774,44 @@ static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pai
     return m;
 }
 
+int sd_wall_near_set(int on)
+{
+    const int was = wall_near_on;
+    wall_near_on = on != 0;
+    return was;
+}
+
+/* The bodies among i0 .. i1-1 with wall pairs that are near touching one, into list
+ * (ascending; returns how many; *skip: how many were left out): near when the centre's distance
+ * to a triangle's plane (no nearer than that to the triangle) less the radius, or a log's
+ * bounding radius (the log lies within it whatever its tilt), is below the skin. A body
+ * farther from every plane cannot reach one before the near pairs are remade (walls do not
+ * move; a triangle switched on forces a rebuild). All of them when sd_wall_near_set(0). */
+static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *list, long *skip)
+{
+    const sd_bodies *b = &w->b;
+    const sd_walls *wl = &w->w;
+    const sd_pair *p = w->bt.p;
+    const int kend = w->csr.bt_start[i1];
+    int m = 0;
+    long left = 0;
+    for (int from = w->csr.bt_start[i0]; from < kend;) {
+        const int i = p[from].a, to = w->csr.bt_start[i + 1];
+        const double reach = (b->shape[i] == SD_SHAPE_SPHERE ? b->radius[i] : b->bound_r[i]) + skin;
+        int near = !wall_near_on;
+        for (int k = from; k < to; k++) {
+            const sd_tri *t = &wl->tri[p[k].b];
+            near |= wl->active[p[k].b] && fabs(v3_dot(v3_sub(b->pos[i], t->v[0]), t->n)) < reach;
+        }
+        list[m] = i;
+        m += near;
+        left += !near;
+        from = to;
+    }
+    *skip = left;
+    return m;
+}
+
 /* The near pairs (of either pass) still good: no rebuild since, and no surface has drifted
  * half the near skin (near_update). */
 static int near_still_good(const sd_world *w)
@@ -1809,8 +1850,11 @@ static sd_status near_update(sd_world *w)
     const double skin = SD_NEAR_SKIN * w->def.margin;
     if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     const int fresh = near_mark_ready(w);
-    if (fresh < 0 || pair_soa_reserve(&w->near_soa, nbb + 1)) return SD_ERR_NOMEM;
+    if (fresh < 0 || pair_soa_reserve(&w->near_soa, nbb + 1) ||
+        sd_grow((void **)&w->wall_list, &w->wall_list_cap, w->b.n + 1, sizeof(int32_t)))
+        return SD_ERR_NOMEM;
     w->near_n = near_filter(w, skin, fresh, w->near, &w->near_soa);
+    w->wall_n = wall_near_range(w, skin, 0, w->b.n, w->wall_list, &w->wall_skip);
     w->near_nbb = nbb;
     near_made(w, skin);
     w->near_soa_version = w->near_version + 1;
@@ -2085,7 +2129,7 @@ static sd_status owned_update(sd_world *w, int T)
         sd_grow((void **)&o->xo, &o->xo_cap, nbb + 1, sizeof(uint8_t)) ||
         sd_grow((void **)&o->xout, &o->xout_cap, nbb + 1, sizeof(sd_pair_out)) ||
         sd_grow((void **)&o->xact, &o->xact_cap, nbb + 1, sizeof(uint8_t)) || pair_soa_reserve(&o->soa, nbb + 1) ||
-        pair_soa_reserve(&o->xsoa, nbb + 1))
+        pair_soa_reserve(&o->xsoa, nbb + 1) || sd_grow((void **)&w->wall_list, &w->wall_list_cap, n + 1, sizeof(int32_t)))
         return SD_ERR_NOMEM;
     const double skin = SD_NEAR_SKIN * w->def.margin;
     const int fresh = near_mark_ready(w);
@@ -2096,6 +2140,8 @@ static sd_status owned_update(sd_world *w, int T)
         for (int t = tid; t < T; t += nthr) {
             const int k0 = o->K[t], k1 = o->K[t + 1];
             const uint8_t *kp = near_keep_range(w, skin, k0, k1, fresh);
+            /* its bodies near a wall, at its bodies' place */
+            o->wn[t] = wall_near_range(w, skin, o->B[t], o->B[t + 1], w->wall_list + o->B[t], &o->wskip[t]);
             /* the near ones into its segment in pair order, each cross pair as ~c; xp[j - k0]
              * counts the cross entries before entry j */
             const unsigned i0 = (unsigned)o->B[t], len = (unsigned)(o->B[t + 1] - o->B[t]);
@@ -2250,7 +2296,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 }
             }
             /* its bodies' wall pairs, then its moving bodies */
-            count += bt_range(w, law, i0, i1f > i0 ? i1f : i0, &x->wq);
+            count += bt_range(w, law, w->wall_list + i0, o->wn[t], o->wskip[t], &x->wq);
             if (moved_out)
                 moved |= sd_integrate_list(w, w->mov, sd_mov_lower(w->mov, w->mov_n, i0),
                                            sd_mov_lower(w->mov, w->mov_n, i1), &v2, &dc, &xf);
@@ -2290,6 +2336,16 @@ static void sc_lanes_fold(void *scratch, int T)
     }
 }
 
+/* The same for the bodies the wall pass skipped, into the world. */
+static void wall_skipped_fold(sd_world *w, int T)
+{
+    for (int t = 0; t < T; t++) {
+        bt_batch *q = &((bb_scratch *)w->bb_scratch)[t].wq;
+        w->wall_skipped += q->skipped;
+        q->skipped = 0;
+    }
+}
+
 sd_status sd_contact_compute(sd_world *w, int *integrated)
 {
     sd_law law = sd_law_make(&w->def.contact);
@@ -2305,6 +2361,8 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         for (int t = 0; t < T; t++)
             ((bb_scratch *)w->bb_scratch)[t].q.sc.n_run = ((bb_scratch *)w->bb_scratch)[t].q.sc.n_redo =
                 ((bb_scratch *)w->bb_scratch)[t].q.sc.n_geom = 0;
+        for (int t = 0; t < T; t++)
+            ((bb_scratch *)w->bb_scratch)[t].wq.skipped = 0;
     }
 #ifdef _OPENMP
     if (T > 1) {
@@ -2324,9 +2382,10 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         sd_status nst = near_update(w);
         if (nst) return nst;
         count = bb_serial_pass(w, &law, w->bb_scratch);
-        count += bt_range(w, &law, 0, w->b.n, &((bb_scratch *)w->bb_scratch)[0].wq);
+        count += bt_range(w, &law, w->wall_list, w->wall_n, w->wall_skip, &((bb_scratch *)w->bb_scratch)[0].wq);
     }
     sc_lanes_fold(w->bb_scratch, T);
+    wall_skipped_fold(w, T);
     w->contacts = count;
     w->wall_force_stale = 1;
     return SD_OK;

@@ -104,6 +104,7 @@ void sd_world_destroy(sd_world *w)
     free(w->mov);
     free(w->near);
     free(w->near_mark);
+    free(w->wall_list);
     sd_pair_soa_free(&w->near_soa);
     free(w);
 }

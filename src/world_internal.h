@@ -153,6 +153,10 @@ typedef struct {
      * the body-body pairs, and each owner's time since it was set */
     double fo[SD_MAX_OWNERS + 1];
     double tau[SD_MAX_OWNERS];
+    /* owner t's bodies near a wall: wall_list[B[t] ..] (wn[t] of them), and how many of its
+     * bodies with wall pairs were left out (wskip[t]) */
+    int wn[SD_MAX_OWNERS];
+    long wskip[SD_MAX_OWNERS];
     int passes; /* passes timed in tau */
 } sd_owned;
 
@@ -252,6 +256,14 @@ struct sd_world {
      * the scratch for each candidate's answer while they are remade. */
     uint8_t *near_mark;
     int near_mark_cap;
+    /* the bodies with a wall pair (bt) within the near skin of touching, ascending, made with
+     * the near pairs (so valid while they are): a body not listed has no wall contact until
+     * they are remade, and the wall pass skips it. The serial pass's list: wall_list[0 ..
+     * wall_n), wall_skip left out; the owners' in sd_owned. */
+    int32_t *wall_list;
+    int wall_list_cap, wall_n;
+    long wall_skip;
+    long wall_skipped; /* bodies the wall pass skipped, summed over the steps (for the tests) */
     long near_mark_rb;
     double ref_drift; /* the same bound as near_drift since the last rebuild (pos_ref) */
     /* derived, never saved: what the rebuilds know of the bed roughness (the fixed spheres,
@@ -342,6 +354,9 @@ int sd_sc_lanes_set(int on);
 /* The sphere-log contacts' geometry in AVX2 lanes where the CPU has it (1, the default) or
  * pair by pair (0); the same bits either way. Returns the previous setting. */
 int sd_sc_geom_set(int on);
+/* The wall pass over the bodies with a wall pair near touching only (1, the default) or over
+ * all with wall pairs (0); the same bits either way. Returns the previous setting. */
+int sd_wall_near_set(int on);
 /* Sphere-log lanes filled by the AVX2 geometry since the start (for the tests). */
 long sd_sc_geom_count(void);
 long sd_sc_lanes_count(long *redo);

@@ -537,6 +537,62 @@ static void test_bed_cache(void)
         sd_world_destroy(w[c]);
 }
 
+/* The wall pass over the bodies near a wall only (contact.c wall_near_range): spheres
+ * dropped on a floor with tilted triangles about, stepped with it and without, on one thread
+ * (the serial pass) and on all (the owners): the same state at every check, wall contacts
+ * made, and bodies with wall pairs skipped. */
+static void test_wall_near(void)
+{
+    int threads[2] = {1, 1};
+#ifdef _OPENMP
+    threads[1] = omp_get_max_threads();
+#endif
+    for (int h = 0; h < 2; h++) {
+#ifdef _OPENMP
+        const int T0 = omp_get_max_threads();
+        omp_set_num_threads(threads[h]);
+#endif
+        sd_world *w[2];
+        for (int c = 0; c < 2; c++) {
+            w[c] = new_world();
+            w[c]->def.gravity = v3(0, 0, -9.81);
+            rng_state = 0x3C6EF372FE94F82BULL;
+            const double L = 0.08;
+            add_tris(w[c], L, 12);
+            for (int k = 0; k < 150; k++) {
+                sd_sphere_def sd = sd_sphere_def_default();
+                sd.radius = 0.0025 + 0.0025 * urand();
+                sd.pos = v3(0.006 + (L - 0.012) * urand(), 0.006 + (L - 0.012) * urand(), 0.004 + 0.012 * urand());
+                sd.vel = v3(0.5 * (urand() - 0.5), 0.5 * (urand() - 0.5), -0.5 - 1.5 * urand());
+                CHECK(sd_world_add_sphere(w[c], &sd) >= 0);
+            }
+        }
+        long differ = 0, touching = 0;
+        for (int st = 1; st <= 3000; st++) {
+            for (int c = 0; c < 2; c++) {
+                const int was = sd_wall_near_set(c == 0);
+                CHECK(sd_world_step(w[c]) == SD_OK);
+                sd_wall_near_set(was);
+            }
+            for (int k = 0; k < w[0]->bt.n; k++)
+                touching += w[0]->bt.active[k];
+            if (st % 100 == 0) differ += sd_world_state_hash(w[0]) != sd_world_state_hash(w[1]);
+        }
+        printf("wall pass near walls only, %d thread(s): %ld of 30 checks differ, wall contacts summed over the steps %ld, "
+               "bodies skipped %ld (%ld without)\n",
+               threads[h], differ, touching, w[0]->wall_skipped, w[1]->wall_skipped);
+        CHECK(differ == 0);
+        CHECK(touching > 3000);
+        CHECK(w[0]->wall_skipped > 1000);
+        CHECK(w[1]->wall_skipped == 0);
+        for (int c = 0; c < 2; c++)
+            sd_world_destroy(w[c]);
+#ifdef _OPENMP
+        omp_set_num_threads(T0);
+#endif
+    }
+}
+
 int main(void)
 {
     test_static(1);
@@ -545,6 +601,7 @@ int main(void)
     test_near_slow();
     test_history();
     test_bed_cache();
+    test_wall_near();
     printf("near-list checks of the owners' segments (two or more threads): %ld\n", near_by_owners);
 #ifdef _OPENMP
     if (omp_get_max_threads() > 1) CHECK(near_by_owners > 1000);
