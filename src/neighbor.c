@@ -454,10 +454,10 @@ static sd_status sort_bodies_by_cell(sd_world *w, int n)
     const sd_grid *g = &w->grid;
     int ncell = g->nx * g->ny * g->nz;
     int32_t *cell = malloc((size_t)(n + 1) * sizeof(int32_t));
-    int32_t *count = calloc(2 * (size_t)ncell + 1, sizeof(int32_t));
     int32_t *perm = malloc((size_t)(n + 1) * sizeof(int32_t));
+    int32_t *count = NULL;
     sd_status st = SD_OK;
-    if (!cell || !count || !perm) {
+    if (!cell || !perm) {
         st = SD_ERR_NOMEM;
         goto done;
     }
@@ -478,12 +478,33 @@ static sd_status sort_bodies_by_cell(sd_world *w, int n)
     for (int i = 1; i < n; i++)
         unsorted |= cell[i] < cell[i - 1];
     if (!unsorted) goto done;
+    /* between two rebuilds a few bodies change cells, each passing a few others: a stable
+     * insertion sort, while its moves stay under 8 per body; else (a store out of order, the
+     * first rebuild) a stable counting sort over the cells. The same order either way. */
+    long moves = 0;
+    const long max_moves = 8L * n + 64;
     for (int i = 0; i < n; i++)
-        count[cell[i] + 1]++;
-    for (int c = 0; c < 2 * ncell; c++)
-        count[c + 1] += count[c];
-    for (int i = 0; i < n; i++)
-        perm[count[cell[i]]++] = i;
+        perm[i] = i;
+    for (int i = 1; i < n && moves <= max_moves; i++) {
+        const int x = perm[i], cx = cell[x];
+        int j = i - 1;
+        for (; j >= 0 && cell[perm[j]] > cx && moves <= max_moves; j--, moves++)
+            perm[j + 1] = perm[j];
+        perm[j + 1] = x;
+    }
+    if (moves > max_moves) {
+        count = calloc(2 * (size_t)ncell + 1, sizeof(int32_t));
+        if (!count) {
+            st = SD_ERR_NOMEM;
+            goto done;
+        }
+        for (int i = 0; i < n; i++)
+            count[cell[i] + 1]++;
+        for (int c = 0; c < 2 * ncell; c++)
+            count[c + 1] += count[c];
+        for (int i = 0; i < n; i++)
+            perm[count[cell[i]]++] = i;
+    }
     /* the bed at the end stays where it was: permute the part before it only */
     int m = n;
     while (m > 0 && perm[m - 1] == m - 1)

@@ -2,6 +2,7 @@
  * candidate, every candidate has its gap within the margin (and every pair within the margin is
  * a candidate); after moves smaller than margin/2 without rebuild, every contact is still a
  * candidate; a move beyond margin/2 asks for a rebuild; tangential history survives rebuilds. */
+#include <math.h>
 #include <string.h>
 
 #include "check.h"
@@ -517,6 +518,19 @@ static void test_bed_cache(void)
             }
             check_candidates(w[0], 1, "bed cache, after a rebuild");
             strict++;
+            /* the store in cell order, x slowest, the bed last (the rebuild's sort) */
+            const sd_grid *g = &w[0]->grid;
+            long prev = -1, unsorted = 0;
+            for (int i = 0; i < w[0]->b.n; i++) {
+                const sd_vec3 p = w[0]->b.pos[i];
+                const long cx = (long)floor((p.x - g->lo.x) / g->cell), cy = (long)floor((p.y - g->lo.y) / g->cell),
+                           cz = (long)floor((p.z - g->lo.z) / g->cell);
+                const long key = ((cx * g->ny + cy) * g->nz + cz) +
+                                 (sd_body_is_bed(&w[0]->b, i) ? (long)g->nx * g->ny * g->nz : 0);
+                unsorted += key < prev;
+                prev = key;
+            }
+            CHECK(unsorted == 0);
         }
     }
     sd_bed_cache_set(was);
