@@ -544,7 +544,17 @@ typedef struct {
  * roughness is half the paper's elements and fills its cells: its scans get short. */
 typedef struct {
     int32_t *start, *items;
+    uint8_t *flags; /* the entries' gflag */
 } moving_index;
+
+static int moving_index_min = 64; /* made for more fixed bodies than this (sd_moving_index_set) */
+
+int sd_moving_index_set(int min_fixed)
+{
+    const int was = moving_index_min;
+    moving_index_min = min_fixed;
+    return was;
+}
 
 static int moving_index_make(const sd_world *w, moving_index *mi)
 {
@@ -553,12 +563,16 @@ static int moving_index_make(const sd_world *w, moving_index *mi)
     const int total = g->cell_start[ncell];
     mi->start = malloc((size_t)(ncell + 1) * sizeof(int32_t));
     mi->items = malloc((size_t)(total + 1) * sizeof(int32_t));
-    if (!mi->start || !mi->items) return 1;
+    mi->flags = malloc((size_t)(total + 1));
+    if (!mi->start || !mi->items || !mi->flags) return 1;
     int m = 0;
     for (int c = 0; c < ncell; c++) {
         mi->start[c] = m;
         for (int k = g->cell_start[c]; k < g->cell_start[c + 1]; k++)
-            if (!w->b.fixed[g->items[k]]) mi->items[m++] = g->items[k];
+            if (!w->b.fixed[g->items[k]]) {
+                mi->flags[m] = w->gflag[k];
+                mi->items[m++] = g->items[k];
+            }
     }
     mi->start[ncell] = m;
     return 0;
@@ -591,13 +605,6 @@ static inline int take_pair(const sd_world *w, int i, int j, double hm, cand_buf
     if (sd_grow((void **)&out->c, &out->cap, out->n + 1, sizeof(cand))) return 1;
     out->c[out->n++] = (cand){a, bb, kind};
     return 0;
-}
-
-/* The cell (x, y, z) is the lowest that the cell ranges ri and rj share (where a pair is taken). */
-static inline int lowest_shared_cell(const int32_t *rj, const int32_t *ri, int x, int y, int z)
-{
-    return (x == (ri[0] > rj[0] ? ri[0] : rj[0])) & (y == (ri[1] > rj[1] ? ri[1] : rj[1])) &
-           (z == (ri[2] > rj[2] ? ri[2] : rj[2])); /* (& not &&: no branch) */
 }
 
 #ifdef SD_SCAN512
@@ -695,52 +702,31 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
                     continue;
                 }
 #endif
+                /* the entries whose pair is taken in this cell first, from the flags alone
+                 * (a byte each, in entry order): along each axis where this cell is past the
+                 * start of i's range, j's must start here (this is then the lowest cell the
+                 * two ranges share). About half the entries are left; then within reach and
+                 * not two fixed bodies; then the takers, in entry order: the same candidates
+                 * in the same order */
+                const unsigned need = (unsigned)((x > ri[0]) | (y > ri[1]) << 1 | (z > ri[2]) << 2);
+                const uint8_t *fl = use_mi ? mi->flags : w->gflag;
                 int32_t js[64];
-                if (!use_mi) {
-                    /* the entries whose pair is taken in this cell first, from the flags
-                     * alone (a byte each, in entry order): along each axis where this cell is
-                     * past the start of i's range, j's must start here. About half the entries
-                     * are left; then within reach and not two fixed bodies; then the takers, in
-                     * entry order: the same candidates in the same order */
-                    const unsigned need = (unsigned)((x > ri[0]) | (y > ri[1]) << 1 | (z > ri[2]) << 2);
-                    const uint8_t *fl = w->gflag;
-                    while (k < kend) {
-                        const int k1 = kend - k < 64 ? kend : k + 64;
-                        int nj = 0;
-                        for (; k < k1; k++) {
-                            js[nj] = items[k];
-                            nj += (fl[k] & need) == need;
-                        }
-                        int nt = 0;
-                        for (int q = 0; q < nj; q++) {
-                            const int j = js[q];
-                            const double reach = bri + b->bound_r[j] + margin;
-                            const int in = !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
-                            js[nt] = j;
-                            nt += in & !(fixed_i & b->fixed[j]);
-                        }
-                        for (int q = 0; q < nt; q++)
-                            if (take_pair(w, i, js[q], hm, out)) return 1;
-                    }
-                    continue;
-                }
-                /* a fixed body through the moving bodies' lists (no flags there): the tests
-                 * (within reach; this cell the lowest the two ranges share; not two fixed
-                 * bodies) without a branch on any, a block of entries at a time, then the
-                 * takers in entry order. The first two pass for about a third and a half of
-                 * the entries, a coin toss to the branch predictor (branching on them, the
-                 * scan ran 5-10 % slower). */
                 while (k < kend) {
                     const int k1 = kend - k < 64 ? kend : k + 64;
                     int nj = 0;
                     for (; k < k1; k++) {
-                        const int j = items[k];
+                        js[nj] = items[k];
+                        nj += (fl[k] & need) == need;
+                    }
+                    int nt = 0;
+                    for (int q = 0; q < nj; q++) {
+                        const int j = js[q];
                         const double reach = bri + b->bound_r[j] + margin;
                         const int in = !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
-                        js[nj] = j;
-                        nj += in & lowest_shared_cell(w->range[j], ri, x, y, z) & !(fixed_i & b->fixed[j]);
+                        js[nt] = j;
+                        nt += in & !(fixed_i & b->fixed[j]);
                     }
-                    for (int q = 0; q < nj; q++)
+                    for (int q = 0; q < nt; q++)
                         if (take_pair(w, i, js[q], hm, out)) return 1;
                 }
             }
@@ -1007,11 +993,12 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         cand_buf *buf = calloc(2 * (size_t)K, sizeof(cand_buf)); /* K body-body, K body-triangle */
         /* the moving bodies of each cell, for the fixed bodies' scans: worth making when there
          * are many (the bed, sorted last, has none to scan; the dam's pipes are a few) */
-        moving_index mi = {NULL, NULL};
-        if (!buf || (nfixed > 64 && moving_index_make(w, &mi))) {
+        moving_index mi = {NULL, NULL, NULL};
+        if (!buf || (nfixed > moving_index_min && moving_index_make(w, &mi))) {
             free(buf);
             free(mi.start);
             free(mi.items);
+            free(mi.flags);
             return SD_ERR_NOMEM;
         }
         const int nm = w->mov_n;
@@ -1027,6 +1014,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         }
         free(mi.start);
         free(mi.items);
+        free(mi.flags);
         for (int c = 0; c < K && !nomem; c++)
             for (int k = 0; k < buf[c].n && !st; k++)
                 st = push_pair(&w->bb, buf[c].c[k].a, buf[c].c[k].b, buf[c].c[k].kind);

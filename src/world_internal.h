@@ -305,6 +305,10 @@ void sd_bed_cache_free(sd_bed_cache *c);
 /* Whether rebuilds take the bed from its cache (default on; off: every rebuild places it
  * afresh, the same bits, for the tests); returns the previous setting. */
 int sd_bed_cache_set(int on);
+/* The fixed bodies scan the moving bodies' lists of each cell when there are more of them
+ * (not bed) than min_fixed (default 64), else the grid's own lists: the same candidates. For
+ * the tests; returns the previous setting. */
+int sd_moving_index_set(int min_fixed);
 
 /* contact_law.c */
 typedef struct {
