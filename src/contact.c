@@ -1453,7 +1453,6 @@ typedef struct {
     double tx[BT_CHUNK], ty[BT_CHUNK], tz[BT_CHUNK]; /* torque on it */
     double redo[BT_CHUNK];
     int32_t k[BT_CHUNK]; /* the pair */
-    long skipped;        /* bodies passed over by bt_range, not near a wall (for the tests) */
 } bt_batch;
 
 SD_SIMD_CLONES
@@ -1599,7 +1598,7 @@ static inline void pf_body(const sd_bodies *b, int j)
  * pair's slot (gathered per body in pair order by sd_contact_gather). */
 static int wall_near_on = 1; /* sd_wall_near_set */
 
-static long bt_range(sd_world *w, const sd_law *law, const int32_t *list, int nl, long skipped, bt_batch *q)
+static long bt_range(sd_world *w, const sd_law *law, const int32_t *list, int nl, bt_batch *q)
 {
     sd_bodies *b = &w->b;
     long count = 0;
@@ -1663,7 +1662,6 @@ static long bt_range(sd_world *w, const sd_law *law, const int32_t *list, int nl
         b->torque[i] = t;
     }
     if (m > 0) bt_flush(w, law, q, m);
-    q->skipped += skipped;
     return count;
 }
 
@@ -2296,7 +2294,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 }
             }
             /* its bodies' wall pairs, then its moving bodies */
-            count += bt_range(w, law, w->wall_list + i0, o->wn[t], o->wskip[t], &x->wq);
+            count += bt_range(w, law, w->wall_list + i0, o->wn[t], &x->wq);
             if (moved_out)
                 moved |= sd_integrate_list(w, w->mov, sd_mov_lower(w->mov, w->mov_n, i0),
                                            sd_mov_lower(w->mov, w->mov_n, i1), &v2, &dc, &xf);
@@ -2336,16 +2334,6 @@ static void sc_lanes_fold(void *scratch, int T)
     }
 }
 
-/* The same for the bodies the wall pass skipped, into the world. */
-static void wall_skipped_fold(sd_world *w, int T)
-{
-    for (int t = 0; t < T; t++) {
-        bt_batch *q = &((bb_scratch *)w->bb_scratch)[t].wq;
-        w->wall_skipped += q->skipped;
-        q->skipped = 0;
-    }
-}
-
 sd_status sd_contact_compute(sd_world *w, int *integrated)
 {
     sd_law law = sd_law_make(&w->def.contact);
@@ -2361,8 +2349,6 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         for (int t = 0; t < T; t++)
             ((bb_scratch *)w->bb_scratch)[t].q.sc.n_run = ((bb_scratch *)w->bb_scratch)[t].q.sc.n_redo =
                 ((bb_scratch *)w->bb_scratch)[t].q.sc.n_geom = 0;
-        for (int t = 0; t < T; t++)
-            ((bb_scratch *)w->bb_scratch)[t].wq.skipped = 0;
     }
 #ifdef _OPENMP
     if (T > 1) {
@@ -2371,6 +2357,8 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         int moved = 0;
         double v2 = 0.0, dc = 0.0, xf = -INFINITY;
         count = bb_owned_pass(w, &law, T, w->bb_scratch, integrated ? &moved : NULL, &v2, &dc, &xf);
+        for (int t = 0; t < T; t++)
+            w->wall_skipped += w->owned->wskip[t];
         if (moved) w->need_rebuild = 1;
         if (integrated) {
             *integrated = 1;
@@ -2382,10 +2370,10 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         sd_status nst = near_update(w);
         if (nst) return nst;
         count = bb_serial_pass(w, &law, w->bb_scratch);
-        count += bt_range(w, &law, w->wall_list, w->wall_n, w->wall_skip, &((bb_scratch *)w->bb_scratch)[0].wq);
+        count += bt_range(w, &law, w->wall_list, w->wall_n, &((bb_scratch *)w->bb_scratch)[0].wq);
+        w->wall_skipped += w->wall_skip;
     }
     sc_lanes_fold(w->bb_scratch, T);
-    wall_skipped_fold(w, T);
     w->contacts = count;
     w->wall_force_stale = 1;
     return SD_OK;
