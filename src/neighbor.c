@@ -900,13 +900,6 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     const sd_bed_cache *bc = &w->bed;
     const int bed0 = bed_cache_on && bc->made && bc->version == w->body_version && bc->n == b->n;
     const int nb = bed0 ? bc->nb0 : b->n;
-    /* the bed's low corner, the grid's anchor: from the cache, else found with the box */
-    double ax = 1e300, ay = 1e300, az = 1e300;
-    int nbed = 0;
-    if (bed0) {
-        ax = bc->blo.x, ay = bc->blo.y, az = bc->blo.z;
-        nbed = b->n - bc->nb0;
-    }
 
     /* cell size: the largest sphere diameter plus the margin; cylinders span several cells */
     double dmax = 0.0;
@@ -922,10 +915,15 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         if (st) return st;
     }
 
+    /* the box of all bodies, and the bed's low corner (the grid's anchor): the bed's part from
+     * the cache, else found with the rest */
     double lx = 1e300, ly = 1e300, lz = 1e300, hx = -1e300, hy = -1e300, hz = -1e300;
+    double ax = 1e300, ay = 1e300, az = 1e300;
+    int nbed = 0;
     if (bed0) {
-        lx = bc->blo.x, ly = bc->blo.y, lz = bc->blo.z;
+        lx = ax = bc->blo.x, ly = ay = bc->blo.y, lz = az = bc->blo.z;
         hx = bc->bhi.x, hy = bc->bhi.y, hz = bc->bhi.z;
+        nbed = b->n - bc->nb0;
     }
 #pragma omp parallel for schedule(static) reduction(min : lx, ly, lz, ax, ay, az) reduction(max : hx, hy, hz) \
     reduction(+ : nbed) if (par)
