@@ -19,7 +19,7 @@
  * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
-_Static_assert(sizeof(struct sd_world) == 1352, "struct sd_world changed: update io_checkpoint.c");
+_Static_assert(sizeof(struct sd_world) == 1384, "struct sd_world changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_world_def) == 104, "sd_world_def changed: update io_checkpoint.c");
 /* sd_walls: its edge ids, seams and edge lines are derived (sd_walls_weld, again on load) */
 _Static_assert(sizeof(sd_walls) == 96, "sd_walls changed: update io_checkpoint.c");
@@ -664,7 +664,7 @@ static sd_status read_tgrid(const rd_ctx *r, cursor *c, sd_world *w)
         for (int d = 0; d < 3; d++)
             if (w->trange[t][d] < 0 || w->trange[t][d] > w->trange[t][d + 3] || w->trange[t][d + 3] >= dims[d])
                 return fail(r, "section TGRD: bad cell range of triangle %d", t);
-    return SD_OK;
+    return sd_neighbor_tgrid_flags(w);
 }
 
 /* Derived structures, exactly as sd_neighbor_rebuild leaves them for these pair lists. */

@@ -35,6 +35,11 @@ void sd_bed_cache_free(sd_bed_cache *c)
     memset(c, 0, sizeof(*c));
 }
 
+/* fmax(0.0, t) and fmin(fmax(t, 0.0), 1.0) without the library calls (gcc calls them on
+ * x86-64, for their NaN rules): the same values, NaN included, up to the sign of a zero */
+static inline double max0(double t) { return t > 0.0 ? t : 0.0; }
+static inline double clamp01(double t) { return t > 0.0 ? (t < 1.0 ? t : 1.0) : 0.0; }
+
 static void body_box(const sd_bodies *b, int i, double half_margin, sd_vec3 *lo, sd_vec3 *hi)
 {
     sd_vec3 c = b->pos[i];
@@ -46,9 +51,8 @@ static void body_box(const sd_bodies *b, int i, double half_margin, sd_vec3 *lo,
         /* exact box of a cylinder: hl|a_k| + r sqrt(1 - a_k^2) per axis */
         sd_vec3 a = b->axis[i];
         double hl = b->hl[i];
-        e = v3(hl * fabs(a.x) + r * sqrt(fmax(0.0, 1.0 - a.x * a.x)),
-               hl * fabs(a.y) + r * sqrt(fmax(0.0, 1.0 - a.y * a.y)),
-               hl * fabs(a.z) + r * sqrt(fmax(0.0, 1.0 - a.z * a.z)));
+        e = v3(hl * fabs(a.x) + r * sqrt(max0(1.0 - a.x * a.x)), hl * fabs(a.y) + r * sqrt(max0(1.0 - a.y * a.y)),
+               hl * fabs(a.z) + r * sqrt(max0(1.0 - a.z * a.z)));
     }
     e = v3_add(e, v3(half_margin, half_margin, half_margin));
     *lo = v3_sub(c, e);
@@ -68,8 +72,37 @@ static void tri_box(const sd_tri *t, double half_margin, sd_vec3 *lo, sd_vec3 *h
 
 static int clampi(long v, int lo, int hi) { return v < lo ? lo : (v > hi ? hi : (int)v); }
 
+#ifdef SD_SCAN512
+/* cell_range's six divisions and floors in two AVX2 operations (each lane correctly rounded, as
+ * the scalar ones), clamped as doubles before the conversion: the same ranges (a NaN gives 0,
+ * like the scalar conversion here). */
+__attribute__((target("avx2"))) static void cell_range256(const sd_grid *g, sd_vec3 lo, sd_vec3 hi, int32_t r[6])
+{
+    const __m256d o = _mm256_setr_pd(g->lo.x, g->lo.y, g->lo.z, g->lo.x), c = _mm256_set1_pd(g->cell),
+                  zero = _mm256_setzero_pd();
+    const __m256d top = _mm256_setr_pd(g->nx - 1, g->ny - 1, g->nz - 1, g->nx - 1);
+    const __m256d a = _mm256_setr_pd(lo.x, lo.y, lo.z, hi.x), b = _mm256_setr_pd(hi.y, hi.z, hi.y, hi.z);
+    const __m256d ob = _mm256_setr_pd(g->lo.y, g->lo.z, g->lo.y, g->lo.z),
+                  topb = _mm256_setr_pd(g->ny - 1, g->nz - 1, g->ny - 1, g->nz - 1);
+    __m256d fa = _mm256_round_pd(_mm256_div_pd(_mm256_sub_pd(a, o), c), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+    __m256d fb = _mm256_round_pd(_mm256_div_pd(_mm256_sub_pd(b, ob), c), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+    fa = _mm256_min_pd(_mm256_max_pd(fa, zero), top); /* (max_pd gives its second operand for a NaN) */
+    fb = _mm256_min_pd(_mm256_max_pd(fb, zero), topb);
+    int32_t ia[4], ib[4];
+    _mm_storeu_si128((__m128i *)ia, _mm256_cvttpd_epi32(fa));
+    _mm_storeu_si128((__m128i *)ib, _mm256_cvttpd_epi32(fb));
+    r[0] = ia[0], r[1] = ia[1], r[2] = ia[2], r[3] = ia[3], r[4] = ib[0], r[5] = ib[1];
+}
+#endif
+
 static void cell_range(const sd_grid *g, sd_vec3 lo, sd_vec3 hi, int32_t r[6])
 {
+#ifdef SD_SCAN512
+    if (sd_simd_level() >= SD_SIMD_AVX2) {
+        cell_range256(g, lo, hi, r);
+        return;
+    }
+#endif
     r[0] = clampi((long)floor((lo.x - g->lo.x) / g->cell), 0, g->nx - 1);
     r[1] = clampi((long)floor((lo.y - g->lo.y) / g->cell), 0, g->ny - 1);
     r[2] = clampi((long)floor((lo.z - g->lo.z) / g->cell), 0, g->nz - 1);
@@ -188,6 +221,113 @@ static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const u
     return SD_OK;
 }
 
+#ifdef _OPENMP
+/* grid_fill of the body grid (reg0, slot and flags made) by T threads: the same grid, entry
+ * for entry. The bodies before the bed are cut into T runs; each thread counts its run's
+ * entries per cell, the cells' starts and each run's place in each cell follow (serial, over
+ * the cells), then each thread places its run (a cell lists its bodies ascending: lower runs
+ * first) and the bed's cached lists go in after them. */
+static sd_status grid_fill_par(sd_grid *g, int n, const int32_t (*range)[6], int32_t *reg0, int32_t **slot,
+                               int *slot_cap, uint8_t **flag, int *flag_cap, const sd_bed_cache *bed, int T)
+{
+    const int ncell = g->nx * g->ny * g->nz;
+    const int nd = bed ? bed->nb0 : n;
+    /* cur[t * (ncell + 1) + c]: run t's entries in cell c, then its cursor there; cur[T * ..]
+     * the bed's count per cell */
+    int32_t *cur = malloc(((size_t)T + 1) * ((size_t)ncell + 1) * sizeof(int32_t));
+    long tot[SD_MAX_OWNERS + 1];
+    if (!cur) return SD_ERR_NOMEM;
+    int32_t *bedc = cur + (size_t)T * (ncell + 1);
+    memset(bedc, 0, ((size_t)ncell + 1) * sizeof(int32_t));
+    if (bed)
+        for (int q = 0; q < bed->ncells; q++)
+            bedc[bed->cells[q]] = bed->off[q + 1] - bed->off[q];
+#pragma omp parallel num_threads(T)
+    {
+        const int nthr = omp_get_num_threads();
+        for (int t = omp_get_thread_num(); t < T; t += nthr) {
+            int32_t *cnt = cur + (size_t)t * (ncell + 1);
+            memset(cnt, 0, ((size_t)ncell + 1) * sizeof(int32_t));
+            const int i0 = (int)((long)nd * t / T), i1 = (int)((long)nd * (t + 1) / T);
+            long e = 0;
+            for (int i = i0; i < i1; i++) {
+                const int32_t *r = range[i];
+                for (int z = r[2]; z <= r[5]; z++)
+                    for (int y = r[1]; y <= r[4]; y++)
+                        for (int x = r[0]; x <= r[3]; x++)
+                            cnt[(z * g->ny + y) * g->nx + x]++;
+                e += (long)(r[3] - r[0] + 1) * (r[4] - r[1] + 1) * (r[5] - r[2] + 1);
+            }
+            tot[t] = e;
+        }
+    }
+    long total = 0;
+    for (int t = 0; t < T; t++) {
+        const long e = tot[t];
+        tot[t] = total;
+        total += e;
+    }
+    /* the cells' starts; each run's cursor in each cell; the bed's place (in bedc) */
+    int32_t at = 0;
+    for (int c = 0; c < ncell; c++) {
+        g->cell_start[c] = at;
+        for (int t = 0; t < T; t++) {
+            int32_t *q = cur + (size_t)t * (ncell + 1) + c;
+            const int32_t m = *q;
+            *q = at;
+            at += m;
+        }
+        const int32_t m = bedc[c];
+        bedc[c] = at;
+        at += m;
+    }
+    g->cell_start[ncell] = at;
+    const long all = at;
+    if (sd_grow((void **)&g->items, &g->cap_items, (int)all + 1, sizeof(int32_t)) ||
+        sd_grow((void **)slot, slot_cap, (int)total + 1, sizeof(int32_t)) ||
+        sd_grow((void **)flag, flag_cap, (int)all + 1, sizeof(uint8_t))) {
+        free(cur);
+        return SD_ERR_NOMEM;
+    }
+    uint8_t *fl = *flag;
+    int32_t *sl = *slot;
+#pragma omp parallel num_threads(T)
+    {
+        const int nthr = omp_get_num_threads();
+        for (int t = omp_get_thread_num(); t < T; t += nthr) {
+            int32_t *cnt = cur + (size_t)t * (ncell + 1);
+            const int i0 = (int)((long)nd * t / T), i1 = (int)((long)nd * (t + 1) / T);
+            long e = tot[t];
+            for (int i = i0; i < i1; i++) {
+                reg0[i] = (int32_t)e;
+                const int32_t *r = range[i];
+                for (int z = r[2]; z <= r[5]; z++)
+                    for (int y = r[1]; y <= r[4]; y++)
+                        for (int x = r[0]; x <= r[3]; x++) {
+                            const int a = cnt[(z * g->ny + y) * g->nx + x]++;
+                            g->items[a] = i;
+                            sl[e++] = a;
+                            fl[a] = range_begins(r, x, y, z);
+                        }
+            }
+        }
+        /* the bed's lists, cell by cell */
+        if (bed) {
+#pragma omp for schedule(static)
+            for (int q = 0; q < bed->ncells; q++) {
+                const int c = bed->cells[q], m = bed->off[q + 1] - bed->off[q];
+                memcpy(g->items + bedc[c], bed->items + bed->off[q], (size_t)m * sizeof(int32_t));
+                memcpy(fl + bedc[c], bed->flags + bed->off[q], (size_t)m);
+            }
+        }
+    }
+    for (int i = nd; i <= n; i++)
+        reg0[i] = (int32_t)total;
+    free(cur);
+    return SD_OK;
+}
+#endif
+
 /* Distance between the axis segments of two bodies (a sphere's segment is its centre). */
 static double seg_gap(const sd_bodies *b, int i, int j)
 {
@@ -198,21 +338,21 @@ static double seg_gap(const sd_bodies *b, int i, int j)
     double s = 0.0, t = 0.0;
     if (a <= 1e-30 && e <= 1e-30) return v3_norm(r);
     if (a <= 1e-30) {
-        t = fmin(fmax(f / e, 0.0), 1.0);
+        t = clamp01(f / e);
     } else {
         double c = v3_dot(d1, r);
         if (e <= 1e-30) {
-            s = fmin(fmax(-c / a, 0.0), 1.0);
+            s = clamp01(-c / a);
         } else {
             double bb = v3_dot(d1, d2), den = a * e - bb * bb;
-            s = den > 1e-20 * a * e ? fmin(fmax((bb * f - c * e) / den, 0.0), 1.0) : 0.0;
+            s = den > 1e-20 * a * e ? clamp01((bb * f - c * e) / den) : 0.0;
             t = (bb * s + f) / e;
             if (t < 0.0) {
                 t = 0.0;
-                s = fmin(fmax(-c / a, 0.0), 1.0);
+                s = clamp01(-c / a);
             } else if (t > 1.0) {
                 t = 1.0;
-                s = fmin(fmax((bb - c) / a, 0.0), 1.0);
+                s = clamp01((bb - c) / a);
             }
         }
     }
@@ -404,9 +544,19 @@ static void set_effective_masses(sd_world *w)
         w->bt.p[k].sqrt_m_eff = sqrt(b->mass[w->bt.p[k].a]);
 }
 
-static int boxes_overlap(const int32_t *a, const int32_t *b)
+sd_status sd_neighbor_tgrid_flags(sd_world *w)
 {
-    return a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] && a[2] <= b[5] && b[2] <= a[5];
+    const sd_grid *g = &w->tgrid;
+    const int nitems = g->cell_start[g->nx * g->ny * g->nz];
+    if (sd_grow((void **)&w->tflag, &w->tflag_cap, nitems + 1, sizeof(uint8_t))) return SD_ERR_NOMEM;
+    for (int z = 0; z < g->nz; z++)
+        for (int y = 0; y < g->ny; y++)
+            for (int x = 0; x < g->nx; x++) {
+                const int c = (z * g->ny + y) * g->nx + x;
+                for (int k = g->cell_start[c]; k < g->cell_start[c + 1]; k++)
+                    w->tflag[k] = range_begins(w->trange[g->items[k]], x, y, z);
+            }
+    return SD_OK;
 }
 
 static sd_status rebuild_triangle_grid(sd_world *w, double cell)
@@ -436,7 +586,8 @@ static sd_status rebuild_triangle_grid(sd_world *w, double cell)
     if (!skip) return SD_ERR_NOMEM;
     for (int t = 0; t < wl->n; t++)
         skip[t] = !wl->active[t];
-    st = grid_fill(&w->tgrid, wl->n, (const int32_t(*)[6])w->trange, skip, NULL, NULL, NULL, NULL, NULL, NULL);
+    st = grid_fill(&w->tgrid, wl->n, (const int32_t(*)[6])w->trange, skip, NULL, NULL, NULL, &w->tflag, &w->tflag_cap,
+                   NULL);
     free(skip);
     if (st) return st;
     st = sd_walls_weld(wl);
@@ -581,6 +732,18 @@ static int moving_index_make(const sd_world *w, moving_index *mi)
 /* Body j found by body i's scan, within reach and in the lowest cell their ranges share: the
  * exact box and capsule tests where a log is involved, then the candidate, ordered by (shape,
  * gid). Returns nonzero when out of memory. */
+/* Body i's box: as the rebuild's range loop stored it (the bodies before the bed), else made
+ * here (a bed sphere: c ± (r + hm), no square root) */
+static inline void box_of(const sd_world *w, int i, double hm, sd_vec3 *lo, sd_vec3 *hi)
+{
+    if (i < w->box_n) {
+        *lo = w->box[2 * i];
+        *hi = w->box[2 * i + 1];
+    } else {
+        body_box(&w->b, i, hm, lo, hi);
+    }
+}
+
 static inline int take_pair(const sd_world *w, int i, int j, double hm, cand_buf *out)
 {
     const sd_bodies *b = &w->b;
@@ -589,8 +752,8 @@ static inline int take_pair(const sd_world *w, int i, int j, double hm, cand_buf
         /* (two spheres within reach have overlapping boxes: the distance test is the box test
          * and more) */
         sd_vec3 li, hi_, lj, hj;
-        body_box(b, i, hm, &li, &hi_);
-        body_box(b, j, hm, &lj, &hj);
+        box_of(w, i, hm, &li, &hi_);
+        box_of(w, j, hm, &lj, &hj);
         if (li.x > hj.x || lj.x > hi_.x || li.y > hj.y || lj.y > hi_.y || li.z > hj.z || lj.z > hi_.z) return 0;
         /* capsule test: a cylinder lies within radius r of its axis segment */
         if (seg_gap(b, i, j) > b->radius[i] + b->radius[j] + w->def.margin) return 0;
@@ -741,7 +904,7 @@ static int bt_scan(const sd_world *w, int i, double hm, cand_buf *out)
     const sd_grid *tg = &w->tgrid;
     if (b->fixed[i] || w->w.n == 0) return 0;
     sd_vec3 l, h;
-    body_box(b, i, hm, &l, &h);
+    box_of(w, i, hm, &l, &h);
     const sd_vec3 tlo = tg->lo;
     const sd_vec3 thi = v3_add(tg->lo, v3(tg->nx * tg->cell, tg->ny * tg->cell, tg->nz * tg->cell));
     if (h.x < tlo.x || h.y < tlo.y || h.z < tlo.z || l.x > thi.x || l.y > thi.y || l.z > thi.z) return 0;
@@ -751,13 +914,13 @@ static int bt_scan(const sd_world *w, int i, double hm, cand_buf *out)
         for (int y = ri[1]; y <= ri[4]; y++)
             for (int x = ri[0]; x <= ri[3]; x++) {
                 const int c = (z * tg->ny + y) * tg->nx + x;
+                /* the pair is taken in the lowest cell the two ranges share: along each axis
+                 * where this cell is past the start of i's range, the triangle's must start
+                 * here (its flag byte); the cell is in both ranges */
+                const unsigned need = (unsigned)((x > ri[0]) | (y > ri[1]) << 1 | (z > ri[2]) << 2);
                 for (int k = tg->cell_start[c]; k < tg->cell_start[c + 1]; k++) {
+                    if ((w->tflag[k] & need) != need) continue;
                     const int t = tg->items[k];
-                    const int32_t *rt = w->trange[t];
-                    if (!boxes_overlap(ri, rt)) continue;
-                    if (x != (ri[0] > rt[0] ? ri[0] : rt[0]) || y != (ri[1] > rt[1] ? ri[1] : rt[1]) ||
-                        z != (ri[2] > rt[2] ? ri[2] : rt[2]))
-                        continue;
                     const sd_tri *tr = &w->w.tri[t];
                     const double s = v3_dot(v3_sub(b->pos[i], tr->v[0]), tr->n);
                     if (fabs(s) > b->bound_r[i] + w->def.margin) continue;
@@ -887,6 +1050,54 @@ static sd_status bed_cache_make(sd_world *w, double hm)
     return SD_OK;
 }
 
+/* The chunks' body-body candidates, in chunk order, into w->bb (emptied by the caller): what
+ * push_pair in that order makes (the same pairs, slots and offsets), each chunk written by
+ * one of T threads at its place. */
+static sd_status join_chunks(sd_world *w, const cand_buf *buf, int K, int T)
+{
+    sd_pairlist *l = &w->bb;
+    int32_t *at = malloc(2 * ((size_t)K + 1) * sizeof(int32_t)), *hat = at + K + 1;
+    if (!at) return SD_ERR_NOMEM;
+    /* each chunk's slots (its pairs' caps summed) */
+    (void)T;
+#pragma omp parallel for schedule(static) num_threads(T) if (T > 1)
+    for (int c = 0; c < K; c++) {
+        int h = 0;
+        for (int k = 0; k < buf[c].n; k++)
+            h += hist_cap_of_kind[buf[c].c[k].kind];
+        hat[c + 1] = h;
+    }
+    at[0] = l->n;
+    hat[0] = l->nh;
+    for (int c = 0; c < K; c++) {
+        at[c + 1] = at[c] + buf[c].n;
+        hat[c + 1] += hat[c];
+    }
+    if (sd_grow((void **)&l->p, &l->cap, at[K] + 1, sizeof(sd_pair))) {
+        free(at);
+        return SD_ERR_NOMEM;
+    }
+#pragma omp parallel for schedule(static) num_threads(T) if (T > 1)
+    for (int c = 0; c < K; c++) {
+        int32_t off = hat[c];
+        sd_pair *p = l->p + at[c];
+        for (int k = 0; k < buf[c].n; k++, p++) {
+            const cand *e = &buf[c].c[k];
+            p->a = e->a;
+            p->b = e->b;
+            p->kind = (int16_t)e->kind;
+            p->cap = (int16_t)hist_cap_of_kind[e->kind];
+            p->off = off;
+            p->sqrt_m_eff = 0.0;
+            off += p->cap;
+        }
+    }
+    l->n = at[K];
+    l->nh = hat[K];
+    free(at);
+    return SD_OK;
+}
+
 sd_status sd_neighbor_rebuild(sd_world *w)
 {
     sd_bodies *b = &w->b;
@@ -906,7 +1117,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     const int par = b->n > w->def.parallel_min;
 #pragma omp parallel for schedule(static) reduction(max : dmax) if (par)
     for (int i = 0; i < b->n; i++)
-        dmax = fmax(dmax, 2.0 * b->radius[i]);
+        dmax = 2.0 * b->radius[i] > dmax ? 2.0 * b->radius[i] : dmax;
     if (dmax <= 0.0) dmax = 0.01;
     double cell = dmax + w->def.margin;
 
@@ -930,10 +1141,11 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     for (int i = 0; i < nb; i++) {
         sd_vec3 l, h;
         body_box(b, i, hm, &l, &h);
-        lx = fmin(lx, l.x), ly = fmin(ly, l.y), lz = fmin(lz, l.z);
-        hx = fmax(hx, h.x), hy = fmax(hy, h.y), hz = fmax(hz, h.z);
+        /* (not fmin / fmax: library calls here) */
+        lx = l.x < lx ? l.x : lx, ly = l.y < ly ? l.y : ly, lz = l.z < lz ? l.z : lz;
+        hx = h.x > hx ? h.x : hx, hy = h.y > hy ? h.y : hy, hz = h.z > hz ? h.z : hz;
         if (sd_body_is_bed(b, i)) {
-            ax = fmin(ax, l.x), ay = fmin(ay, l.y), az = fmin(az, l.z);
+            ax = l.x < ax ? l.x : ax, ay = l.y < ay ? l.y : ay, az = l.z < az ? l.z : az;
             nbed++;
         }
     }
@@ -949,17 +1161,36 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     if ((st = sort_bodies_by_cell(w, nr))) return st;
     w->mov_stamp = -1; /* the store was reordered */
     if ((st = sd_world_moving_update(w))) return st;
-    if (sd_grow((void **)&w->range, &w->range_cap, b->n + 1, sizeof(*w->range))) return SD_ERR_NOMEM;
+    if (sd_grow((void **)&w->range, &w->range_cap, b->n + 1, sizeof(*w->range)) ||
+        sd_grow((void **)&w->box, &w->box_cap, 2 * b->n + 2, sizeof(sd_vec3)))
+        return SD_ERR_NOMEM;
 #pragma omp parallel for schedule(static) if (nr > w->def.parallel_min)
     for (int i = 0; i < nr; i++) {
         sd_vec3 l, h;
         body_box(b, i, hm, &l, &h);
+        w->box[2 * i] = l;
+        w->box[2 * i + 1] = h;
         cell_range(&w->grid, l, h, w->range[i]);
     }
+    w->box_n = nr;
     if (bed) memcpy(w->range + nr, bc->range, (size_t)(b->n - nr) * sizeof(*w->range));
     if (sd_grow((void **)&w->reg0, &w->reg0_cap, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL, w->reg0, &w->slot, &w->slot_cap, &w->gflag,
-                   &w->gflag_cap, bed ? bc : NULL);
+    {
+        int T = 1;
+#ifdef _OPENMP
+        T = omp_get_max_threads();
+        if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
+        if (nr <= w->def.parallel_min) T = 1;
+#endif
+#ifdef _OPENMP
+        if (T > 1)
+            st = grid_fill_par(&w->grid, b->n, (const int32_t(*)[6])w->range, w->reg0, &w->slot, &w->slot_cap,
+                               &w->gflag, &w->gflag_cap, bed ? bc : NULL, T);
+        else
+#endif
+            st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL, w->reg0, &w->slot, &w->slot_cap,
+                           &w->gflag, &w->gflag_cap, bed ? bc : NULL);
+    }
     if (st) return st;
     if (bed)
         w->bed.used++;
@@ -981,7 +1212,9 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
         if (b->n <= w->def.parallel_min) T = 1;
 #endif
-        const int K = T > 1 ? 8 * T : 1;
+        /* (32 chunks a thread: the scan's cost per body varies along the flume, a log jam at
+         * the dam, and the last chunks taken were waited for) */
+        const int K = T > 1 ? 32 * T : 1;
         /* past the last moving body, a fixed body has no candidates (j > i would be fixed) */
         int nscan = b->n, nfixed = 0;
         while (nscan > 0 && b->fixed[nscan - 1])
@@ -1013,9 +1246,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         free(mi.start);
         free(mi.items);
         free(mi.flags);
-        for (int c = 0; c < K && !nomem; c++)
-            for (int k = 0; k < buf[c].n && !st; k++)
-                st = push_pair(&w->bb, buf[c].c[k].a, buf[c].c[k].b, buf[c].c[k].kind);
+        if (!nomem) st = join_chunks(w, buf, K, T);
         /* body–triangle pairs grouped by body, ascending (the mesh dedup in contact.c relies
          * on it) */
         int i = 0;

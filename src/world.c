@@ -96,11 +96,13 @@ void sd_world_destroy(sd_world *w)
     free(w->old_hist);
     free(w->old_keys);
     free(w->range);
+    free(w->box);
     sd_bed_cache_free(&w->bed);
     free(w->reg0);
     free(w->slot);
     free(w->gflag);
     free(w->trange);
+    free(w->tflag);
     free(w->mov);
     free(w->near);
     free(w->near_mark);

@@ -217,6 +217,10 @@ struct sd_world {
     int keys_collected;  /* old keys already taken (a body was removed since) */
     int32_t (*range)[6]; /* per-body cell range in the body grid */
     int range_cap;
+    /* box[2i], box[2i+1]: body i's margin-expanded box (low, high corner) as the last rebuild
+     * made it, for bodies before the bed (neighbor.c; scratch, not saved) */
+    sd_vec3 *box;
+    int box_cap, box_n;
     /* body i's entries in the body grid are reg0[i] .. reg0[i+1]-1, slot[e] the place of
      * entry e in the grid's items (neighbor.c grid_fill; scratch, not saved) */
     int32_t *reg0, *slot;
@@ -228,6 +232,8 @@ struct sd_world {
     int gflag_cap;
     int32_t (*trange)[6]; /* per-triangle cell range in the triangle grid */
     int trange_cap;
+    uint8_t *tflag; /* the triangle grid's entries' flags, as gflag for the body grid */
+    int tflag_cap;
     /* derived, never saved: the indices of the moving bodies, ascending, for the per-body
      * passes (a static split over all bodies would give one thread the bed, the other the
      * flow); valid while mov_stamp == timers.rebuilds and mov_bn == b.n */
@@ -296,6 +302,9 @@ sd_status sd_walls_weld(sd_walls *w);
 
 /* neighbor.c */
 sd_status sd_neighbor_rebuild(sd_world *w);
+/* The triangle grid's flag bytes (tflag) made from its lists and ranges (a checkpoint keeps
+ * the grid, not the flags). */
+sd_status sd_neighbor_tgrid_flags(sd_world *w);
 int sd_neighbor_needs_rebuild(const sd_world *w);
 /* Take the live tangential history out of the pair lists, keyed by gids (before the body
  * store changes order); the next rebuild puts it back. */
