@@ -2143,34 +2143,46 @@ static sd_status owned_update(sd_world *w, int T)
             /* the near ones into its segment in pair order, each cross pair as ~c; xp[j - k0]
              * counts the cross entries before entry j */
             const unsigned i0 = (unsigned)o->B[t], len = (unsigned)(o->B[t + 1] - o->B[t]);
+            const int nf = o->nf;
             int32_t *xp = owned_xpre(o, t);
-            int m = k0, xc = k0;
+            int m = k0, xc = k0, q = 0;
             xp[0] = 0;
+            /* the records' arrays held in restrict locals: through o, every store made gcc
+             * load the next array's address again (about half of this loop's samples) */
+            int32_t *restrict sa = o->soa.a, *restrict sb = o->soa.b, *restrict so = o->soa.off,
+                              *restrict sc = o->soa.ck, *restrict list = o->list;
+            double *restrict sq = o->soa.sqm;
+            const sd_pair *restrict pairs = w->bb.p;
             for (int k = k0; k < k1; k++) {
                 /* every candidate written, kept or not (then overwritten): no branch on the
                  * answer, close to a coin toss */
-                const sd_pair *p = &w->bb.p[k];
+                const sd_pair *p = &pairs[k];
                 const int keep = kp[k - k0];
                 int cross = 0, ta = t, tb = t;
-                if (!((unsigned)p->a - i0 < len && (unsigned)p->b - i0 < len)) { /* (both its own: most) */
+                /* both its own or the bed (after o->nf, its partner's owner's: most) */
+                if (!(((unsigned)p->a - i0 < len || p->a >= nf) && ((unsigned)p->b - i0 < len || p->b >= nf))) {
                     pair_owners(&w->b, p, o->B, T, &ta, &tb);
                     cross = ta != tb;
                 }
-                pair_soa_set(&o->soa, m, p);
-                o->list[m] = k;
+                sa[m] = p->a; /* (pair_soa_set) */
+                sb[m] = p->b;
+                so[m] = p->off;
+                sc[m] = (int32_t)((uint32_t)(uint16_t)p->cap | (uint32_t)(uint16_t)p->kind << 16);
+                sq[m] = p->sqrt_m_eff;
+                list[m] = k;
                 if (cross & keep) { /* few */
                     o->cross[xc] = k;
                     o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
                     pair_soa_set(&o->xsoa, xc, p);
-                    o->list[m] = ~xc++;
+                    list[m] = ~xc++;
+                    q++;
                 }
+                /* xp[j - k0 + 1]: the cross entries among entries k0 .. j (an entry not kept
+                 * is overwritten with the next, and so is its count) */
+                xp[m - k0 + 1] = q;
                 m += keep;
             }
             o->seg1[t] = m;
-            for (int j = k0, q = 0; j < m; j++) {
-                q += o->list[j] < 0;
-                xp[j - k0 + 1] = q;
-            }
             o->xb[t] = xc; /* its cross pairs: cross[K[t] .. xb[t]-1] */
         }
     }
@@ -2332,6 +2344,16 @@ static void sc_lanes_fold(void *scratch, int T)
         if (q->n_geom) __atomic_fetch_add(&sc_geom_run, q->n_geom, __ATOMIC_RELAXED);
         q->n_run = q->n_redo = q->n_geom = 0;
     }
+}
+
+sd_status sd_contact_near_remake(sd_world *w)
+{
+    w->near_drift = w->near_skin; /* as a drift past half the skin would */
+#ifdef _OPENMP
+    const int T = bb_owners(w);
+    if (T > 1) return owned_update(w, T);
+#endif
+    return near_update(w);
 }
 
 sd_status sd_contact_compute(sd_world *w, int *integrated)

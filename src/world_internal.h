@@ -346,6 +346,9 @@ void sd_pairlist_free(sd_pairlist *l);
 /* Mesh rule on the manifolds man[from..to) of one body's triangle pairs: drops edge and vertex
  * contacts already represented by a face or edge contact (used by the force pass and by
  * sd_world_spring_energy, so that the energy counts the springs the forces use). */
+/* For benchmarks: the near pairs (the owners' lists, or the serial one) remade now, as when
+ * the bodies have drifted past half the near skin. */
+sd_status sd_contact_near_remake(sd_world *w);
 void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to);
 /* The hand-written SIMD kernels: none (the scalar loops), AVX2 (contact.c's touch filter, gather
  * and sums, run.c's fluid forces, 4 lanes) or AVX-512 (the filter, gather and fluid forces in 8
