@@ -1949,7 +1949,10 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
     const int pf = sd_front_prefetch_on(w);
     int front = -1;
     for (int i = 0; i < b->n; i++)
-        if (!sd_body_is_bed(b, i)) b->force[i] = b->torque[i] = v3(0, 0, 0);
+        if (!sd_body_is_bed(b, i)) { /* (two stores: the chained assignment read torque back) */
+            b->force[i] = v3(0, 0, 0);
+            b->torque[i] = v3(0, 0, 0);
+        }
     for (int k0 = 0; k0 < nn; k0 += SS_CHUNK) {
         const int n = nn - k0 < SS_CHUNK ? nn - k0 : SS_CHUNK;
         /* the chunk adds its pairs onto the bodies itself, in pair order */
@@ -2244,7 +2247,10 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
         for (int t = tid; t < T; t += nthr) {
             const int i0 = o->B[t], i1 = o->B[t + 1], i1f = i1 < o->nf ? i1 : o->nf;
             for (int i = i0; i < i1f; i++)
-                if (!sd_body_is_bed(b, i)) b->force[i] = b->torque[i] = v3(0, 0, 0);
+                if (!sd_body_is_bed(b, i)) { /* (two stores: the chained assignment read torque back) */
+                    b->force[i] = v3(0, 0, 0);
+                    b->torque[i] = v3(0, 0, 0);
+                }
             /* the cross pairs of lower owners that touch its bodies, ascending: each comes
              * before every pair of its own (a lower lower body) */
             for (int s = 0; s < t; s++)
