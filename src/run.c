@@ -148,7 +148,8 @@ static void fluid_flush(fluid_batch *q, const sd_fluid_params *fp, double h_d, s
  * order, so the same bits, without the copy of each body into the batch and out. The logs
  * among them are left to the caller. */
 __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const struct fluid_ctx *fc, sd_world *w,
-                                                                         const int32_t *mov, int k0, int k1)
+                                                                         const int32_t *mov, int k0, int k1,
+                                                                         int32_t *logs, int *nlogs)
 {
     const sd_fluid_params *p = &fc->fp;
     sd_bodies *b = &w->b;
@@ -171,8 +172,11 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
     for (int k = k0; k < k1; k += 8) {
         const int nl = k1 - k < 8 ? k1 - k : 8;
         __mmask8 sph = 0;
-        for (int l = 0; l < nl; l++)
-            sph |= (__mmask8)((shape[mov[k + l]] == SD_SHAPE_SPHERE) << l);
+        for (int l = 0; l < nl; l++) {
+            const int s = shape[mov[k + l]] == SD_SHAPE_SPHERE;
+            sph |= (__mmask8)(s << l);
+            if (logs && !s) logs[(*nlogs)++] = k + l;
+        }
         if (!sph) continue;
         const __m256i i = _mm256_maskz_loadu_epi32(sph, mov + k);
         const __m256i i3 = _mm256_add_epi32(i, _mm256_add_epi32(i, i));
@@ -223,7 +227,7 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
  * each body's centre and velocity read as a row (a masked 32-byte load) and its force written
  * back as one. The logs among them are left to the caller. */
 __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_ctx *fc, sd_world *w, const int32_t *mov,
-                                                            int k0, int k1)
+                                                            int k0, int k1, int32_t *logs, int *nlogs)
 {
     const sd_fluid_params *p = &fc->fp;
     sd_bodies *b = &w->b;
@@ -249,6 +253,9 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
         const int i0 = mov[k], i1 = mov[k + 1], i2 = mov[k + 2], i3 = mov[k + 3];
         const int sph = (shape[i0] == SD_SHAPE_SPHERE) | (shape[i1] == SD_SHAPE_SPHERE) << 1 |
                         (shape[i2] == SD_SHAPE_SPHERE) << 2 | (shape[i3] == SD_SHAPE_SPHERE) << 3;
+        if (logs && sph != 15) /* (the logs: a few groups in a hundred) */
+            for (int l = 0; l < 4; l++)
+                if (!(sph >> l & 1)) logs[(*nlogs)++] = k + l;
         if (!sph) continue;
         __m256d P[4], V[4];
         sd_transpose4(SD_XYZ_LOAD(pos, i0), SD_XYZ_LOAD(pos, i1), SD_XYZ_LOAD(pos, i2), SD_XYZ_LOAD(pos, i3), P);
@@ -299,6 +306,23 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
 }
 #endif
 
+/* The fluid force on log i, one by one (sd_fluid_force_total). */
+static void fluid_log(const struct fluid_ctx *fc, sd_bodies *b, int i)
+{
+    sd_fluid_element e;
+    e.shape = b->shape[i];
+    e.pos = b->pos[i];
+    e.vel = b->vel[i];
+    e.axis = b->axis[i];
+    e.radius = b->radius[i];
+    e.length = 2.0 * b->hl[i];
+    /* the capture profile applies upstream of the dam; passed elements keep the flow one */
+    const sd_fluid_phase ph = (fc->capture && b->pos[i].x < fc->xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
+    b->ext_force[i] = sd_fluid_force_total(&fc->fp, ph, fc->h_d, &e);
+}
+
+#define SD_FLUID_LOGS 128 /* the bodies of a block whose logs the lanes list (SD_EXT_BLOCK) */
+
 /* The fluid forces on the moving bodies mov[k0 .. k1): called by the world's step for each
  * block of up to 128 of a thread's bodies just before it moves them (sd_world.ext_fn), so
  * their data are still in that core's L1 when they move. Spheres in batches (sd_fluid_sphere_batch: the same bits,
@@ -313,12 +337,20 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
     /* the spheres of mov[k0 .. kv) in SIMD lanes where the CPU has them (8 AVX-512 lanes, 4 AVX2
      * lanes), the rest through the batch */
     int kv = k0;
+    /* the logs among the bodies the lanes went over, listed by them (a block holds up to
+     * SD_FLUID_LOGS bodies): the loop below then starts where the lanes stopped, instead of
+     * going over every body again for the logs and the rest */
+    int32_t logs[SD_FLUID_LOGS];
+    int nlogs = 0;
+    int32_t *lp = k1 - k0 <= SD_FLUID_LOGS ? logs : NULL;
 #ifdef SD_FLUID512
     if (sd_simd_level() == SD_SIMD_AVX512) {
-        fluid_spheres512(fc, w, mov, k0, k1);
+        fluid_spheres512(fc, w, mov, k0, k1, lp, &nlogs);
         kv = k1;
     } else if (sd_simd_level() == SD_SIMD_AVX2)
-        kv = fluid_spheres256(fc, w, mov, k0, k1);
+        kv = fluid_spheres256(fc, w, mov, k0, k1, lp, &nlogs);
+#else
+    lp = NULL;
 #endif
     fluid_batch q;
     q.m = 0;
@@ -326,7 +358,7 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
      * load each array's address again for every body */
     const sd_vec3 *restrict pos = b->pos, *restrict vel = b->vel;
     const double *restrict rad = b->radius;
-    for (int k = k0; k < k1; k++) {
+    for (int k = lp ? kv : k0; k < k1; k++) {
         const int i = mov[k];
         if (b->shape[i] == SD_SHAPE_SPHERE) {
             if (k < kv) continue;
@@ -340,17 +372,10 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
             if (q.m == FLUID_BATCH) fluid_flush(&q, fp, h_d, b);
             continue;
         }
-        sd_fluid_element e;
-        e.shape = b->shape[i];
-        e.pos = b->pos[i];
-        e.vel = b->vel[i];
-        e.axis = b->axis[i];
-        e.radius = b->radius[i];
-        e.length = 2.0 * b->hl[i];
-        /* the capture profile applies upstream of the dam; passed elements keep the flow one */
-        sd_fluid_phase ph = (capture && b->pos[i].x < xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
-        b->ext_force[i] = sd_fluid_force_total(fp, ph, h_d, &e);
+        fluid_log(fc, b, i);
     }
+    for (int l = 0; l < nlogs; l++)
+        fluid_log(fc, b, mov[logs[l]]);
     if (q.m > 0) fluid_flush(&q, fp, h_d, b);
 }
 
