@@ -1782,7 +1782,7 @@ int sd_wall_near_set(int on)
 /* The bodies among i0 .. i1-1 with wall pairs that are near touching one, into list
  * (ascending; returns how many; *skip: how many were left out): near when the centre's distance
  * to a triangle's plane (no nearer than that to the triangle) less the radius, or a log's
- * bounding radius (the log lies within it whatever its tilt), is below the skin. A body
+ * extent along the plane's normal, is below the skin. A body
  * farther from every plane cannot reach one before the near pairs are remade (walls do not
  * move; a triangle switched on forces a rebuild). All of them when sd_wall_near_set(0). */
 static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *list, long *skip)
@@ -1795,11 +1795,21 @@ static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *li
     long left = 0;
     for (int from = w->csr.bt_start[i0]; from < kend;) {
         const int i = p[from].a, to = w->csr.bt_start[i + 1];
-        const double reach = (b->shape[i] == SD_SHAPE_SPHERE ? b->radius[i] : b->bound_r[i]) + skin;
+        const int sphere = b->shape[i] == SD_SHAPE_SPHERE;
+        const double reach = b->radius[i] + skin;
         int near = !wall_near_on;
         for (int k = from; k < to; k++) {
             const sd_tri *t = &wl->tri[p[k].b];
-            near |= wl->active[p[k].b] && fabs(v3_dot(v3_sub(b->pos[i], t->v[0]), t->n)) < reach;
+            /* a log reaches hl |a.n| + r sqrt(1 - (a.n)^2) along the plane's normal, its
+             * extent there whatever its spin: a log lying on the bed roughness, half its
+             * bounding radius off the floor, is not near it (the near pairs' drift bound
+             * counts a log's turning, at its bounding radius) */
+            double rk = reach;
+            if (!sphere) {
+                const double an = fabs(v3_dot(b->axis[i], t->n)), s2 = 1.0 - an * an;
+                rk = b->hl[i] * an + b->radius[i] * sqrt(s2 > 0.0 ? s2 : 0.0) + skin;
+            }
+            near |= wl->active[p[k].b] && fabs(v3_dot(v3_sub(b->pos[i], t->v[0]), t->n)) < rk;
         }
         list[m] = i;
         m += near;

@@ -580,23 +580,38 @@ static void test_wall_near(void)
                 sd.vel = v3(0.5 * (urand() - 0.5), 0.5 * (urand() - 0.5), -0.5 - 1.5 * urand());
                 CHECK(sd_world_add_sphere(w[c], &sd) >= 0);
             }
+            /* and logs, spinning as they fall: listed by their extent along each wall's
+             * normal, which their turning changes */
+            for (int k = 0; k < 24; k++) {
+                sd_cylinder_def cd = sd_cylinder_def_default();
+                cd.radius = 0.0015;
+                cd.length = 0.012 + 0.008 * urand();
+                cd.pos = v3(0.012 + (L - 0.024) * urand(), 0.012 + (L - 0.024) * urand(), 0.01 + 0.02 * urand());
+                cd.axis = v3(urand() - 0.5, urand() - 0.5, 0.6 * (urand() - 0.5));
+                cd.vel = v3(0.3 * (urand() - 0.5), 0.3 * (urand() - 0.5), -0.3 - urand());
+                cd.omega = v3(60.0 * (urand() - 0.5), 60.0 * (urand() - 0.5), 60.0 * (urand() - 0.5));
+                CHECK(sd_world_add_cylinder(w[c], &cd) >= 0);
+            }
         }
-        long differ = 0, touching = 0;
+        long differ = 0, touching = 0, log_touching = 0;
         for (int st = 1; st <= 3000; st++) {
             for (int c = 0; c < 2; c++) {
                 const int was = sd_wall_near_set(c == 0);
                 CHECK(sd_world_step(w[c]) == SD_OK);
                 sd_wall_near_set(was);
             }
-            for (int k = 0; k < w[0]->bt.n; k++)
+            for (int k = 0; k < w[0]->bt.n; k++) {
                 touching += w[0]->bt.active[k];
+                log_touching += w[0]->bt.active[k] && w[0]->b.shape[w[0]->bt.p[k].a] != SD_SHAPE_SPHERE;
+            }
             if (st % 100 == 0) differ += sd_world_state_hash(w[0]) != sd_world_state_hash(w[1]);
         }
-        printf("wall pass near walls only, %d thread(s): %ld of 30 checks differ, wall contacts summed over the steps %ld, "
-               "bodies skipped %ld (%ld without)\n",
-               threads[h], differ, touching, w[0]->wall_skipped, w[1]->wall_skipped);
+        printf("wall pass near walls only, %d thread(s): %ld of 30 checks differ, wall contacts summed over the steps %ld "
+               "(logs %ld), bodies skipped %ld (%ld without)\n",
+               threads[h], differ, touching, log_touching, w[0]->wall_skipped, w[1]->wall_skipped);
         CHECK(differ == 0);
         CHECK(touching > 3000);
+        CHECK(log_touching > 500);
         CHECK(w[0]->wall_skipped > 1000);
         CHECK(w[1]->wall_skipped == 0);
         for (int c = 0; c < 2; c++)
