@@ -1675,10 +1675,13 @@ static inline int near_test(const sd_world *w, double skin, const sd_pair *p)
         const double reach = rad[p->a] + rad[p->b] + skin;
         return v3_norm2(v3_sub(pos[p->a], pos[p->b])) <= reach * reach;
     }
-    /* a log lies within its radius of its axis segment: a sphere (or the other log's bounding
-     * sphere) farther than the radii and the skin from it cannot touch */
+    /* a log lies within its radius of its axis segment: two logs whose segments are farther
+     * apart than their radii and the skin cannot touch (the drift bound counts their turning,
+     * at their bounding radii) */
+    if (p->kind == SD_PAIR_CC) return sd_axis_gap(&w->b, p->a, p->b) <= rad[p->a] + rad[p->b] + skin;
+    /* nor a sphere farther than the radii and the skin from the segment */
     const sd_cyl c = sd_body_cyl(&w->b, p->b);
-    const double ra = p->kind == SD_PAIR_SC ? rad[p->a] : w->b.bound_r[p->a];
+    const double ra = rad[p->a];
     const sd_vec3 d = v3_sub(pos[p->a], c.c);
     double t = v3_dot(d, c.a);
     t = t > c.hl ? c.hl : (t < -c.hl ? -c.hl : t);

@@ -35,10 +35,9 @@ void sd_bed_cache_free(sd_bed_cache *c)
     memset(c, 0, sizeof(*c));
 }
 
-/* fmax(0.0, t) and fmin(fmax(t, 0.0), 1.0) without the library calls (gcc calls them on
- * x86-64, for their NaN rules): the same values, NaN included, up to the sign of a zero */
+/* fmax(0.0, t) without the library call (gcc calls libm's on x86-64, for its NaN rules): the
+ * same values, NaN included, up to the sign of a zero (sd_clamp01 likewise) */
 static inline double max0(double t) { return t > 0.0 ? t : 0.0; }
-static inline double clamp01(double t) { return t > 0.0 ? (t < 1.0 ? t : 1.0) : 0.0; }
 
 static void body_box(const sd_bodies *b, int i, double half_margin, sd_vec3 *lo, sd_vec3 *hi)
 {
@@ -327,37 +326,6 @@ static sd_status grid_fill_par(sd_grid *g, int n, const int32_t (*range)[6], int
     return SD_OK;
 }
 #endif
-
-/* Distance between the axis segments of two bodies (a sphere's segment is its centre). */
-static double seg_gap(const sd_bodies *b, int i, int j)
-{
-    sd_vec3 p1 = v3_madd(b->pos[i], b->axis[i], -b->hl[i]), d1 = v3_scale(b->axis[i], 2.0 * b->hl[i]);
-    sd_vec3 p2 = v3_madd(b->pos[j], b->axis[j], -b->hl[j]), d2 = v3_scale(b->axis[j], 2.0 * b->hl[j]);
-    sd_vec3 r = v3_sub(p1, p2);
-    double a = v3_dot(d1, d1), e = v3_dot(d2, d2), f = v3_dot(d2, r);
-    double s = 0.0, t = 0.0;
-    if (a <= 1e-30 && e <= 1e-30) return v3_norm(r);
-    if (a <= 1e-30) {
-        t = clamp01(f / e);
-    } else {
-        double c = v3_dot(d1, r);
-        if (e <= 1e-30) {
-            s = clamp01(-c / a);
-        } else {
-            double bb = v3_dot(d1, d2), den = a * e - bb * bb;
-            s = den > 1e-20 * a * e ? clamp01((bb * f - c * e) / den) : 0.0;
-            t = (bb * s + f) / e;
-            if (t < 0.0) {
-                t = 0.0;
-                s = clamp01(-c / a);
-            } else if (t > 1.0) {
-                t = 1.0;
-                s = clamp01((bb - c) / a);
-            }
-        }
-    }
-    return v3_norm(v3_sub(v3_madd(p1, d1, s), v3_madd(p2, d2, t)));
-}
 
 static uint64_t pair_key(int32_t gid_a, int kind, int32_t id_b)
 {
@@ -756,7 +724,7 @@ static inline int take_pair(const sd_world *w, int i, int j, double hm, cand_buf
         box_of(w, j, hm, &lj, &hj);
         if (li.x > hj.x || lj.x > hi_.x || li.y > hj.y || lj.y > hi_.y || li.z > hj.z || lj.z > hi_.z) return 0;
         /* capsule test: a cylinder lies within radius r of its axis segment */
-        if (seg_gap(b, i, j) > b->radius[i] + b->radius[j] + w->def.margin) return 0;
+        if (sd_axis_gap(b, i, j) > b->radius[i] + b->radius[j] + w->def.margin) return 0;
     }
     int a = i, bb = j;
     if (b->shape[a] > b->shape[bb] || (b->shape[a] == b->shape[bb] && b->gid[a] > b->gid[bb])) {

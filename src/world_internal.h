@@ -421,6 +421,41 @@ static inline double sd_body_x_extent(const sd_bodies *b, int i)
     return b->hl[i] * fabs(ax) + b->radius[i] * sqrt(fmax(0.0, 1.0 - ax * ax));
 }
 
+static inline double sd_clamp01(double t) { return t > 0.0 ? (t < 1.0 ? t : 1.0) : 0.0; }
+
+/* Distance between the axis segments of two bodies (a sphere's segment is its centre): the
+ * clamped closest points of the two segments (the candidates' capsule test, neighbor.c, and
+ * the log pairs' near test, contact.c). fmin/fmax-free clamps: gcc calls libm for those. */
+static inline double sd_axis_gap(const sd_bodies *b, int i, int j)
+{
+    sd_vec3 p1 = v3_madd(b->pos[i], b->axis[i], -b->hl[i]), d1 = v3_scale(b->axis[i], 2.0 * b->hl[i]);
+    sd_vec3 p2 = v3_madd(b->pos[j], b->axis[j], -b->hl[j]), d2 = v3_scale(b->axis[j], 2.0 * b->hl[j]);
+    sd_vec3 r = v3_sub(p1, p2);
+    double a = v3_dot(d1, d1), e = v3_dot(d2, d2), f = v3_dot(d2, r);
+    double s = 0.0, t = 0.0;
+    if (a <= 1e-30 && e <= 1e-30) return v3_norm(r);
+    if (a <= 1e-30) {
+        t = sd_clamp01(f / e);
+    } else {
+        double c = v3_dot(d1, r);
+        if (e <= 1e-30) {
+            s = sd_clamp01(-c / a);
+        } else {
+            double bb = v3_dot(d1, d2), den = a * e - bb * bb;
+            s = den > 1e-20 * a * e ? sd_clamp01((bb * f - c * e) / den) : 0.0;
+            t = (bb * s + f) / e;
+            if (t < 0.0) {
+                t = 0.0;
+                s = sd_clamp01(-c / a);
+            } else if (t > 1.0) {
+                t = 1.0;
+                s = sd_clamp01((bb - c) / a);
+            }
+        }
+    }
+    return v3_norm(v3_sub(v3_madd(p1, d1, s), v3_madd(p2, d2, t)));
+}
+
 /* Kernel shapes of a body. */
 static inline sd_cyl sd_body_cyl(const sd_bodies *b, int i)
 {

@@ -283,6 +283,48 @@ static void test_near_slow(void)
     sd_world_destroy(w);
 }
 
+/* A heap of spinning logs (log-log pairs near by their axis segments' distance, whatever they
+ * turn): no touching pair is ever left out of the near list. */
+static void test_near_logs(void)
+{
+    sd_world *w = new_world();
+    w->def.gravity = v3(0, 0, -9.81);
+    w->def.t_reset = 1.0;
+    const double L = 0.08;
+    add_tris(w, L, 0);
+    /* a crib: ten layers of four logs 1 cm apart, crossing the layer below, then set spinning */
+    for (int k = 0; k < 40; k++) {
+        sd_cylinder_def c = sd_cylinder_def_default();
+        const int layer = k / 4, j = k % 4;
+        c.radius = 0.002 + 0.001 * urand();
+        c.length = 0.03 + 0.01 * urand();
+        const double u = 0.025 + 0.01 * j;
+        c.pos = layer & 1 ? v3(u, 0.04, 0.0035 + 0.0075 * layer) : v3(0.04, u, 0.0035 + 0.0075 * layer);
+        c.axis = layer & 1 ? v3(0.1 * (urand() - 0.5), 1.0, 0.1 * (urand() - 0.5))
+                           : v3(1.0, 0.1 * (urand() - 0.5), 0.1 * (urand() - 0.5));
+        c.omega = v3(40.0 * (urand() - 0.5), 40.0 * (urand() - 0.5), 40.0 * (urand() - 0.5));
+        c.vel = v3(0.2 * (urand() - 0.5), 0.2 * (urand() - 0.5), -0.2 * urand());
+        CHECK(sd_world_add_cylinder(w, &c) >= 0);
+    }
+    near_logs_out = 0;
+    long checked = 0, shorter = 0, missing = 0, cc_touch = 0;
+    for (int st = 0; st < 6000; st++) {
+        CHECK(sd_world_step(w) == SD_OK);
+        near_check(w, &checked, &shorter, &missing);
+        for (int k = 0; k < w->bb.n; k++)
+            if (w->bb.p[k].kind == SD_PAIR_CC)
+                for (int q = 0; q < w->bb.p[k].cap; q++)
+                    cc_touch += w->bb.hist[w->bb.p[k].off + q].feature >= 0;
+    }
+    printf("near list, a heap of spinning logs: checked at %ld steps (%ld shorter than the candidates, %ld log pairs "
+           "left out), log-log contact points summed %ld, touching pairs missing %ld\n",
+           checked, shorter, near_logs_out, cc_touch, missing);
+    CHECK(missing == 0);
+    CHECK(checked > 3000 && shorter > 3000 && near_logs_out > 10000);
+    CHECK(cc_touch > 5000);
+    sd_world_destroy(w);
+}
+
 /* Falling spheres onto a floor, rebuilds by margin and t_reset only: at every step without a
  * pending rebuild, every contact must be a candidate (and every touching pair near). */
 static void test_dynamic(void)
@@ -677,6 +719,7 @@ int main(void)
     test_history();
     test_bed_cache();
     test_wall_near();
+    test_near_logs();
     test_moving_index();
     printf("near-list checks of the owners' segments (two or more threads): %ld\n", near_by_owners);
 #ifdef _OPENMP
