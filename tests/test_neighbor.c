@@ -710,6 +710,78 @@ static void test_moving_index(void)
         sd_world_destroy(w[c]);
 }
 
+/* The rebuild on one thread and on three (the grid filled by runs of bodies, the chunks' lists
+ * joined at their places): the same grid, entry for entry, and the same lists, pair for pair,
+ * for a bed under falling spheres and logs, at several moments. */
+static void test_rebuild_threads(void)
+{
+#ifdef _OPENMP
+    const int T0 = omp_get_max_threads();
+    sd_world *w = bed_world();
+    for (int k = 0; k < 12; k++) {
+        sd_cylinder_def c = sd_cylinder_def_default();
+        c.radius = 0.0015;
+        c.length = 0.015 + 0.01 * urand();
+        c.pos = v3(0.01 + 0.06 * urand(), 0.01 + 0.06 * urand(), 0.04 + 0.01 * urand());
+        c.axis = v3_normalize(v3(urand() - 0.5, urand() - 0.5, urand() - 0.5));
+        c.vel = v3(0.0, 0.0, -0.5);
+        CHECK(sd_world_add_cylinder(w, &c) >= 0);
+    }
+    long compared = 0, entries = 0, differ = 0;
+    for (int round = 0; round < 6; round++) {
+        omp_set_num_threads(2);
+        for (int st = 0; st < 150; st++)
+            CHECK(sd_world_step(w) == SD_OK);
+        /* the same store for both: rebuilt once (sorted), then on 1 thread and on 3 */
+        CHECK(sd_neighbor_rebuild(w) == SD_OK);
+        const sd_grid *g = &w->grid;
+        int32_t *snap[2] = {NULL, NULL};
+        size_t len[2] = {0, 0};
+        for (int v = 0; v < 2; v++) {
+            omp_set_num_threads(v == 0 ? 1 : 3);
+            CHECK(sd_neighbor_rebuild(w) == SD_OK);
+            const int ncell = g->nx * g->ny * g->nz, nitems = g->cell_start[ncell], n = w->b.n;
+            const int nslot = w->reg0[n];
+            /* cells, items, flags, reg0, slots, then each body-body and body-triangle pair */
+            len[v] = (size_t)(ncell + 1) + (size_t)nitems * 2 + (size_t)(n + 1) + (size_t)nslot +
+                     (size_t)w->bb.n * 5 + (size_t)w->bt.n * 3 + 4;
+            int32_t *q = snap[v] = malloc(len[v] * sizeof(int32_t));
+            CHECK(q != NULL);
+            if (!q) return;
+            *q++ = ncell, *q++ = nitems, *q++ = w->bb.n, *q++ = w->bt.n;
+            for (int c = 0; c <= ncell; c++)
+                *q++ = g->cell_start[c];
+            for (int k = 0; k < nitems; k++)
+                *q++ = g->items[k], *q++ = w->gflag[k];
+            for (int i = 0; i <= n; i++)
+                *q++ = w->reg0[i];
+            for (int e = 0; e < nslot; e++)
+                *q++ = w->slot[e];
+            for (int k = 0; k < w->bb.n; k++) {
+                const sd_pair *p = &w->bb.p[k];
+                *q++ = p->a, *q++ = p->b, *q++ = p->off, *q++ = p->cap, *q++ = p->kind;
+            }
+            for (int k = 0; k < w->bt.n; k++) {
+                const sd_pair *p = &w->bt.p[k];
+                *q++ = p->a, *q++ = p->b, *q++ = p->off;
+            }
+        }
+        compared++;
+        entries += (long)len[0];
+        differ += len[0] != len[1] || memcmp(snap[0], snap[1], len[0] * sizeof(int32_t)) != 0;
+        free(snap[0]);
+        free(snap[1]);
+    }
+    printf("rebuild on 1 and 3 threads: %ld states compared (%ld words), %ld differ; bed cache used %ld times\n",
+           compared, entries, differ, w->bed.used);
+    CHECK(differ == 0);
+    CHECK(compared == 6 && entries > 10000);
+    CHECK(w->bed.used > 10);
+    sd_world_destroy(w);
+    omp_set_num_threads(T0);
+#endif
+}
+
 int main(void)
 {
     test_static(1);
@@ -720,6 +792,7 @@ int main(void)
     test_bed_cache();
     test_wall_near();
     test_near_logs();
+    test_rebuild_threads();
     test_moving_index();
     printf("near-list checks of the owners' segments (two or more threads): %ld\n", near_by_owners);
 #ifdef _OPENMP
