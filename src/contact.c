@@ -1666,11 +1666,13 @@ static long bt_range(sd_world *w, const sd_law *law, const int32_t *list, int nl
 }
 
 /* Whether candidate p can touch before the bodies drift by half the skin (near_update): its
- * gap is below the skin. */
-static inline int near_test(const sd_world *w, double skin, const sd_pair *p)
+ * gap is below the skin, or half of it with a body of the bed (from nf on), which does not
+ * move: only the other closes the gap, by less than half the skin. */
+static inline int near_test(const sd_world *w, double skin, const sd_pair *p, int nf)
 {
     const sd_vec3 *pos = w->b.pos;
     const double *rad = w->b.radius;
+    if (p->a >= nf || p->b >= nf) skin *= 0.5;
     if (p->kind == SD_PAIR_SS) {
         const double reach = rad[p->a] + rad[p->b] + skin;
         return v3_norm2(v3_sub(pos[p->a], pos[p->b])) <= reach * reach;
@@ -1693,17 +1695,20 @@ static inline int near_test(const sd_world *w, double skin, const sd_pair *p)
 /* near_test of candidates k0 .. while 4 remain, the sphere pairs' in AVX2 lanes (the centres
  * as rows, near_test's operations; a log's pair through near_test); returns where it stopped. */
 __attribute__((target("avx2"))) static int near_test256(const sd_world *w, double skin, int k0, int k1,
-                                                        uint8_t *restrict keep)
+                                                        uint8_t *restrict keep, int nf)
 {
     const double *pos = &w->b.pos[0].x, *rad = w->b.radius;
     const sd_pair *pairs = w->bb.p;
-    const __m256d sk = _mm256_set1_pd(skin);
+    const double hs = 0.5 * skin;
     int k = k0;
     for (; k + 4 <= k1; k += 4) {
         const sd_pair *p = pairs + k;
         const int32_t a[4] = {p[0].a, p[1].a, p[2].a, p[3].a}, b[4] = {p[0].b, p[1].b, p[2].b, p[3].b};
         __m256d dx, dy, dz;
         diff_lanes(pos, a, b, &dx, &dy, &dz);
+        /* half the skin where a body is of the bed (near_test) */
+        const __m256d sk = _mm256_setr_pd(a[0] >= nf || b[0] >= nf ? hs : skin, a[1] >= nf || b[1] >= nf ? hs : skin,
+                                          a[2] >= nf || b[2] >= nf ? hs : skin, a[3] >= nf || b[3] >= nf ? hs : skin);
         const __m256d reach = _mm256_add_pd(_mm256_add_pd(_mm256_setr_pd(rad[a[0]], rad[a[1]], rad[a[2]], rad[a[3]]),
                                                           _mm256_setr_pd(rad[b[0]], rad[b[1]], rad[b[2]], rad[b[3]])),
                                             sk);
@@ -1711,7 +1716,7 @@ __attribute__((target("avx2"))) static int near_test256(const sd_world *w, doubl
             _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
         const int in = _mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(reach, reach), _CMP_LE_OQ));
         for (int l = 0; l < 4; l++)
-            keep[k + l - k0] = (uint8_t)(p[l].kind == SD_PAIR_SS ? in >> l & 1 : near_test(w, skin, &p[l]));
+            keep[k + l - k0] = (uint8_t)(p[l].kind == SD_PAIR_SS ? in >> l & 1 : near_test(w, skin, &p[l], nf));
     }
     return k;
 }
@@ -1725,16 +1730,16 @@ __attribute__((target("avx2"))) static int near_test256(const sd_world *w, doubl
  * cache line per candidate. The answers first, alone, then their consequences with one
  * seldom-taken branch: the loop that did both as it went, branching on a coin toss, took 18 ns
  * a candidate (docs/performance.md §2-000000000). */
-static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, int fresh)
+static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, int fresh, int nf)
 {
     const sd_pair *restrict pairs = w->bb.p;
     uint8_t *restrict keep = w->near_mark + w->bb.n + 1 + k0; /* (near_mark's second half) */
     int k = k0;
 #ifdef SD_FILTER512
-    if (simd_level >= SD_SIMD_AVX2) k = near_test256(w, skin, k0, k1, keep);
+    if (simd_level >= SD_SIMD_AVX2) k = near_test256(w, skin, k0, k1, keep, nf);
 #endif
     for (; k < k1; k++)
-        keep[k - k0] = (uint8_t)near_test(w, skin, &pairs[k]);
+        keep[k - k0] = (uint8_t)near_test(w, skin, &pairs[k], nf);
     uint8_t *restrict mark = w->near_mark;
     sd_hist *restrict hist = w->bb.hist;
     for (int j = k0; j < k1; j++) {
@@ -1764,7 +1769,10 @@ static int near_mark_ready(sd_world *w)
  * records; returns how many. */
 static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pair_soa *soa)
 {
-    const uint8_t *keep = near_keep_range(w, skin, 0, w->bb.n, fresh);
+    int nf = w->b.n; /* the bed: bodies nf .. n-1 (sorted last by the rebuild) */
+    while (nf > 0 && sd_body_is_bed(&w->b, nf - 1))
+        nf--;
+    const uint8_t *keep = near_keep_range(w, skin, 0, w->bb.n, fresh, nf);
     const sd_pair *pairs = w->bb.p;
     int m = 0;
     for (int k = 0; k < w->bb.n; k++) {
@@ -1785,7 +1793,7 @@ int sd_wall_near_set(int on)
 /* The bodies among i0 .. i1-1 with wall pairs that are near touching one, into list
  * (ascending; returns how many; *skip: how many were left out): near when the centre's distance
  * to a triangle's plane (no nearer than that to the triangle) less the radius, or a log's
- * extent along the plane's normal, is below the skin. A body
+ * extent along the plane's normal, is below half the skin. A body
  * farther from every plane cannot reach one before the near pairs are remade (walls do not
  * move; a triangle switched on forces a rebuild). All of them when sd_wall_near_set(0). */
 static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *list, long *skip)
@@ -1799,7 +1807,9 @@ static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *li
     for (int from = w->csr.bt_start[i0]; from < kend;) {
         const int i = p[from].a, to = w->csr.bt_start[i + 1];
         const int sphere = b->shape[i] == SD_SHAPE_SPHERE;
-        const double reach = b->radius[i] + skin;
+        /* half the skin: a wall does not move, only the body closes the gap, by less than half
+         * the skin before the near pairs are remade */
+        const double hs = 0.5 * skin, reach = b->radius[i] + hs;
         int near = !wall_near_on;
         for (int k = from; k < to; k++) {
             const sd_tri *t = &wl->tri[p[k].b];
@@ -1810,7 +1820,7 @@ static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *li
             double rk = reach;
             if (!sphere) {
                 const double an = fabs(v3_dot(b->axis[i], t->n)), s2 = 1.0 - an * an;
-                rk = b->hl[i] * an + b->radius[i] * sqrt(s2 > 0.0 ? s2 : 0.0) + skin;
+                rk = b->hl[i] * an + b->radius[i] * sqrt(s2 > 0.0 ? s2 : 0.0) + hs;
             }
             near |= wl->active[p[k].b] && fabs(v3_dot(v3_sub(b->pos[i], t->v[0]), t->n)) < rk;
         }
@@ -2153,7 +2163,7 @@ static sd_status owned_update(sd_world *w, int T)
         const int tid = omp_get_thread_num(), nthr = omp_get_num_threads();
         for (int t = tid; t < T; t += nthr) {
             const int k0 = o->K[t], k1 = o->K[t + 1];
-            const uint8_t *kp = near_keep_range(w, skin, k0, k1, fresh);
+            const uint8_t *kp = near_keep_range(w, skin, k0, k1, fresh, o->nf);
             /* its bodies near a wall, at its bodies' place */
             o->wn[t] = wall_near_range(w, skin, o->B[t], o->B[t + 1], w->wall_list + o->B[t], &o->wskip[t]);
             /* the near ones into its segment in pair order, each cross pair as ~c; xp[j - k0]
