@@ -1699,16 +1699,18 @@ __attribute__((target("avx2"))) static int near_test256(const sd_world *w, doubl
 {
     const double *pos = &w->b.pos[0].x, *rad = w->b.radius;
     const sd_pair *pairs = w->bb.p;
-    const double hs = 0.5 * skin;
+    const __m256d skv = _mm256_set1_pd(skin), hsv = _mm256_set1_pd(0.5 * skin);
+    const __m128i nf1 = _mm_set1_epi32(nf - 1);
     int k = k0;
     for (; k + 4 <= k1; k += 4) {
         const sd_pair *p = pairs + k;
         const int32_t a[4] = {p[0].a, p[1].a, p[2].a, p[3].a}, b[4] = {p[0].b, p[1].b, p[2].b, p[3].b};
         __m256d dx, dy, dz;
         diff_lanes(pos, a, b, &dx, &dy, &dz);
-        /* half the skin where a body is of the bed (near_test) */
-        const __m256d sk = _mm256_setr_pd(a[0] >= nf || b[0] >= nf ? hs : skin, a[1] >= nf || b[1] >= nf ? hs : skin,
-                                          a[2] >= nf || b[2] >= nf ? hs : skin, a[3] >= nf || b[3] >= nf ? hs : skin);
+        /* half the skin where a body is of the bed (near_test), chosen by lane masks */
+        const __m128i bed = _mm_or_si128(_mm_cmpgt_epi32(_mm_loadu_si128((const __m128i *)a), nf1),
+                                         _mm_cmpgt_epi32(_mm_loadu_si128((const __m128i *)b), nf1));
+        const __m256d sk = _mm256_blendv_pd(skv, hsv, _mm256_castsi256_pd(_mm256_cvtepi32_epi64(bed)));
         const __m256d reach = _mm256_add_pd(_mm256_add_pd(_mm256_setr_pd(rad[a[0]], rad[a[1]], rad[a[2]], rad[a[3]]),
                                                           _mm256_setr_pd(rad[b[0]], rad[b[1]], rad[b[2]], rad[b[3]])),
                                             sk);
