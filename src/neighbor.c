@@ -1024,10 +1024,11 @@ static sd_status bed_cache_make(sd_world *w, double hm)
 static sd_status join_chunks(sd_world *w, const cand_buf *buf, int K, int T)
 {
     sd_pairlist *l = &w->bb;
-    int32_t *at = malloc(2 * ((size_t)K + 1) * sizeof(int32_t)), *hat = at + K + 1;
+    int32_t *at = malloc(2 * ((size_t)K + 1) * sizeof(int32_t));
     if (!at) return SD_ERR_NOMEM;
+    int32_t *hat = at + K + 1;
+    (void)T; /* (read by the pragmas only) */
     /* each chunk's slots (its pairs' caps summed) */
-    (void)T;
 #pragma omp parallel for schedule(static) num_threads(T) if (T > 1)
     for (int c = 0; c < K; c++) {
         int h = 0;
