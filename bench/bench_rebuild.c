@@ -25,6 +25,22 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* op(w) R times, each timed into t[r], with K untimed steps before each (a step rebuilds when
+ * its lists say so) */
+static sd_status timed(sd_world *w, sd_status (*op)(sd_world *), int reps, int steps, double *t)
+{
+    sd_status st = SD_OK;
+    for (int r = 0; r < reps && !st; r++) {
+        for (int s = 0; s < steps && !st; s++)
+            st = sd_world_step(w);
+        if (st) break;
+        const double t0 = sd_now();
+        st = op(w);
+        t[r] = sd_now() - t0;
+    }
+    return st;
+}
+
 int main(int argc, char **argv)
 {
     const char *path = NULL;
@@ -64,31 +80,20 @@ int main(int argc, char **argv)
         st = sd_world_step(w);
     for (int s = 0; s < 3 && !st; s++)
         st = sd_neighbor_rebuild(w);
-    double *t = malloc((size_t)reps * sizeof *t);
-    for (int r = 0; r < reps && !st && t; r++) {
-        for (int s = 0; s < steps && !st; s++) /* (not timed; a step rebuilds when its lists say so) */
-            st = sd_world_step(w);
-        if (st) break;
-        const double t0 = sd_now();
-        st = sd_neighbor_rebuild(w);
-        t[r] = sd_now() - t0;
-    }
-    if (st || !t) {
-        fprintf(stderr, "%s: %s\n", path, t ? sd_status_message(st) : "out of memory");
+    double *t = malloc((size_t)reps * sizeof *t), *tn = malloc((size_t)reps * sizeof *tn);
+    if (!t || !tn) {
+        fprintf(stderr, "%s: out of memory\n", path);
         free(t);
+        free(tn);
         sd_world_destroy(w);
         return 1;
     }
+    st = timed(w, sd_neighbor_rebuild, reps, steps, t);
     /* the near pairs remade alone, R times (after a step: the lists as a run has them) */
-    double *tn = malloc((size_t)reps * sizeof *tn);
     if (!st) st = sd_world_step(w);
-    for (int r = 0; r < reps && !st && tn; r++) {
-        const double t0 = sd_now();
-        st = sd_contact_near_remake(w);
-        tn[r] = sd_now() - t0;
-    }
-    if (st || !tn) {
-        fprintf(stderr, "%s: %s\n", path, tn ? sd_status_message(st) : "out of memory");
+    if (!st) st = timed(w, sd_contact_near_remake, reps, 0, tn);
+    if (st) {
+        fprintf(stderr, "%s: %s\n", path, sd_status_message(st));
         free(t);
         free(tn);
         sd_world_destroy(w);

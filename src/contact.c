@@ -1771,10 +1771,7 @@ static int near_mark_ready(sd_world *w)
  * records; returns how many. */
 static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pair_soa *soa)
 {
-    int nf = w->b.n; /* the bed: bodies nf .. n-1 (sorted last by the rebuild) */
-    while (nf > 0 && sd_body_is_bed(&w->b, nf - 1))
-        nf--;
-    const uint8_t *keep = near_keep_range(w, skin, 0, w->bb.n, fresh, nf);
+    const uint8_t *keep = near_keep_range(w, skin, 0, w->bb.n, fresh, sd_bed_start(&w->b));
     const sd_pair *pairs = w->bb.p;
     int m = 0;
     for (int k = 0; k < w->bb.n; k++) {
@@ -2142,9 +2139,7 @@ static sd_status owned_update(sd_world *w, int T)
     for (int t = 1; t < T; t++)
         o->K[t] = first_led_by(w, o->K[t - 1], o->B[t]);
     if (o->n != n || o->nf_stamp != w->timers.rebuilds) {
-        o->nf = n;
-        while (o->nf > 0 && sd_body_is_bed(&w->b, o->nf - 1))
-            o->nf--;
+        o->nf = sd_bed_start(&w->b);
         o->nf_stamp = w->timers.rebuilds;
     }
     /* owner t's segment, its cross pairs (cross[K[t] ..]) and its counts of cross entries

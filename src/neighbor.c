@@ -16,6 +16,21 @@
 #include <omp.h>
 #endif
 
+/* The threads for one of the rebuild's parallel parts over n items: all the process has (at most
+ * SD_MAX_OWNERS), or one for a small part (start-up costs more). */
+static int rebuild_threads(const sd_world *w, int n)
+{
+    int T = 1;
+#ifdef _OPENMP
+    T = omp_get_max_threads();
+    if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
+    if (n <= w->def.parallel_min) T = 1;
+#else
+    (void)w, (void)n;
+#endif
+    return T;
+}
+
 static const int hist_cap_of_kind[SD_PAIR_KINDS] = {1, 1, SD_MANIFOLD_MAX, 1, SD_MANIFOLD_MAX};
 
 void sd_grid_free(sd_grid *g)
@@ -362,12 +377,7 @@ sd_status sd_neighbor_collect_history(sd_world *w)
     sd_contact_gather(w); /* the wall loads of the last step, before its pairs go */
     const sd_pairlist *lists[2] = {&w->bb, &w->bt};
     const int np = w->bb.n + w->bt.n, G = w->next_gid;
-    int T = 1;
-#ifdef _OPENMP
-    T = omp_get_max_threads();
-    if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
-    if (np <= w->def.parallel_min) T = 1;
-#endif
+    const int T = rebuild_threads(w, np);
     /* cnt[t * (G + 1) + g]: thread t's entries of gid g, then where they go */
     int32_t *cnt = calloc((size_t)T * (G + 1) + 1, sizeof(int32_t));
     if (!cnt) return SD_ERR_NOMEM;
@@ -929,9 +939,7 @@ static sd_status bed_cache_make(sd_world *w, double hm)
     const sd_grid *g = &w->grid;
     sd_bed_cache *c = &w->bed;
     c->made = 0;
-    int nb0 = b->n;
-    while (nb0 > 0 && sd_body_is_bed(b, nb0 - 1))
-        nb0--;
+    const int nb0 = sd_bed_start(b);
     if (nb0 == b->n) return SD_OK;
     for (int i = 0; i < nb0; i++)
         if (sd_body_is_bed(b, i)) return SD_OK;
@@ -1145,12 +1153,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     if (bed) memcpy(w->range + nr, bc->range, (size_t)(b->n - nr) * sizeof(*w->range));
     if (sd_grow((void **)&w->reg0, &w->reg0_cap, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     {
-        int T = 1;
-#ifdef _OPENMP
-        T = omp_get_max_threads();
-        if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
-        if (nr <= w->def.parallel_min) T = 1;
-#endif
+        const int T = rebuild_threads(w, nr);
 #ifdef _OPENMP
         if (T > 1)
             st = grid_fill_par(&w->grid, b->n, (const int32_t(*)[6])w->range, w->reg0, &w->slot, &w->slot_cap,
@@ -1175,12 +1178,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     w->bt.nh = 0;
     if (sd_grow((void **)&w->csr.bt_start, &w->csr.cap_bt_start, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     {
-        int T = 1;
-#ifdef _OPENMP
-        T = omp_get_max_threads();
-        if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
-        if (b->n <= w->def.parallel_min) T = 1;
-#endif
+        const int T = rebuild_threads(w, b->n);
         /* (32 chunks a thread: the scan's cost per body varies along the flume, a log jam at
          * the dam, and the last chunks taken were waited for) */
         const int K = T > 1 ? 32 * T : 1;

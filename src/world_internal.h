@@ -341,6 +341,15 @@ void sd_pair_soa_free(sd_pair_soa *s);
  * elements of the paper's flume: memory traffic saved every step). Dam pipes (fixed
  * cylinders) are summed. */
 static inline int sd_body_is_bed(const sd_bodies *b, int i) { return b->fixed[i] && b->shape[i] == SD_SHAPE_SPHERE; }
+/* The first body of the trailing bed (n when none): bodies from there on are the bed, which the
+ * rebuild sorts after every other body. */
+static inline int sd_bed_start(const sd_bodies *b)
+{
+    int i = b->n;
+    while (i > 0 && sd_body_is_bed(b, i - 1))
+        i--;
+    return i;
+}
 
 void sd_pairlist_free(sd_pairlist *l);
 /* Mesh rule on the manifolds man[from..to) of one body's triangle pairs: drops edge and vertex
