@@ -844,11 +844,13 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
         const int defer = sc_lanes_on && sc_geom_on;
         for (int o = ~ss & 15; o; o &= o - 1) {
             const int j = i + __builtin_ctz((unsigned)o);
-            const sd_pair *p = &w->bb.p[ks[j]];
-            if (defer && p->kind == SD_PAIR_SC)
+            /* the kind from the view (ck's high half): the pair's record, a line of the store
+             * the filter reads nowhere else, is read only for a log–log or log–wall pair (its
+             * load was a ninth of the filter's samples in the packing) */
+            if (defer && (int)((uint32_t)v->ck[j] >> 16) == SD_PAIR_SC)
                 gen[(*ngp)++] = j;
             else
-                filter_log_pair(w, p, j, used, gen, ngp);
+                filter_log_pair(w, &w->bb.p[ks[j]], j, used, gen, ngp);
         }
     }
     *mp = m;
@@ -1145,8 +1147,8 @@ __attribute__((target("avx2"))) static inline void sc_quad_load(const sd_bodies 
  * scalar path spent ~12 % of the settled packing's step here (docs/performance.md
  * §2-00000000000000). */
 __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const sd_law *law, const int32_t *ks,
-                                                      const int *sg, int n, struct sc_lanes *q, int msc,
-                                                      sd_pair_out *out, int *used)
+                                                      const soa_view *v, const int *sg, int n, struct sc_lanes *q,
+                                                      int msc, sd_pair_out *out, int *used)
 {
     const sd_bodies *b = &w->b;
     const double *vel = &b->vel[0].x, *om = &b->omega[0].x;
@@ -1165,10 +1167,8 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
         int g = 0;
         for (; g + 4 <= n; g += 4) {
             int sa[4], lc[4];
-            for (int l = 0; l < 4; l++) {
-                const sd_pair *p = &pairs[ks[sg[g + l]]];
-                sa[l] = p->a, lc[l] = p->b;
-            }
+            for (int l = 0; l < 4; l++) /* (from the chunk's view: the pair store's lines are not read) */
+                sa[l] = v->a[sg[g + l]], lc[l] = v->b[sg[g + l]];
             sc_quad u;
             sc_quad_load(b, sa, lc, &u);
             const __m256d rr = _mm256_add_pd(u.rc, u.rs);
@@ -1179,7 +1179,7 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
                 const int i = sg[g + l];
                 if (apart >> l & 1) {
                     used[i] = 0;
-                    w->bb.hist[pairs[ks[i]].off].feature = -1; /* (one slot) */
+                    w->bb.hist[v->off[i]].feature = -1; /* (one slot) */
                 } else
                     sg2[n2++] = i;
             }
@@ -1199,12 +1199,9 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
     /* 2. the contacts */
     int g = 0;
     for (; g + 4 <= n; g += 4) {
-        const sd_pair *p[4];
         int sa[4], lc[4];
-        for (int l = 0; l < 4; l++) {
-            p[l] = &pairs[ks[sg[g + l]]];
-            sa[l] = p[l]->a, lc[l] = p[l]->b;
-        }
+        for (int l = 0; l < 4; l++)
+            sa[l] = v->a[sg[g + l]], lc[l] = v->b[sg[g + l]];
         sc_quad u;
         sc_quad_load(b, sa, lc, &u);
         const __m256d cx = u.cx, cy = u.cy, cz = u.cz, bx = u.bx, by = u.by, bz = u.bz, ax = u.ax, ay = u.ay,
@@ -1261,9 +1258,9 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
             rows4_store(om, lc, q->wbx, q->wby, q->wbz, j);
             for (int l = 0; l < 4; l++) {
                 const int f = sidem >> l & 1 ? 0 : (negm >> l & 1 ? 1 : 2) + (endm >> l & 1 ? 0 : 2);
-                const sd_hist *h = &hist[p[l]->off];
+                const sd_hist *h = &hist[v->off[sg[g + l]]];
                 const int same = h->feature == f;
-                q->sqm[j + l] = p[l]->sqrt_m_eff;
+                q->sqm[j + l] = v->sqm[sg[g + l]];
                 q->sx[j + l] = same ? h->shear.x : 0.0, q->sy[j + l] = same ? h->shear.y : 0.0;
                 q->sz[j + l] = same ? h->shear.z : 0.0;
                 q->feature[j + l] = f;
@@ -1284,7 +1281,7 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
         for (int l = 0; l < 4; l++) {
             const int i = sg[g + l];
             if (!(ok >> l & 1)) {
-                msc += pair_general(w, law, p[l], i, q, msc, out, used);
+                msc += pair_general(w, law, &pairs[ks[i]], i, q, msc, out, used);
                 continue;
             }
             /* sc_lane_fill */
@@ -1301,8 +1298,8 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
             q->wax[j] = om[3 * a], q->way[j] = om[3 * a + 1], q->waz[j] = om[3 * a + 2];
             q->vbx[j] = vel[3 * c], q->vby[j] = vel[3 * c + 1], q->vbz[j] = vel[3 * c + 2];
             q->wbx[j] = om[3 * c], q->wby[j] = om[3 * c + 1], q->wbz[j] = om[3 * c + 2];
-            q->sqm[j] = p[l]->sqrt_m_eff;
-            const sd_hist *h = &hist[p[l]->off];
+            q->sqm[j] = v->sqm[i];
+            const sd_hist *h = &hist[v->off[i]];
             const int same = h->feature == f;
             q->sx[j] = same ? h->shear.x : 0.0, q->sy[j] = same ? h->shear.y : 0.0, q->sz[j] = same ? h->shear.z : 0.0;
             q->feature[j] = f;
@@ -1350,13 +1347,13 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             int sg[SS_CHUNK], nsg = 0;
             for (int g = 0; g < ng; g++) {
                 const int i = gen[g];
-                const sd_pair *p = &pairs[ks[i]];
-                if (p->kind == SD_PAIR_SC && p->cap == 1)
+                /* kind and cap from the view (ck), the record read only for the others */
+                if (v->ck[i] == (int32_t)(1u | (uint32_t)SD_PAIR_SC << 16))
                     sg[nsg++] = i;
                 else
-                    msc += pair_general(w, law, p, i, &q->sc, msc, out, used);
+                    msc += pair_general(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
             }
-            msc = sc_geom256(w, law, ks, sg, nsg, &q->sc, msc, out, used);
+            msc = sc_geom256(w, law, ks, v, sg, nsg, &q->sc, msc, out, used);
         } else
 #endif
             for (int g = 0; g < ng; g++) {
@@ -1387,7 +1384,10 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
         for (int j = 0; j <= m; j++) {
             const int i = j < m ? q->sel[j] : n;
             for (; g < ng && gen[g] < i; g++)
-                if (used[gen[g]] > 0) add_both(acc, &pairs[ks[gen[g]]], &out[gen[g]]);
+                if (used[gen[g]] > 0) { /* add_both, its bodies from the view (not the store's line) */
+                    add_pair(acc, v->a[gen[g]], 0, &out[gen[g]]);
+                    add_pair(acc, v->b[gen[g]], 1, &out[gen[g]]);
+                }
             if (j == m) break;
 #ifdef SD_FILTER512
             /* four lanes at once where no other shape's pair comes between them and none is
