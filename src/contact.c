@@ -1058,7 +1058,7 @@ static void sc_batch_law(const sd_law *law, double dt, struct sc_lanes *restrict
 /* The lanes' results into their pairs' slots and out[]; a lane the law sends back (its spring
  * tilted past the small-angle rule) through apply_manifold, from the slot not yet written. */
 static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, int m, const int32_t *ks,
-                     sd_pair_out *out, int *used)
+                     const soa_view *v, sd_pair_out *out, int *used)
 {
     sc_batch_law(law, w->def.dt, q, m);
     long redo = 0;
@@ -1069,9 +1069,10 @@ static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, i
     q->n_redo += redo;
     for (int j = 0; j < m; j++) {
         const int i = q->i[j];
-        const sd_pair *p = &w->bb.p[ks[i]];
-        sd_hist *h = &w->bb.hist[p->off];
+        sd_hist *h = &w->bb.hist[v->off[i]]; /* (the slot from the chunk's view: the pair store's
+                                               * line is read only for a redo) */
         if (q->redo[j] != 0.0) {
+            const sd_pair *p = &w->bb.p[ks[i]];
             sd_manifold m1;
             m1.n = 1;
             m1.normal[0] = v3(q->nx[j], q->ny[j], q->nz[j]);
@@ -1360,7 +1361,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
                 const int i = gen[g];
                 msc += pair_general(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
             }
-        if (msc > 0) sc_flush(w, law, &q->sc, msc, ks, out, used);
+        if (msc > 0) sc_flush(w, law, &q->sc, msc, ks, v, out, used);
     }
     /* 3. the rest of what the law needs of the touching spheres */
     {
