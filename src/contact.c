@@ -698,10 +698,16 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
         _mm256_storeu_si256((__m256i *)(q->sel + m),
                             _mm256_maskz_compress_epi32(t, _mm256_add_epi32(_mm256_set1_epi32(i), lane)));
         m += __builtin_popcount(t);
-        /* the log pairs of the group, as the scalar loop takes them */
+        /* the log pairs of the group, as the scalar loop takes them, but a sphere-log pair's
+         * apart test left to sc_geom256's lanes, as ss_filter256 leaves it (its kind from the
+         * view: the pair store's line is read only for the other log pairs) */
+        const int defer = sc_lanes_on && sc_geom_on;
         for (__mmask8 o = other; o; o &= (__mmask8)(o - 1)) {
             const int j = i + __builtin_ctz(o);
-            filter_log_pair(w, &pairs[ks[j]], j, used, gen, &ng);
+            if (defer && (int)((uint32_t)v->ck[j] >> 16) == SD_PAIR_SC)
+                gen[ng++] = j;
+            else
+                filter_log_pair(w, &pairs[ks[j]], j, used, gen, &ng);
         }
     }
     *mp = m;
