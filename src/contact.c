@@ -452,7 +452,7 @@ static inline void filter_log_pair(const sd_world *w, const sd_pair *p, int i, i
         gen[(*ng)++] = i;
 }
 
-static void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
+static inline __attribute__((always_inline)) void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
 {
     if (sd_body_is_bed(b, i)) return; /* its load is never read: stays zero (bt_range adds nothing to a fixed body) */
     if (as_b) {
