@@ -4,11 +4,22 @@
  * |L|Δt/I_tr (space) composed with a spin about the body axis by (1/I_ax − 1/I_tr)(L·a)Δt
  * (body). That keeps L·a and the kinetic energy of a free log exact, where the plain update
  * q ← exp(ωΔt) q drifts at O(Δt) (see docs/physics.md). Spheres: ω ← ω + TΔt/I. */
+#include "core/simd.h"
 #include "world_internal.h"
 
 #ifdef _OPENMP
 #include <omp.h>
 #endif
+
+/* The logs moved in batches (cyl_steps), or one by one (cyl_step; sd_cyl_batch_set). */
+static int cyl_batch_on = 1;
+
+int sd_cyl_batch_set(int on)
+{
+    const int was = cyl_batch_on;
+    cyl_batch_on = on != 0;
+    return was;
+}
 
 /* A log's rotation and its rebuild bounds (out of line, so that the sphere loop keeps its
  * running maxima in registers): returns the x of its downstream end. */
@@ -37,6 +48,137 @@ static __attribute__((noinline)) double cyl_step(sd_bodies *b, int i, double dt,
     return b->pos[i].x + sd_body_x_extent(b, i);
 }
 
+/* The logs' moves in batches: cyl_step's operations, in its order, lane by lane over the
+ * logs of a batch held field by field, so that the compiler runs them in SIMD lanes (its
+ * divisions and square roots, each waited for in turn by one log, overlap across logs); the
+ * sines and cosines one by one, as cyl_step calls them. The same bits as cyl_step: IEEE
+ * operations give the same result in a lane as alone, and nothing is contracted. */
+#define CYL_BATCH 32
+typedef struct {
+    /* in: angular momentum, torque, axis (before), orientation (before, then after),
+     * inverse inertias, centre less its rebuild reference, axis at the rebuild, half length,
+     * bounding radius, |v|^2 */
+    double mx[CYL_BATCH], my[CYL_BATCH], mz[CYL_BATCH], tx[CYL_BATCH], ty[CYL_BATCH], tz[CYL_BATCH];
+    double ax[CYL_BATCH], ay[CYL_BATCH], az[CYL_BATCH];
+    double qw[CYL_BATCH], qx[CYL_BATCH], qy[CYL_BATCH], qz[CYL_BATCH];
+    double iax[CYL_BATCH], itr[CYL_BATCH], dx[CYL_BATCH], dy[CYL_BATCH], dz[CYL_BATCH];
+    double rx[CYL_BATCH], ry[CYL_BATCH], rz[CYL_BATCH], hl[CYL_BATCH], br[CYL_BATCH], v2[CYL_BATCH];
+    /* the body spin (about the axis) and the space rotation vector, their angles, and the sine
+     * and cosine of half of each */
+    double spin[CYL_BATCH], angb[CYL_BATCH], px[CYL_BATCH], py[CYL_BATCH], pz[CYL_BATCH], angs[CYL_BATCH];
+    double sinb[CYL_BATCH], cosb[CYL_BATCH], sins[CYL_BATCH], coss[CYL_BATCH];
+    /* out: the new axis, spin vector, (the drift bound)^2 and the surface's step */
+    double nx[CYL_BATCH], ny[CYL_BATCH], nz[CYL_BATCH], ox[CYL_BATCH], oy[CYL_BATCH], oz[CYL_BATCH];
+    double d2[CYL_BATCH], step[CYL_BATCH];
+} cyl_batch;
+
+/* cyl_step up to its rotation vectors and their angles (quat_from_rotvec's v3_norm) */
+SD_SIMD_CLONES
+static void cyl_batch_angles(cyl_batch *restrict c, int n, double dt)
+{
+    for (int j = 0; j < n; j++) {
+        const double Lx = c->mx[j] + dt * c->tx[j], Ly = c->my[j] + dt * c->ty[j], Lz = c->mz[j] + dt * c->tz[j];
+        c->mx[j] = Lx, c->my[j] = Ly, c->mz[j] = Lz;
+        const double spin = (c->iax[j] - c->itr[j]) * (Lx * c->ax[j] + Ly * c->ay[j] + Lz * c->az[j]) * dt;
+        c->spin[j] = spin;
+        c->angb[j] = sqrt(0.0 * 0.0 + 0.0 * 0.0 + spin * spin);
+        const double k = c->itr[j] * dt, px = Lx * k, py = Ly * k, pz = Lz * k;
+        c->px[j] = px, c->py[j] = py, c->pz[j] = pz;
+        c->angs[j] = sqrt(px * px + py * py + pz * pz);
+    }
+}
+
+/* quat_from_rotvec from the angle ang of the rotation vector (x, y, z), given the sine sn and
+ * cosine cs of its half: both of its branches, then the one it takes */
+static inline void rotvec_quat(double x, double y, double z, double ang, double sn, double cs, double *w, double *qx,
+                               double *qy, double *qz)
+{
+    const double s = sn / ang;
+    const double tw = 1.0 - ang * ang / 8.0, tx = 0.5 * x, ty = 0.5 * y, tz = 0.5 * z;
+    const double tn = sqrt(tw * tw + tx * tx + ty * ty + tz * tz);
+    const int tiny = ang < 1e-12;
+    *w = tiny ? tw / tn : cs;
+    *qx = tiny ? tx / tn : x * s;
+    *qy = tiny ? ty / tn : y * s;
+    *qz = tiny ? tz / tn : z * s;
+}
+
+/* the rest of cyl_step: the orientation, axis and spin vector, the drift bound and the step */
+SD_SIMD_CLONES
+static void cyl_batch_turn(cyl_batch *restrict c, int n, double dt)
+{
+    for (int j = 0; j < n; j++) {
+        double bw, bx, by, bz, sw, sx, sy, sz;
+        rotvec_quat(0.0, 0.0, c->spin[j], c->angb[j], c->sinb[j], c->cosb[j], &bw, &bx, &by, &bz);
+        rotvec_quat(c->px[j], c->py[j], c->pz[j], c->angs[j], c->sins[j], c->coss[j], &sw, &sx, &sy, &sz);
+        /* quat_mul(q_space, quat_mul(q, q_body)), then quat_normalize */
+        const double aw = c->qw[j], ax = c->qx[j], ay = c->qy[j], az = c->qz[j];
+        const double mw = aw * bw - ax * bx - ay * by - az * bz, mx = aw * bx + ax * bw + ay * bz - az * by,
+                     my = aw * by - ax * bz + ay * bw + az * bx, mz = aw * bz + ax * by - ay * bx + az * bw;
+        const double rw = sw * mw - sx * mx - sy * my - sz * mz, rx = sw * mx + sx * mw + sy * mz - sz * my,
+                     ry = sw * my - sx * mz + sy * mw + sz * mx, rz = sw * mz + sx * my - sy * mx + sz * mw;
+        const double qn = sqrt(rw * rw + rx * rx + ry * ry + rz * rz);
+        const double qw = rw / qn, qx = rx / qn, qy = ry / qn, qz = rz / qn;
+        c->qw[j] = qw, c->qx[j] = qx, c->qy[j] = qy, c->qz[j] = qz;
+        /* quat_rotate(q, (0, 0, 1)) */
+        const double vx = 0.0, vy = 0.0, vz = 1.0;
+        const double ux = (qy * vz - qz * vy) * 2.0, uy = (qz * vx - qx * vz) * 2.0, uz = (qx * vy - qy * vx) * 2.0;
+        const double nx = vx + ux * qw + (qy * uz - qz * uy), ny = vy + uy * qw + (qz * ux - qx * uz),
+                     nz = vz + uz * qw + (qx * uy - qy * ux);
+        c->nx[j] = nx, c->ny[j] = ny, c->nz[j] = nz;
+        const double Lx = c->mx[j], Ly = c->my[j], Lz = c->mz[j], itr = c->itr[j];
+        const double e = (c->iax[j] - itr) * (Lx * nx + Ly * ny + Lz * nz);
+        c->ox[j] = Lx * itr + e * nx, c->oy[j] = Ly * itr + e * ny, c->oz[j] = Lz * itr + e * nz;
+        const double ex = nx - c->rx[j], ey = ny - c->ry[j], ez = nz - c->rz[j];
+        const double d = sqrt(c->dx[j] * c->dx[j] + c->dy[j] * c->dy[j] + c->dz[j] * c->dz[j]) +
+                         c->hl[j] * sqrt(ex * ex + ey * ey + ez * ez);
+        c->d2[j] = d * d;
+        const double tx = nx - c->ax[j], ty = ny - c->ay[j], tz = nz - c->az[j];
+        c->step[j] = sqrt(c->v2[j]) * dt + 1.01 * c->br[j] * sqrt(tx * tx + ty * ty + tz * tz);
+    }
+}
+
+/* cyl_step for the logs lg[0 .. n) (body indices; their centres already moved), in batches;
+ * returns the largest x of their downstream ends. */
+static double cyl_steps(sd_bodies *b, const int32_t *lg, int n, double dt, double lim2, int *moved, double *dc)
+{
+    cyl_batch c;
+    double xf = -INFINITY;
+    for (int k0 = 0; k0 < n; k0 += CYL_BATCH) {
+        const int m = n - k0 < CYL_BATCH ? n - k0 : CYL_BATCH;
+        for (int j = 0; j < m; j++) {
+            const int i = lg[k0 + j];
+            c.mx[j] = b->angmom[i].x, c.my[j] = b->angmom[i].y, c.mz[j] = b->angmom[i].z;
+            c.tx[j] = b->torque[i].x, c.ty[j] = b->torque[i].y, c.tz[j] = b->torque[i].z;
+            c.ax[j] = b->axis[i].x, c.ay[j] = b->axis[i].y, c.az[j] = b->axis[i].z;
+            c.qw[j] = b->quat[i].w, c.qx[j] = b->quat[i].x, c.qy[j] = b->quat[i].y, c.qz[j] = b->quat[i].z;
+            c.iax[j] = b->inv_i_ax[i], c.itr[j] = b->inv_i_tr[i];
+            const sd_vec3 d = v3_sub(b->pos[i], b->pos_ref[i]);
+            c.dx[j] = d.x, c.dy[j] = d.y, c.dz[j] = d.z;
+            c.rx[j] = b->axis_ref[i].x, c.ry[j] = b->axis_ref[i].y, c.rz[j] = b->axis_ref[i].z;
+            c.hl[j] = b->hl[i], c.br[j] = b->bound_r[i], c.v2[j] = v3_norm2(b->vel[i]);
+        }
+        cyl_batch_angles(&c, m, dt);
+        for (int j = 0; j < m; j++) { /* (one sincos call each, as cyl_step's) */
+            c.sinb[j] = sin(0.5 * c.angb[j]), c.cosb[j] = cos(0.5 * c.angb[j]);
+            c.sins[j] = sin(0.5 * c.angs[j]), c.coss[j] = cos(0.5 * c.angs[j]);
+        }
+        cyl_batch_turn(&c, m, dt);
+        for (int j = 0; j < m; j++) {
+            const int i = lg[k0 + j];
+            b->angmom[i] = v3(c.mx[j], c.my[j], c.mz[j]);
+            b->quat[i] = (sd_quat){c.qw[j], c.qx[j], c.qy[j], c.qz[j]};
+            b->axis[i] = v3(c.nx[j], c.ny[j], c.nz[j]);
+            b->omega[i] = v3(c.ox[j], c.oy[j], c.oz[j]);
+            *moved |= c.d2[j] > lim2;
+            *dc = c.step[j] > *dc ? c.step[j] : *dc;
+            const double x = b->pos[i].x + sd_body_x_extent(b, i);
+            xf = x > xf ? x : xf;
+        }
+    }
+    return xf;
+}
+
 #define SD_EXT_BLOCK 128
 
 int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *dcyl, double *xfront)
@@ -47,6 +189,9 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
     double vm = *v2max, dc = *dcyl, xf = *xfront;
+    /* the logs, moved in batches after the rest (each body's move is its own) */
+    int32_t lg[CYL_BATCH];
+    int nlg = 0;
     for (int kb = k0; kb < k1; kb += SD_EXT_BLOCK) {
         const int ke = k1 - kb < SD_EXT_BLOCK ? k1 : kb + SD_EXT_BLOCK;
         /* the external forces of a block just before it moves: its bodies are still in L1 */
@@ -72,11 +217,22 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
                 const double v2 = v3_norm2(vn);
                 vm = v2 > vm ? v2 : vm;
                 x = pn.x + b->radius[i];
+            } else if (cyl_batch_on) {
+                lg[nlg++] = i;
+                if (nlg == CYL_BATCH) {
+                    x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc);
+                    nlg = 0;
+                } else
+                    continue;
             } else {
                 x = cyl_step(b, i, dt, lim2, &moved, &dc);
             }
             xf = x > xf ? x : xf;
         }
+    }
+    if (nlg > 0) {
+        const double x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc);
+        xf = x > xf ? x : xf;
     }
     *v2max = vm;
     *dcyl = dc;

@@ -382,6 +382,9 @@ int sd_sc_geom_set(int on);
 /* The wall pass over the bodies with a wall pair near touching only (1, the default) or over
  * all with wall pairs (0); the same bits either way. Returns the previous setting. */
 int sd_wall_near_set(int on);
+/* The logs' moves in batches of SIMD lanes (1, the default) or one by one (0); returns the
+ * setting before. Either gives the same bits (integrate.c). */
+int sd_cyl_batch_set(int on);
 /* Sphere-log lanes filled by the AVX2 geometry since the start (for the tests). */
 long sd_sc_geom_count(void);
 long sd_sc_lanes_count(long *redo);
