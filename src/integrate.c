@@ -181,6 +181,49 @@ static double cyl_steps(sd_bodies *b, const int32_t *lg, int n, double dt, doubl
 
 #define SD_EXT_BLOCK 128
 
+/* The moves of a block's spheres, and the centres of its logs (their turning left to the
+ * caller: their indices appended to lg, whose new count is returned). The arrays through
+ * restrict parameters: through b, gcc loaded each array's address again after every store
+ * (the loop's hottest samples sat on those loads). */
+static inline int move_block(const int32_t *restrict mov, int kb, int ke, double dt, sd_vec3 g,
+                             const sd_vec3 *restrict force, const sd_vec3 *restrict ext,
+                             const double *restrict inv_mass, sd_vec3 *restrict vel, sd_vec3 *restrict pos,
+                             sd_vec3 *restrict omega, const sd_vec3 *restrict torque,
+                             const double *restrict inv_i_ax, const double *restrict radius,
+                             const uint8_t *restrict shape, double *vmax, double *xfront, int32_t *restrict lg,
+                             int nlg)
+{
+    double vm = *vmax, xf = *xfront;
+    for (int k = kb; k < ke; k++) {
+        const int i = mov[k];
+        const sd_vec3 f = v3_add(force[i], ext[i]);
+        const sd_vec3 acc = v3_madd(g, f, inv_mass[i]);
+        /* the new velocity and centre kept in registers, not read back from the store right
+         * after being written (x and y by one 16-byte store): on AMD Zen 3 a tenth of this
+         * loop's samples sat on the read of y, as if it waited for the store. The same values
+         * either way. */
+        const sd_vec3 vn = v3_madd(vel[i], acc, dt);
+        const sd_vec3 pn = v3_madd(pos[i], vn, dt);
+        vel[i] = vn;
+        pos[i] = pn;
+        if (shape[i] == SD_SHAPE_SPHERE) {
+            omega[i] = v3_madd(omega[i], torque[i], dt * inv_i_ax[i]);
+            /* a sphere's displacement since the rebuild is bounded by the summed largest |v| dt
+             * (sd_world_after_moves checks it exactly only when that bound nears half the
+             * margin) */
+            const double v2 = v3_norm2(vn);
+            vm = v2 > vm ? v2 : vm;
+            const double x = pn.x + radius[i];
+            xf = x > xf ? x : xf;
+        } else {
+            lg[nlg++] = i;
+        }
+    }
+    *vmax = vm;
+    *xfront = xf;
+    return nlg;
+}
+
 int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *dcyl, double *xfront)
 {
     sd_bodies *b = &w->b;
@@ -189,45 +232,25 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
     double vm = *v2max, dc = *dcyl, xf = *xfront;
-    /* the logs, moved in batches after the rest (each body's move is its own) */
-    int32_t lg[CYL_BATCH];
+    /* the logs, turned in batches once a batch has gathered (each body's move is its own) */
+    int32_t lg[CYL_BATCH + SD_EXT_BLOCK];
     int nlg = 0;
     for (int kb = k0; kb < k1; kb += SD_EXT_BLOCK) {
         const int ke = k1 - kb < SD_EXT_BLOCK ? k1 : kb + SD_EXT_BLOCK;
         /* the external forces of a block just before it moves: its bodies are still in L1 */
         if (w->ext_fn) w->ext_fn(w->ext_ctx, w, mov, kb, ke);
-        for (int k = kb; k < ke; k++) {
-            const int i = mov[k];
-            const sd_vec3 f = v3_add(b->force[i], b->ext_force[i]);
-            const sd_vec3 acc = v3_madd(g, f, b->inv_mass[i]);
-            /* the new velocity and centre kept in registers, not read back from the store
-             * right after being written (x and y by one 16-byte store): on AMD Zen 3 a tenth
-             * of this loop's samples sat on the read of y, as if it waited for the store. The
-             * same values either way. */
-            const sd_vec3 vn = v3_madd(b->vel[i], acc, dt);
-            const sd_vec3 pn = v3_madd(b->pos[i], vn, dt);
-            b->vel[i] = vn;
-            b->pos[i] = pn;
-            double x;
-            if (b->shape[i] == SD_SHAPE_SPHERE) {
-                b->omega[i] = v3_madd(b->omega[i], b->torque[i], dt * b->inv_i_ax[i]);
-                /* a sphere's displacement since the rebuild is bounded by the summed largest
-                 * |v| dt (sd_world_after_moves checks it exactly only when that bound nears half
-                 * the margin) */
-                const double v2 = v3_norm2(vn);
-                vm = v2 > vm ? v2 : vm;
-                x = pn.x + b->radius[i];
-            } else if (cyl_batch_on) {
-                lg[nlg++] = i;
-                if (nlg == CYL_BATCH) {
-                    x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc);
-                    nlg = 0;
-                } else
-                    continue;
-            } else {
-                x = cyl_step(b, i, dt, lim2, &moved, &dc);
+        nlg = move_block(mov, kb, ke, dt, g, b->force, b->ext_force, b->inv_mass, b->vel, b->pos, b->omega,
+                         b->torque, b->inv_i_ax, b->radius, b->shape, &vm, &xf, lg, nlg);
+        if (!cyl_batch_on) {
+            for (int q = 0; q < nlg; q++) {
+                const double x = cyl_step(b, lg[q], dt, lim2, &moved, &dc);
+                xf = x > xf ? x : xf;
             }
+            nlg = 0;
+        } else if (nlg >= CYL_BATCH) {
+            const double x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc);
             xf = x > xf ? x : xf;
+            nlg = 0;
         }
     }
     if (nlg > 0) {
