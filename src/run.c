@@ -248,59 +248,77 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
     const __m256d flow_ok = h > 0.0 ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero,
                   cap_ok = hd > 0.0 ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero,
                   capture = fc->capture ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero;
+    /* in two loops over up to 32 groups at a time: the first up to the speed (the divisions and
+     * the square root, a chain each group waits on), the second the forces and their stores.
+     * One loop had room in flight for little more than one group's chain: the instructions
+     * right after the square root and the division held a third of its samples */
+    enum { FG = 32 };
     int k = k0;
-    for (; k + 4 <= k1; k += 4) {
-        const int i0 = mov[k], i1 = mov[k + 1], i2 = mov[k + 2], i3 = mov[k + 3];
-        const int sph = (shape[i0] == SD_SHAPE_SPHERE) | (shape[i1] == SD_SHAPE_SPHERE) << 1 |
-                        (shape[i2] == SD_SHAPE_SPHERE) << 2 | (shape[i3] == SD_SHAPE_SPHERE) << 3;
-        if (logs && sph != 15) /* (the logs: a few groups in a hundred) */
+    while (k + 4 <= k1) {
+        __m256d RX[FG], RY[FG], RZ[FG], SP[FG], RA[FG], WT[FG];
+        int SPH[FG], KK[FG], ng = 0;
+        for (; k + 4 <= k1 && ng < FG; k += 4) {
+            const int i0 = mov[k], i1 = mov[k + 1], i2 = mov[k + 2], i3 = mov[k + 3];
+            const int sph = (shape[i0] == SD_SHAPE_SPHERE) | (shape[i1] == SD_SHAPE_SPHERE) << 1 |
+                            (shape[i2] == SD_SHAPE_SPHERE) << 2 | (shape[i3] == SD_SHAPE_SPHERE) << 3;
+            if (logs && sph != 15) /* (the logs: a few groups in a hundred) */
+                for (int l = 0; l < 4; l++)
+                    if (!(sph >> l & 1)) logs[(*nlogs)++] = k + l;
+            if (!sph) continue;
+            __m256d P[4], V[4];
+            sd_transpose4(SD_XYZ_LOAD(pos, i0), SD_XYZ_LOAD(pos, i1), SD_XYZ_LOAD(pos, i2), SD_XYZ_LOAD(pos, i3), P);
+            sd_transpose4(SD_XYZ_LOAD(vel, i0), SD_XYZ_LOAD(vel, i1), SD_XYZ_LOAD(vel, i2), SD_XYZ_LOAD(vel, i3), V);
+            const __m256d px = P[0], py = P[1], pz = P[2], vx = V[0], vy = V[1], vz = V[2];
+            const __m256d r = _mm256_setr_pd(rad[i0], rad[i1], rad[i2], rad[i3]);
+            /* z = p.n - z_bed (sd_fluid_height), clamped at the bed as z < 0 ? 0 : z */
+            const __m256d z = _mm256_sub_pd(
+                _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(px, nx), _mm256_mul_pd(py, ny)), _mm256_mul_pd(pz, nz)), zb);
+            const __m256d zc = _mm256_blendv_pd(z, zero, _mm256_cmp_pd(z, zero, _CMP_LT_OQ));
+            /* the capture profile upstream of the dam (capture && p.x < x_dam) */
+            const __m256d cap = _mm256_and_pd(capture, _mm256_cmp_pd(px, XD, _CMP_LT_OQ));
+            const __m256d wet =
+                _mm256_or_pd(_mm256_and_pd(_mm256_and_pd(cap, cap_ok), _mm256_cmp_pd(zc, HD, _CMP_LE_OQ)),
+                             _mm256_andnot_pd(cap, _mm256_and_pd(flow_ok, _mm256_cmp_pd(zc, H, _CMP_LE_OQ))));
+            /* the profile of each lane; a group all of one profile skips the other's divisions */
+            const int capm = _mm256_movemask_pd(cap) & sph;
+            __m256d u;
+            if (capm == sph)
+                u = _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_mul_pd(bma, zc), HD), A), U); /* eq 51 */
+            else if (!capm)
+                u = _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_div_pd(zc, H), five), c45), U); /* eq 50 */
+            else
+                u = _mm256_blendv_pd(_mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_div_pd(zc, H), five), c45), U),
+                                     _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_mul_pd(bma, zc), HD), A), U),
+                                     cap);
+            const __m256d rx = _mm256_sub_pd(_mm256_mul_pd(dx, u), vx), ry = _mm256_sub_pd(_mm256_mul_pd(dy, u), vy),
+                          rz = _mm256_sub_pd(_mm256_mul_pd(dz, u), vz);
+            const __m256d speed = _mm256_sqrt_pd(
+                _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(rx, rx), _mm256_mul_pd(ry, ry)), _mm256_mul_pd(rz, rz)));
+            RX[ng] = rx, RY[ng] = ry, RZ[ng] = rz, SP[ng] = speed, RA[ng] = r, WT[ng] = wet;
+            SPH[ng] = sph, KK[ng] = k;
+            ng++;
+        }
+        for (int q = 0; q < ng; q++) {
+            const __m256d rx = RX[q], ry = RY[q], rz = RZ[q], speed = SP[q], r = RA[q], wet = WT[q];
+            const int sph = SPH[q], kq = KK[q];
+            const int i0 = mov[kq], i1 = mov[kq + 1], i2 = mov[kq + 2], i3 = mov[kq + 3];
+            const __m256d area = _mm256_mul_pd(_mm256_mul_pd(pi, r), r),
+                          volume = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(c43pi, r), r), r);
+            const __m256d sk = _mm256_mul_pd(_mm256_mul_pd(kd, area), speed), bs = _mm256_mul_pd(mrho, volume);
+            /* dry spheres get zero */
+            const __m256d tx = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(rx, sk), _mm256_mul_pd(gx, bs))),
+                          ty = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(ry, sk), _mm256_mul_pd(gy, bs))),
+                          tz = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(rz, sk), _mm256_mul_pd(gz, bs)));
+            /* back as rows (x, y, z, -), each sphere's written */
+            __m256d row[4];
+            sd_transpose4(tx, ty, tz, zero, row);
+            const int idx[4] = {i0, i1, i2, i3};
             for (int l = 0; l < 4; l++)
-                if (!(sph >> l & 1)) logs[(*nlogs)++] = k + l;
-        if (!sph) continue;
-        __m256d P[4], V[4];
-        sd_transpose4(SD_XYZ_LOAD(pos, i0), SD_XYZ_LOAD(pos, i1), SD_XYZ_LOAD(pos, i2), SD_XYZ_LOAD(pos, i3), P);
-        sd_transpose4(SD_XYZ_LOAD(vel, i0), SD_XYZ_LOAD(vel, i1), SD_XYZ_LOAD(vel, i2), SD_XYZ_LOAD(vel, i3), V);
-        const __m256d px = P[0], py = P[1], pz = P[2], vx = V[0], vy = V[1], vz = V[2];
-        const __m256d r = _mm256_setr_pd(rad[i0], rad[i1], rad[i2], rad[i3]);
-        /* z = p.n - z_bed (sd_fluid_height), clamped at the bed as z < 0 ? 0 : z */
-        const __m256d z = _mm256_sub_pd(
-            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(px, nx), _mm256_mul_pd(py, ny)), _mm256_mul_pd(pz, nz)), zb);
-        const __m256d zc = _mm256_blendv_pd(z, zero, _mm256_cmp_pd(z, zero, _CMP_LT_OQ));
-        /* the capture profile upstream of the dam (capture && p.x < x_dam) */
-        const __m256d cap = _mm256_and_pd(capture, _mm256_cmp_pd(px, XD, _CMP_LT_OQ));
-        const __m256d wet =
-            _mm256_or_pd(_mm256_and_pd(_mm256_and_pd(cap, cap_ok), _mm256_cmp_pd(zc, HD, _CMP_LE_OQ)),
-                         _mm256_andnot_pd(cap, _mm256_and_pd(flow_ok, _mm256_cmp_pd(zc, H, _CMP_LE_OQ))));
-        /* the profile of each lane; a group all of one profile skips the other's divisions */
-        const int capm = _mm256_movemask_pd(cap) & sph;
-        __m256d u;
-        if (capm == sph)
-            u = _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_mul_pd(bma, zc), HD), A), U); /* eq 51 */
-        else if (!capm)
-            u = _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_div_pd(zc, H), five), c45), U); /* eq 50 */
-        else
-            u = _mm256_blendv_pd(_mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_div_pd(zc, H), five), c45), U),
-                                 _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_mul_pd(bma, zc), HD), A), U), cap);
-        const __m256d rx = _mm256_sub_pd(_mm256_mul_pd(dx, u), vx), ry = _mm256_sub_pd(_mm256_mul_pd(dy, u), vy),
-                      rz = _mm256_sub_pd(_mm256_mul_pd(dz, u), vz);
-        const __m256d speed = _mm256_sqrt_pd(
-            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(rx, rx), _mm256_mul_pd(ry, ry)), _mm256_mul_pd(rz, rz)));
-        const __m256d area = _mm256_mul_pd(_mm256_mul_pd(pi, r), r),
-                      volume = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(c43pi, r), r), r);
-        const __m256d sk = _mm256_mul_pd(_mm256_mul_pd(kd, area), speed), bs = _mm256_mul_pd(mrho, volume);
-        /* dry spheres get zero */
-        const __m256d tx = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(rx, sk), _mm256_mul_pd(gx, bs))),
-                      ty = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(ry, sk), _mm256_mul_pd(gy, bs))),
-                      tz = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(rz, sk), _mm256_mul_pd(gz, bs)));
-        /* back as rows (x, y, z, -), each sphere's written */
-        __m256d row[4];
-        sd_transpose4(tx, ty, tz, zero, row);
-        const int idx[4] = {i0, i1, i2, i3};
-        for (int l = 0; l < 4; l++)
-            if (sph >> l & 1) { /* x and y in one 16-byte store, z alone (no masked store: slow on AMD) */
-                _mm_storeu_pd(&b->ext_force[idx[l]].x, _mm256_castpd256_pd128(row[l]));
-                b->ext_force[idx[l]].z = _mm_cvtsd_f64(_mm256_extractf128_pd(row[l], 1));
-            }
+                if (sph >> l & 1) { /* x and y in one 16-byte store, z alone (no masked store: slow on AMD) */
+                    _mm_storeu_pd(&b->ext_force[idx[l]].x, _mm256_castpd256_pd128(row[l]));
+                    b->ext_force[idx[l]].z = _mm_cvtsd_f64(_mm256_extractf128_pd(row[l], 1));
+                }
+        }
     }
     return k;
 }
