@@ -2273,11 +2273,13 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
         /* pass 2: each owner its span, in pair order */
         for (int t = tid; t < T; t += nthr) {
             const int i0 = o->B[t], i1 = o->B[t + 1], i1f = i1 < o->nf ? i1 : o->nf;
-            for (int i = i0; i < i1f; i++)
-                if (!sd_body_is_bed(b, i)) { /* (two stores: the chained assignment read torque back) */
-                    b->force[i] = v3(0, 0, 0);
-                    b->torque[i] = v3(0, 0, 0);
-                }
+            /* its forces and torques zeroed, as two runs (the bed, from nf on, is left alone:
+             * its load stays zero, add_pair adds nothing to it, so zeroing a bed body before nf,
+             * should there be one, would change nothing either) */
+            if (i1f > i0) {
+                memset(&b->force[i0], 0, (size_t)(i1f - i0) * sizeof(sd_vec3));
+                memset(&b->torque[i0], 0, (size_t)(i1f - i0) * sizeof(sd_vec3));
+            }
             /* the cross pairs of lower owners that touch its bodies, ascending: each comes
              * before every pair of its own (a lower lower body) */
             for (int s = 0; s < t; s++)
