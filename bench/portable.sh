@@ -5,13 +5,13 @@
 #                                      C test programs (DIR/tests) into DIR, with a settled bed
 #                                      for bench_scale (made with LAMMPS, as bench/run.sh makes
 #                                      it; skipped if DIR has one)
-#   bash bench/portable.sh check DIR [OUT] [--no-run]   there: the C tests (each at every SIMD
+#   bash bench/portable.sh check DIR [OUT] [--no-run] [--no-scale]   there: the C tests (each at every SIMD
 #                                      level that CPU has: AVX-512 is not on the development VM),
 #                                      the paper's run on 2 pinned threads, the state hash of a
 #                                      short paper run on 1, 2, 4 and 16 threads (all must
 #                                      agree), and bench_scale on 1, 2 and 16 threads; logs and
 #                                      summaries into OUT (default DIR/out); --no-run: the tests
-#                                      only
+#                                      only; --no-scale: no bench_scale
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-}
@@ -56,9 +56,11 @@ fi
 [ "$mode" = check ] || { echo "portable.sh: unknown mode '$mode' (build or check)" >&2; exit 2; }
 out=$dir/out
 norun=0
+noscale=0
 for a in "${@:3}"; do
     case $a in
     --no-run) norun=1 ;;
+    --no-scale) noscale=1 ;;
     *) out=$a ;;
     esac
 done
@@ -104,6 +106,7 @@ for T in 1 2 4 16; do
     ref=${ref:-$h}
     [ "$h" = "$ref" ] || { echo "portable.sh: $T threads gave $h, 1 thread $ref" >&2; exit 1; }
 done
+[ $noscale = 1 ] && exit 0
 for T in 1 2 16; do
     OMP_PROC_BIND=true OMP_PLACES=cores "$dir/bench_scale" "$dir/settled.data" 2000 --big --threads "$T" |
         tee "$out/scale$T.txt"
