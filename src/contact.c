@@ -801,18 +801,22 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
 {
     sd_hist *hist = w->bb.hist;
     const double *pos = &w->b.pos[0].x, *rad = w->b.radius;
+    /* the view's arrays in locals: the packing's 16-byte stores may alias anything, and gcc
+     * loaded each address from *v again after them */
+    const int32_t *const va = v->a, *const vb = v->b, *const voff = v->off, *const vck = v->ck;
+    const double *const vsqm = v->sqm;
     int m = *mp;
     const __m128i kind = _mm_set1_epi32((int)0xFFFF0000u), lane = _mm_setr_epi32(0, 1, 2, 3);
     for (; i + 4 <= n; i += 4) {
         /* the lanes of sphere pairs (kind 0 in ck's high half); a log's pair takes the scalar
          * loop's path after the group (in pair order among the log pairs) */
         const int ss = _mm_movemask_ps(_mm_castsi128_ps(
-            _mm_cmpeq_epi32(_mm_and_si128(_mm_loadu_si128((const __m128i *)(v->ck + i)), kind), _mm_setzero_si128())));
-        const int a0 = v->a[i], a1 = v->a[i + 1], a2 = v->a[i + 2], a3 = v->a[i + 3];
-        const int b0 = v->b[i], b1 = v->b[i + 1], b2 = v->b[i + 2], b3 = v->b[i + 3];
-        const int o0 = v->off[i], o1 = v->off[i + 1], o2 = v->off[i + 2], o3 = v->off[i + 3];
+            _mm_cmpeq_epi32(_mm_and_si128(_mm_loadu_si128((const __m128i *)(vck + i)), kind), _mm_setzero_si128())));
+        const int a0 = va[i], a1 = va[i + 1], a2 = va[i + 2], a3 = va[i + 3];
+        const int b0 = vb[i], b1 = vb[i + 1], b2 = vb[i + 2], b3 = vb[i + 3];
+        const int o0 = voff[i], o1 = voff[i + 1], o2 = voff[i + 2], o3 = voff[i + 3];
         __m256d dx, dy, dz;
-        diff_lanes(pos, v->a + i, v->b + i, &dx, &dy, &dz);
+        diff_lanes(pos, va + i, vb + i, &dx, &dy, &dz);
         const __m256d ra = _mm256_setr_pd(rad[a0], rad[a1], rad[a2], rad[a3]);
         const __m256d rb = _mm256_setr_pd(rad[b0], rad[b1], rad[b2], rad[b3]);
         const __m256d rs = _mm256_add_pd(ra, rb);
@@ -826,7 +830,7 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
          * step, so the branch is seldom taken) */
         int gone = ~t & ~_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(was, _mm_set1_epi32(-1)))) & ss;
         for (; gone; gone &= gone - 1)
-            hist[v->off[i + __builtin_ctz((unsigned)gone)]].feature = -1;
+            hist[voff[i + __builtin_ctz((unsigned)gone)]].feature = -1;
         const __m256i pp = _mm256_loadu_si256((const __m256i *)perm_pd[t]);
         const __m128i ps = _mm_loadu_si128((const __m128i *)shuf_i32[t]);
 #define PACK_PD(dst, x) _mm256_storeu_pd((dst) + m, _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(x), pp)))
@@ -836,10 +840,10 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
         PACK_PD(q->dz, dz);
         PACK_PD(q->ra, ra);
         PACK_PD(q->rb, rb);
-        PACK_PD(q->sqm, _mm256_loadu_pd(v->sqm + i));
-        PACK_I32(q->ia, _mm_loadu_si128((const __m128i *)(v->a + i)));
-        PACK_I32(q->ib, _mm_loadu_si128((const __m128i *)(v->b + i)));
-        PACK_I32(q->off, _mm_loadu_si128((const __m128i *)(v->off + i)));
+        PACK_PD(q->sqm, _mm256_loadu_pd(vsqm + i));
+        PACK_I32(q->ia, _mm_loadu_si128((const __m128i *)(va + i)));
+        PACK_I32(q->ib, _mm_loadu_si128((const __m128i *)(vb + i)));
+        PACK_I32(q->off, _mm_loadu_si128((const __m128i *)(voff + i)));
         PACK_I32(q->was, was);
         PACK_I32(q->sel, _mm_add_epi32(_mm_set1_epi32(i), lane));
 #undef PACK_PD
@@ -853,7 +857,7 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
             /* the kind from the view (ck's high half): the pair's record, a line of the store
              * the filter reads nowhere else, is read only for a log–log or log–wall pair (its
              * load was a ninth of the filter's samples in the packing) */
-            if (defer && (int)((uint32_t)v->ck[j] >> 16) == SD_PAIR_SC)
+            if (defer && (int)((uint32_t)vck[j] >> 16) == SD_PAIR_SC)
                 gen[(*ngp)++] = j;
             else
                 filter_log_pair(w, &w->bb.p[ks[j]], j, used, gen, ngp);
