@@ -937,16 +937,21 @@ __attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const s
     sd_transpose4(_mm256_loadu_pd(q->fx + j), _mm256_loadu_pd(q->fy + j), _mm256_loadu_pd(q->fz + j), zero, fr);
     sd_transpose4(_mm256_mul_pd(nfx, mla), _mm256_mul_pd(nfy, mla), _mm256_mul_pd(nfz, mla), zero, ta);
     sd_transpose4(_mm256_mul_pd(nfx, mlb), _mm256_mul_pd(nfy, mlb), _mm256_mul_pd(nfz, mlb), zero, tb);
+    /* the bodies' arrays in locals: each row's 32-byte store may alias anything, and gcc
+     * loaded the four addresses from *acc again after every one (sd_body_is_bed's test, as it
+     * makes it) */
+    sd_vec3 *const force = acc->force, *const torque = acc->torque;
+    const uint8_t *const fixed = acc->fixed, *const shape = acc->shape;
     for (int k = 0; k < 4; k++) {
         const int ia = q->ia[j + k], ib = q->ib[j + k];
         _mm256_storeu_pd((double *)&hist[q->off[j + k]], hr[k]);
-        if (!sd_body_is_bed(acc, ia)) {
-            row_add(&acc->force[ia], fr[k], 0);
-            row_add(&acc->torque[ia], ta[k], 0);
+        if (!(fixed[ia] && shape[ia] == SD_SHAPE_SPHERE)) {
+            row_add(&force[ia], fr[k], 0);
+            row_add(&torque[ia], ta[k], 0);
         }
-        if (!sd_body_is_bed(acc, ib)) {
-            row_add(&acc->force[ib], fr[k], 1);
-            row_add(&acc->torque[ib], tb[k], 0);
+        if (!(fixed[ib] && shape[ib] == SD_SHAPE_SPHERE)) {
+            row_add(&force[ib], fr[k], 1);
+            row_add(&torque[ib], tb[k], 0);
         }
     }
     return 1;

@@ -233,6 +233,7 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
     sd_bodies *b = &w->b;
     const double *pos = &b->pos[0].x, *vel = &b->vel[0].x, *rad = b->radius;
     const uint8_t *shape = b->shape;
+    sd_vec3 *const ext = b->ext_force; /* (in a local: the 16-byte stores may alias b) */
     const double h = p->h, hd = fc->h_d >= h ? fc->h_d : h;
     double al, be;
     sd_fluid_capture_coeffs(h, hd, &al, &be);
@@ -315,8 +316,8 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
             const int idx[4] = {i0, i1, i2, i3};
             for (int l = 0; l < 4; l++)
                 if (sph >> l & 1) { /* x and y in one 16-byte store, z alone (no masked store: slow on AMD) */
-                    _mm_storeu_pd(&b->ext_force[idx[l]].x, _mm256_castpd256_pd128(row[l]));
-                    b->ext_force[idx[l]].z = _mm_cvtsd_f64(_mm256_extractf128_pd(row[l], 1));
+                    _mm_storeu_pd(&ext[idx[l]].x, _mm256_castpd256_pd128(row[l]));
+                    ext[idx[l]].z = _mm_cvtsd_f64(_mm256_extractf128_pd(row[l], 1));
                 }
         }
     }
