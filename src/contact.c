@@ -520,13 +520,20 @@ static int pair_soa_reserve(sd_pair_soa *s, int n)
     return 0;
 }
 
+/* A record's cap and kind as the view holds them (ck): cap in the low half, kind in the high. */
+static inline int32_t ck_pack(int kind, int cap)
+{
+    return (int32_t)((uint32_t)(uint16_t)cap | (uint32_t)(uint16_t)kind << 16);
+}
+static inline int ck_kind(int32_t ck) { return (int)((uint32_t)ck >> 16); }
+
 /* Entry j of s from the record p. */
 static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p)
 {
     s->a[j] = p->a;
     s->b[j] = p->b;
     s->off[j] = p->off;
-    s->ck[j] = (int32_t)((uint32_t)(uint16_t)p->cap | (uint32_t)(uint16_t)p->kind << 16);
+    s->ck[j] = ck_pack(p->kind, p->cap);
     s->sqm[j] = p->sqrt_m_eff;
 }
 
@@ -551,7 +558,7 @@ static inline void ss_filter_range(const sd_world *w, const int32_t *ks, const s
     for (int i = i0; i < i1; i++) {
         /* the records from the chunk's view, in entry order (kind in ck's high half,
          * SD_PAIR_SS is 0) */
-        if ((uint32_t)v->ck[i] >> 16) {
+        if (ck_kind(v->ck[i])) {
             filter_log_pair(w, &pairs[ks[i]], i, used, gen, ngp);
             continue;
         }
@@ -704,7 +711,7 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
         const int defer = sc_lanes_on && sc_geom_on;
         for (__mmask8 o = other; o; o &= (__mmask8)(o - 1)) {
             const int j = i + __builtin_ctz(o);
-            if (defer && (int)((uint32_t)v->ck[j] >> 16) == SD_PAIR_SC)
+            if (defer && ck_kind(v->ck[j]) == SD_PAIR_SC)
                 gen[ng++] = j;
             else
                 filter_log_pair(w, &pairs[ks[j]], j, used, gen, &ng);
@@ -857,7 +864,7 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
             /* the kind from the view (ck's high half): the pair's record, a line of the store
              * the filter reads nowhere else, is read only for a log–log or log–wall pair (its
              * load was a ninth of the filter's samples in the packing) */
-            if (defer && (int)((uint32_t)vck[j] >> 16) == SD_PAIR_SC)
+            if (defer && ck_kind(vck[j]) == SD_PAIR_SC)
                 gen[(*ngp)++] = j;
             else
                 filter_log_pair(w, &w->bb.p[ks[j]], j, used, gen, ngp);
@@ -945,11 +952,11 @@ __attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const s
     for (int k = 0; k < 4; k++) {
         const int ia = q->ia[j + k], ib = q->ib[j + k];
         _mm256_storeu_pd((double *)&hist[q->off[j + k]], hr[k]);
-        if (!(fixed[ia] && shape[ia] == SD_SHAPE_SPHERE)) {
+        if (!sd_is_bed_at(fixed, shape, ia)) {
             row_add(&force[ia], fr[k], 0);
             row_add(&torque[ia], ta[k], 0);
         }
-        if (!(fixed[ib] && shape[ib] == SD_SHAPE_SPHERE)) {
+        if (!sd_is_bed_at(fixed, shape, ib)) {
             row_add(&force[ib], fr[k], 1);
             row_add(&torque[ib], tb[k], 0);
         }
@@ -1364,7 +1371,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             for (int g = 0; g < ng; g++) {
                 const int i = gen[g];
                 /* kind and cap from the view (ck), the record read only for the others */
-                if (v->ck[i] == (int32_t)(1u | (uint32_t)SD_PAIR_SC << 16))
+                if (v->ck[i] == ck_pack(SD_PAIR_SC, 1))
                     sg[nsg++] = i;
                 else
                     msc += pair_general(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
@@ -2206,7 +2213,7 @@ static sd_status owned_update(sd_world *w, int T)
                 sa[m] = p->a; /* (pair_soa_set) */
                 sb[m] = p->b;
                 so[m] = p->off;
-                sc[m] = (int32_t)((uint32_t)(uint16_t)p->cap | (uint32_t)(uint16_t)p->kind << 16);
+                sc[m] = ck_pack(p->kind, p->cap);
                 sq[m] = p->sqrt_m_eff;
                 list[m] = k;
                 if (cross & keep) { /* few */
