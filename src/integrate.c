@@ -77,14 +77,14 @@ SD_SIMD_CLONES
 static void cyl_batch_angles(cyl_batch *restrict c, int n, double dt)
 {
     for (int j = 0; j < n; j++) {
-        const double Lx = c->mx[j] + dt * c->tx[j], Ly = c->my[j] + dt * c->ty[j], Lz = c->mz[j] + dt * c->tz[j];
-        c->mx[j] = Lx, c->my[j] = Ly, c->mz[j] = Lz;
-        const double spin = (c->iax[j] - c->itr[j]) * (Lx * c->ax[j] + Ly * c->ay[j] + Lz * c->az[j]) * dt;
+        const sd_vec3 L = v3_madd(v3(c->mx[j], c->my[j], c->mz[j]), v3(c->tx[j], c->ty[j], c->tz[j]), dt);
+        c->mx[j] = L.x, c->my[j] = L.y, c->mz[j] = L.z;
+        const double spin = (c->iax[j] - c->itr[j]) * v3_dot(L, v3(c->ax[j], c->ay[j], c->az[j])) * dt;
         c->spin[j] = spin;
-        c->angb[j] = sqrt(0.0 * 0.0 + 0.0 * 0.0 + spin * spin);
-        const double k = c->itr[j] * dt, px = Lx * k, py = Ly * k, pz = Lz * k;
-        c->px[j] = px, c->py[j] = py, c->pz[j] = pz;
-        c->angs[j] = sqrt(px * px + py * py + pz * pz);
+        c->angb[j] = v3_norm(v3(0.0, 0.0, spin));
+        const sd_vec3 phi = v3_scale(L, c->itr[j] * dt);
+        c->px[j] = phi.x, c->py[j] = phi.y, c->pz[j] = phi.z;
+        c->angs[j] = v3_norm(phi);
     }
 }
 
@@ -103,38 +103,28 @@ static inline void rotvec_quat(double x, double y, double z, double ang, double 
     *qz = tiny ? tz / tn : z * s;
 }
 
-/* the rest of cyl_step: the orientation, axis and spin vector, the drift bound and the step */
+/* the rest of cyl_step, with its own vmath calls: the orientation, axis and spin vector, the
+ * drift bound and the step */
 SD_SIMD_CLONES
 static void cyl_batch_turn(cyl_batch *restrict c, int n, double dt)
 {
     for (int j = 0; j < n; j++) {
-        double bw, bx, by, bz, sw, sx, sy, sz;
-        rotvec_quat(0.0, 0.0, c->spin[j], c->angb[j], c->sinb[j], c->cosb[j], &bw, &bx, &by, &bz);
-        rotvec_quat(c->px[j], c->py[j], c->pz[j], c->angs[j], c->sins[j], c->coss[j], &sw, &sx, &sy, &sz);
-        /* quat_mul(q_space, quat_mul(q, q_body)), then quat_normalize */
-        const double aw = c->qw[j], ax = c->qx[j], ay = c->qy[j], az = c->qz[j];
-        const double mw = aw * bw - ax * bx - ay * by - az * bz, mx = aw * bx + ax * bw + ay * bz - az * by,
-                     my = aw * by - ax * bz + ay * bw + az * bx, mz = aw * bz + ax * by - ay * bx + az * bw;
-        const double rw = sw * mw - sx * mx - sy * my - sz * mz, rx = sw * mx + sx * mw + sy * mz - sz * my,
-                     ry = sw * my - sx * mz + sy * mw + sz * mx, rz = sw * mz + sx * my - sy * mx + sz * mw;
-        const double qn = sqrt(rw * rw + rx * rx + ry * ry + rz * rz);
-        const double qw = rw / qn, qx = rx / qn, qy = ry / qn, qz = rz / qn;
-        c->qw[j] = qw, c->qx[j] = qx, c->qy[j] = qy, c->qz[j] = qz;
-        /* quat_rotate(q, (0, 0, 1)) */
-        const double vx = 0.0, vy = 0.0, vz = 1.0;
-        const double ux = (qy * vz - qz * vy) * 2.0, uy = (qz * vx - qx * vz) * 2.0, uz = (qx * vy - qy * vx) * 2.0;
-        const double nx = vx + ux * qw + (qy * uz - qz * uy), ny = vy + uy * qw + (qz * ux - qx * uz),
-                     nz = vz + uz * qw + (qx * uy - qy * ux);
-        c->nx[j] = nx, c->ny[j] = ny, c->nz[j] = nz;
-        const double Lx = c->mx[j], Ly = c->my[j], Lz = c->mz[j], itr = c->itr[j];
-        const double e = (c->iax[j] - itr) * (Lx * nx + Ly * ny + Lz * nz);
-        c->ox[j] = Lx * itr + e * nx, c->oy[j] = Ly * itr + e * ny, c->oz[j] = Lz * itr + e * nz;
-        const double ex = nx - c->rx[j], ey = ny - c->ry[j], ez = nz - c->rz[j];
-        const double d = sqrt(c->dx[j] * c->dx[j] + c->dy[j] * c->dy[j] + c->dz[j] * c->dz[j]) +
-                         c->hl[j] * sqrt(ex * ex + ey * ey + ez * ez);
+        sd_quat qb, qs;
+        rotvec_quat(0.0, 0.0, c->spin[j], c->angb[j], c->sinb[j], c->cosb[j], &qb.w, &qb.x, &qb.y, &qb.z);
+        rotvec_quat(c->px[j], c->py[j], c->pz[j], c->angs[j], c->sins[j], c->coss[j], &qs.w, &qs.x, &qs.y, &qs.z);
+        const sd_quat q0 = {c->qw[j], c->qx[j], c->qy[j], c->qz[j]};
+        const sd_quat q = quat_normalize(quat_mul(qs, quat_mul(q0, qb)));
+        c->qw[j] = q.w, c->qx[j] = q.x, c->qy[j] = q.y, c->qz[j] = q.z;
+        const sd_vec3 a = quat_rotate(q, v3(0.0, 0.0, 1.0));
+        c->nx[j] = a.x, c->ny[j] = a.y, c->nz[j] = a.z;
+        const sd_vec3 L = v3(c->mx[j], c->my[j], c->mz[j]);
+        const double itr = c->itr[j];
+        const sd_vec3 om = v3_madd(v3_scale(L, itr), a, (c->iax[j] - itr) * v3_dot(L, a));
+        c->ox[j] = om.x, c->oy[j] = om.y, c->oz[j] = om.z;
+        const double d = sqrt(v3_norm2(v3(c->dx[j], c->dy[j], c->dz[j]))) +
+                         c->hl[j] * sqrt(v3_norm2(v3_sub(a, v3(c->rx[j], c->ry[j], c->rz[j]))));
         c->d2[j] = d * d;
-        const double tx = nx - c->ax[j], ty = ny - c->ay[j], tz = nz - c->az[j];
-        c->step[j] = sqrt(c->v2[j]) * dt + 1.01 * c->br[j] * sqrt(tx * tx + ty * ty + tz * tz);
+        c->step[j] = sqrt(c->v2[j]) * dt + 1.01 * c->br[j] * sqrt(v3_norm2(v3_sub(a, v3(c->ax[j], c->ay[j], c->az[j]))));
     }
 }
 
