@@ -30,15 +30,21 @@ if [ "$mode" = build ]; then
     for f in "$gomp" "$yaml"; do
         [ -f "$f" ] || { echo "portable.sh: $f is missing (libyaml-dev, gcc)" >&2; exit 1; }
     done
+    # a static link (libgomp.a's offloading code names dlopen: a warning, never called; the
+    # linker's messages are shown only when the link fails)
+    link() {
+        local out=$1
+        shift
+        gcc -O3 -static -fopenmp "$@" -o "$out" build/libsabodem.a "$yaml" -lm 2>"$dir/link.log" ||
+            { cat "$dir/link.log" >&2; echo "portable.sh: linking $out failed" >&2; exit 1; }
+    }
     for t in sabodem bench_scale bench_flume; do
-        objs=$(find "build/CMakeFiles/$t.dir" -name '*.o')
-        # (libgomp.a's offloading code names dlopen: a warning in a static link, never called)
-        gcc -O3 -static -fopenmp $objs -o "$dir/$t" build/libsabodem.a "$yaml" -lm 2>/dev/null
+        link "$dir/$t" $(find "build/CMakeFiles/$t.dir" -name '*.o')
     done
     for d in build/CMakeFiles/test_*.dir; do
-        t=$(basename "$d" .dir)
-        gcc -O3 -static -fopenmp $(find "$d" -name '*.o') -o "$dir/tests/$t" build/libsabodem.a "$yaml" -lm 2>/dev/null
+        link "$dir/tests/$(basename "$d" .dir)" $(find "$d" -name '*.o')
     done
+    rm -f "$dir/link.log"
     if [ ! -f "$dir/settled.data" ]; then
         bash scripts/setup.sh --bench >/dev/null
         work=$(mktemp -d)
