@@ -3,7 +3,7 @@
 # the 16-core Intel Xeon of docs/performance.md §2-00000000000000000):
 #   bash bench/portable.sh build DIR   here: static sabodem, bench_scale, bench_flume and the
 #                                      C test programs (DIR/tests) into DIR, with a settled bed
-#                                      for bench_scale (made with LAMMPS, as bench/run.sh makes
+#                                      for bench_scale (bench/settle.sh, as bench/run.sh makes
 #                                      it; skipped if DIR has one)
 #   bash bench/portable.sh check DIR [OUT] [--no-run] [--no-scale]   there: the C tests (each at every SIMD
 #                                      level that CPU has: AVX-512 is not on the development VM),
@@ -47,13 +47,7 @@ if [ "$mode" = build ]; then
     rm -f "$dir/link.log"
     if [ ! -f "$dir/settled.data" ]; then
         bash scripts/setup.sh --bench >/dev/null
-        work=$(mktemp -d)
-        trap 'rm -rf "$work"' EXIT
-        ref=../shared/reference/lammps
-        python3 "$ref/gen_particles.py" spec "$work/init.data" 12345 >/dev/null
-        (cd "$work" && OMP_NUM_THREADS=1 lmp -in "$OLDPWD/$ref/flume.in" -var data init.data -var ndrop 20000 \
-            -var nsettle 60000 -var ndense 0 -var nflow 0 -log settle.log >/dev/null)
-        cp "$work/settled_lammps.data" "$dir/settled.data"
+        bash bench/settle.sh "$dir/settled.data"
     fi
     echo "portable.sh: static binaries and settled.data in $dir"
     exit 0

@@ -21,11 +21,8 @@ mkdir -p "$out"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 ref=../shared/reference/lammps
-python3 "$ref/gen_particles.py" spec "$work/init.data" 12345 >/dev/null
 # settle once with LAMMPS (drop + settle); both codes then start from this settled bed
-(cd "$work" && OMP_NUM_THREADS=1 lmp -in "$OLDPWD/$ref/flume.in" -var data init.data -var ndrop 20000 \
-    -var nsettle 60000 -var ndense 0 -var nflow 0 -log settle.log >/dev/null)
-cp "$work/settled_lammps.data" "$work/settled.data"
+bash bench/settle.sh "$work/settled.data"
 
 # one thread / one rank: both codes pinned to the same CPU (this VM's two vCPUs differ in speed
 # for minutes at a time, docs/performance.md §2, and a ratio across them measures that too)

@@ -121,6 +121,17 @@ static void add_tris(sd_world *w, double L, int random_tris)
     }
 }
 
+/* A world under gravity in the box of add_tris (side L), its candidates rebuilt only on
+ * displacement (t_reset 1 s): the near lists' tests. */
+static sd_world *drift_box(double L)
+{
+    sd_world *w = new_world();
+    w->def.gravity = v3(0, 0, -9.81);
+    w->def.t_reset = 1.0;
+    add_tris(w, L, 0);
+    return w;
+}
+
 /* dense: jittered lattice with spacing below the mean diameter (many overlaps); loose: random */
 static void test_static(int dense)
 {
@@ -227,11 +238,8 @@ static void near_check(const sd_world *w, long *checked, long *shorter, long *mi
  * the near list is remade on drift, leaves pairs out (logs' too), and never a touching one. */
 static void test_near_slow(void)
 {
-    sd_world *w = new_world();
-    w->def.gravity = v3(0, 0, -9.81);
-    w->def.t_reset = 1.0;
     const double L = 0.08;
-    add_tris(w, L, 0);
+    sd_world *w = drift_box(L);
     for (int i = 0; i < 8; i++)
         for (int j = 0; j < 8; j++)
             for (int k = 0; k < 3; k++) {
@@ -287,11 +295,8 @@ static void test_near_slow(void)
  * turn): no touching pair is ever left out of the near list. */
 static void test_near_logs(void)
 {
-    sd_world *w = new_world();
-    w->def.gravity = v3(0, 0, -9.81);
-    w->def.t_reset = 1.0;
     const double L = 0.08;
-    add_tris(w, L, 0);
+    sd_world *w = drift_box(L);
     /* a crib: ten layers of four logs 1 cm apart, crossing the layer below, then set spinning */
     for (int k = 0; k < 40; k++) {
         sd_cylinder_def c = sd_cylinder_def_default();
@@ -329,11 +334,8 @@ static void test_near_logs(void)
  * pending rebuild, every contact must be a candidate (and every touching pair near). */
 static void test_dynamic(void)
 {
-    sd_world *w = new_world();
-    w->def.gravity = v3(0, 0, -9.81);
-    w->def.t_reset = 1.0; /* rebuilds only on displacement */
     const double L = 0.08;
-    add_tris(w, L, 0);
+    sd_world *w = drift_box(L);
     for (int k = 0; k < 150; k++) {
         sd_sphere_def s = sd_sphere_def_default();
         s.radius = 0.0025 + 0.0025 * urand();
@@ -786,10 +788,7 @@ static void test_rebuild_threads(void)
  * bed does not move), and still no touching pair is ever left out of the near list. */
 static void test_near_bed(void)
 {
-    sd_world *w = new_world();
-    w->def.gravity = v3(0, 0, -9.81);
-    w->def.t_reset = 1.0;
-    add_tris(w, 0.08, 0);
+    sd_world *w = drift_box(0.08);
     for (int i = 0; i < 16; i++) /* the bed roughness */
         for (int j = 0; j < 16; j++) {
             sd_sphere_def s = sd_sphere_def_default();
