@@ -668,6 +668,33 @@ typedef struct {
     char pad[64 - sizeof(cand *) - 2 * sizeof(int)];
 } cand_buf;
 
+/* The scan's m chunk buffers, emptied, their arrays as large as they grew before (w->scan_bufs,
+ * one to a cache line); NULL when out of memory. */
+static cand_buf *scan_bufs(sd_world *w, int m)
+{
+    if (w->scan_bufs_n < m) {
+        sd_scan_bufs_free(w);
+        w->scan_bufs = aligned_alloc(64, (size_t)m * sizeof(cand_buf));
+        if (!w->scan_bufs) return NULL;
+        memset(w->scan_bufs, 0, (size_t)m * sizeof(cand_buf));
+        w->scan_bufs_n = m;
+    }
+    cand_buf *buf = w->scan_bufs;
+    for (int c = 0; c < m; c++)
+        buf[c].n = 0;
+    return buf;
+}
+
+void sd_scan_bufs_free(sd_world *w)
+{
+    cand_buf *buf = w->scan_bufs;
+    for (int c = 0; c < w->scan_bufs_n; c++)
+        free(buf[c].c);
+    free(buf);
+    w->scan_bufs = NULL;
+    w->scan_bufs_n = 0;
+}
+
 /* The moving bodies of each cell of the body grid, ascending like the grid's own lists: all
  * that the scan of a fixed body needs (fixed-fixed pairs are never candidates). The bed
  * roughness is half the paper's elements and fills its cells: its scans get short. */
@@ -794,6 +821,29 @@ __attribute__((target("avx512f,avx512vl"))) static int scan_cell512(const sd_wor
 }
 #endif
 
+#define SD_SCAN_JS 512 /* bb_scan's entries gathered before the reach test (at least 64 more than it flushes at) */
+
+/* The entries js[0 .. nj) gathered by body i's scan: those within reach, and not two fixed
+ * bodies, taken in order (js is overwritten). Returns nonzero when out of memory. */
+static int scan_take(const sd_world *w, int i, double hm, int32_t *js, int nj, cand_buf *out)
+{
+    const sd_bodies *b = &w->b;
+    const double bri = b->bound_r[i], margin = w->def.margin;
+    const sd_vec3 pi = b->pos[i];
+    const int fixed_i = b->fixed[i];
+    int nt = 0;
+    for (int q = 0; q < nj; q++) {
+        const int j = js[q];
+        const double reach = bri + b->bound_r[j] + margin;
+        const int in = !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
+        js[nt] = j;
+        nt += in & !(fixed_i & b->fixed[j]);
+    }
+    for (int q = 0; q < nt; q++)
+        if (take_pair(w, i, js[q], hm, out)) return 1;
+    return 0;
+}
+
 /* The body–body candidates (j > i) of body i, in the order of the serial scan. Returns
  * nonzero when out of memory. */
 static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, cand_buf *out)
@@ -802,14 +852,16 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
     const sd_grid *g = &w->grid;
     const int32_t *ri = w->range[i];
     const int fixed_i = b->fixed[i], use_mi = fixed_i && mi->start;
-    const double bri = b->bound_r[i], margin = w->def.margin;
-    const sd_vec3 pi = b->pos[i];
 #ifdef SD_SCAN512
     /* a moving body's entries 8 at a time where the CPU has AVX-512 (an AVX2 form, 4 at a
      * time, was measured and dropped: docs/performance.md §2-0000000) */
     const int vec = !fixed_i && sd_simd512_on();
+    const double bri = b->bound_r[i];
+    const sd_vec3 pi = b->pos[i];
 #endif
     int e = w->reg0[i]; /* i's entries, in the order of the loops below (grid_fill) */
+    int32_t js[SD_SCAN_JS];
+    int nj = 0;
     for (int z = ri[2]; z <= ri[5]; z++)
         for (int y = ri[1]; y <= ri[4]; y++)
             for (int x = ri[0]; x <= ri[3]; x++) {
@@ -833,12 +885,12 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
                 }
 #ifdef SD_SCAN512
                 if (vec) {
-                    int32_t js[SD_SCAN_BUF + 8];
+                    int32_t j8[SD_SCAN_BUF + 8];
                     for (int k0 = k; k0 < kend; k0 += SD_SCAN_BUF) {
                         const int k1 = kend - k0 < SD_SCAN_BUF ? kend : k0 + SD_SCAN_BUF;
-                        const int nj = scan_cell512(w, items, k0, k1, pi, bri, ri, x, y, z, js);
-                        for (int q = 0; q < nj; q++)
-                            if (take_pair(w, i, js[q], hm, out)) return 1;
+                        const int n8 = scan_cell512(w, items, k0, k1, pi, bri, ri, x, y, z, j8);
+                        for (int q = 0; q < n8; q++)
+                            if (take_pair(w, i, j8[q], hm, out)) return 1;
                     }
                     continue;
                 }
@@ -846,32 +898,26 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
                 /* the entries whose pair is taken in this cell first, from the flags alone
                  * (a byte each, in entry order): along each axis where this cell is past the
                  * start of i's range, j's must start here (this is then the lowest cell the
-                 * two ranges share). About half the entries are left; then within reach and
+                 * two ranges share). About half the entries are left, gathered over all of
+                 * i's cells before the next two tests run on them (one loop each per body
+                 * instead of per cell: their exits were mispredicted); then within reach and
                  * not two fixed bodies; then the takers, in entry order: the same candidates
                  * in the same order */
                 const unsigned need = (unsigned)((x > ri[0]) | (y > ri[1]) << 1 | (z > ri[2]) << 2);
                 const uint8_t *fl = use_mi ? mi->flags : w->gflag;
-                int32_t js[64];
                 while (k < kend) {
+                    if (nj > SD_SCAN_JS - 64) {
+                        if (scan_take(w, i, hm, js, nj, out)) return 1;
+                        nj = 0;
+                    }
                     const int k1 = kend - k < 64 ? kend : k + 64;
-                    int nj = 0;
                     for (; k < k1; k++) {
                         js[nj] = items[k];
                         nj += (fl[k] & need) == need;
                     }
-                    int nt = 0;
-                    for (int q = 0; q < nj; q++) {
-                        const int j = js[q];
-                        const double reach = bri + b->bound_r[j] + margin;
-                        const int in = !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
-                        js[nt] = j;
-                        nt += in & !(fixed_i & b->fixed[j]);
-                    }
-                    for (int q = 0; q < nt; q++)
-                        if (take_pair(w, i, js[q], hm, out)) return 1;
                 }
             }
-    return 0;
+    return nj && scan_take(w, i, hm, js, nj, out);
 }
 
 /* The body–triangle candidates of body i, in triangle-grid order. Returns nonzero when out
@@ -1188,12 +1234,11 @@ sd_status sd_neighbor_rebuild(sd_world *w)
             nscan--;
         for (int i = 0; i < nscan; i++)
             nfixed += b->fixed[i];
-        cand_buf *buf = calloc(2 * (size_t)K, sizeof(cand_buf)); /* K body-body, K body-triangle */
+        cand_buf *buf = scan_bufs(w, 2 * K); /* K body-body, K body-triangle */
         /* the moving bodies of each cell, for the fixed bodies' scans: worth making when there
          * are many (the bed, sorted last, has none to scan; the dam's pipes are a few) */
         moving_index mi = {NULL, NULL, NULL};
         if (!buf || (nfixed > moving_index_min && moving_index_make(w, &mi))) {
-            free(buf);
             free(mi.start);
             free(mi.items);
             free(mi.flags);
@@ -1226,9 +1271,6 @@ sd_status sd_neighbor_rebuild(sd_world *w)
             }
         while (i <= b->n)
             w->csr.bt_start[i++] = w->bt.n;
-        for (int c = 0; c < 2 * K; c++)
-            free(buf[c].c);
-        free(buf);
         if (nomem) return SD_ERR_NOMEM;
         if (st) return st;
     }

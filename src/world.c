@@ -98,6 +98,7 @@ void sd_world_destroy(sd_world *w)
     free(w->range);
     free(w->box);
     sd_bed_cache_free(&w->bed);
+    sd_scan_bufs_free(w);
     free(w->reg0);
     free(w->slot);
     free(w->gflag);

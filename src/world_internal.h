@@ -230,6 +230,11 @@ struct sd_world {
      * the two ranges (the lowest cell they share) */
     uint8_t *gflag;
     int gflag_cap;
+    /* the candidate scan's chunk buffers, kept from one rebuild to the next with what they
+     * grew to (neighbor.c; scratch, not saved): made afresh each time, their ~300 reallocs a
+     * rebuild and cold lines cost a third of the scan on two threads */
+    void *scan_bufs;
+    int scan_bufs_n;
     int32_t (*trange)[6]; /* per-triangle cell range in the triangle grid */
     int trange_cap;
     uint8_t *tflag; /* the triangle grid's entries' flags, as gflag for the body grid */
@@ -311,6 +316,7 @@ int sd_neighbor_needs_rebuild(const sd_world *w);
 sd_status sd_neighbor_collect_history(sd_world *w);
 void sd_grid_free(sd_grid *g);
 void sd_bed_cache_free(sd_bed_cache *c);
+void sd_scan_bufs_free(sd_world *w);
 /* Whether rebuilds take the bed from its cache (default on; off: every rebuild places it
  * afresh, the same bits, for the tests); returns the previous setting. */
 int sd_bed_cache_set(int on);
