@@ -832,13 +832,21 @@ static int scan_take(const sd_world *w, int i, double hm, int32_t *js, int nj, c
     const sd_vec3 pi = b->pos[i];
     const int fixed_i = b->fixed[i];
     int nt = 0;
-    for (int q = 0; q < nj; q++) {
-        const int j = js[q];
-        const double reach = bri + b->bound_r[j] + margin;
-        const int in = !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
-        js[nt] = j;
-        nt += in & !(fixed_i & b->fixed[j]);
-    }
+    if (!fixed_i) /* (a moving body's partners are not looked up for being fixed: a line each) */
+        for (int q = 0; q < nj; q++) {
+            const int j = js[q];
+            const double reach = bri + b->bound_r[j] + margin;
+            js[nt] = j;
+            nt += !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
+        }
+    else
+        for (int q = 0; q < nj; q++) {
+            const int j = js[q];
+            const double reach = bri + b->bound_r[j] + margin;
+            const int in = !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
+            js[nt] = j;
+            nt += in & !b->fixed[j];
+        }
     for (int q = 0; q < nt; q++)
         if (take_pair(w, i, js[q], hm, out)) return 1;
     return 0;
