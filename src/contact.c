@@ -1765,6 +1765,12 @@ static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, 
 #endif
     for (; k < k1; k++)
         keep[k - k0] = (uint8_t)near_test(w, skin, &pairs[k], nf);
+    /* every candidate of a body marked fast (near_fast_make) */
+    if (w->nfast_k > 0) {
+        const uint8_t *restrict fast = w->nfast;
+        for (int j = k0; j < k1; j++)
+            keep[j - k0] |= fast[pairs[j].a] | fast[pairs[j].b];
+    }
     uint8_t *restrict mark = w->near_mark;
     sd_hist *restrict hist = w->bb.hist;
     for (int j = k0; j < k1; j++) {
@@ -1777,6 +1783,61 @@ static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, 
         mark[j] = (uint8_t)kp;
     }
     return keep;
+}
+
+/* The fastest moving bodies, marked for the near pairs about to be made (w->nfast): every
+ * candidate of a marked body is near, its gaps not tested, and its moves do not count in the
+ * near pairs' drift (sd_world_after_moves), which the others' then set. In the paper's capture
+ * a few bodies washing out past the dam at ~1 m/s, among thousands at rest, set that drift and
+ * remade the near pairs every ~15 steps. Marked: the bodies in the top octaves of the squared
+ * surface speed (|v|, plus a log's tilt at its bounding radius, |omega x a| r_b) that together
+ * hold at most one moving body in SD_NEAR_FAST_SHARE; their few extra pairs are tested at each
+ * step. Which bodies are marked does not change the bits. Returns how many. */
+#define SD_NEAR_FAST_SHARE 32
+static int near_fast_on = 1;
+
+int sd_near_fast_set(int on)
+{
+    const int was = near_fast_on;
+    near_fast_on = on != 0;
+    return was;
+}
+
+static int near_fast_make(sd_world *w)
+{
+    const sd_bodies *b = &w->b;
+    if (sd_grow((void **)&w->nfast, &w->nfast_cap, b->n + 1, 1)) return -1;
+    memset(w->nfast, 0, (size_t)b->n + 1);
+    w->nfast_n = b->n;
+    w->nfast_k = 0;
+    const int nm = w->mov_n, k = nm / SD_NEAR_FAST_SHARE;
+    if (!near_fast_on || k < 1 || w->mov_bn != b->n) return 0;
+    /* the squared surface speeds by octave (their exponent), then the lowest octave at which
+     * the marked ones stay within k */
+    enum { NB = 64, E0 = 1023 - 40 }; /* octaves of 2^-40 .. 2^23 (m/s)^2 */
+    int cnt[NB] = {0};
+    uint8_t *bin = w->nfast; /* (each body's octave, for now) */
+    for (int q = 0; q < nm; q++) {
+        const int i = w->mov[q];
+        double s = sqrt(v3_norm2(b->vel[i]));
+        if (b->shape[i] != SD_SHAPE_SPHERE) s += 1.01 * b->bound_r[i] * sqrt(v3_norm2(v3_cross(b->omega[i], b->axis[i])));
+        uint64_t bits;
+        const double s2 = s * s;
+        memcpy(&bits, &s2, sizeof bits);
+        const int e = (int)(bits >> 52 & 0x7ff) - E0;
+        bin[i] = (uint8_t)(e < 0 ? 0 : (e >= NB ? NB - 1 : e));
+        cnt[bin[i]]++;
+    }
+    int top = NB, m = 0;
+    while (top > 1 && m + cnt[top - 1] <= k)
+        m += cnt[--top];
+    /* bins top .. NB-1 are marked (m bodies): none when the fastest octave alone is too many */
+    for (int q = 0; q < nm; q++) {
+        const int i = w->mov[q];
+        w->nfast[i] = (uint8_t)(bin[i] >= top);
+    }
+    w->nfast_k = m;
+    return m;
 }
 
 /* near_mark sized for the candidates (its second half: the answers' scratch, keep[] of
@@ -1832,7 +1893,7 @@ static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *li
         /* half the skin: a wall does not move, only the body closes the gap, by less than half
          * the skin before the near pairs are remade */
         const double hs = 0.5 * skin, reach = b->radius[i] + hs;
-        int near = !wall_near_on;
+        int near = !wall_near_on || (w->nfast_k > 0 && w->nfast[i]);
         for (int k = from; k < to; k++) {
             const sd_tri *t = &wl->tri[p[k].b];
             /* a log reaches hl |a.n| + r sqrt(1 - (a.n)^2) along the plane's normal, its
@@ -1892,6 +1953,7 @@ static sd_status near_update(sd_world *w)
     if (near_still_good(w) && w->near_nbb == nbb && w->near && w->near_soa_version == w->near_version + 1) return SD_OK;
     const double skin = SD_NEAR_SKIN * w->def.margin;
     if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    if (near_fast_make(w) < 0) return SD_ERR_NOMEM;
     const int fresh = near_mark_ready(w);
     if (fresh < 0 || pair_soa_reserve(&w->near_soa, nbb + 1) ||
         sd_grow((void **)&w->wall_list, &w->wall_list_cap, w->b.n + 1, sizeof(int32_t)))
@@ -2176,6 +2238,7 @@ static sd_status owned_update(sd_world *w, int T)
         pair_soa_reserve(&o->xsoa, nbb + 1) || sd_grow((void **)&w->wall_list, &w->wall_list_cap, n + 1, sizeof(int32_t)))
         return SD_ERR_NOMEM;
     const double skin = SD_NEAR_SKIN * w->def.margin;
+    if (near_fast_make(w) < 0) return SD_ERR_NOMEM;
     const int fresh = near_mark_ready(w);
     if (fresh < 0) return SD_ERR_NOMEM;
 #pragma omp parallel num_threads(T)
@@ -2245,8 +2308,7 @@ static sd_status owned_update(sd_world *w, int T)
 /* After pass 1 and its barrier, owner t reads and writes the bodies of its range only (its
  * own pairs, the stored cross pairs, its bodies' wall pairs): so it can also move its bodies
  * at once, while they are in its cache, with no barrier. */
-static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scratch, int *moved_out, double *v2max,
-                          double *dcyl, double *xfront)
+static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scratch, int *moved_out, sd_moves *mv)
 {
     sd_bodies *b = &w->b;
     sd_owned *o = w->owned;
@@ -2256,9 +2318,9 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
         nch += owned_xchunks(o, t);
     long count = 0;
     int moved = 0;
-    double v2 = 0.0, dc = 0.0, xf = -INFINITY;
+    double v2 = 0.0, v2s = 0.0, dc = 0.0, dcs = 0.0, xf = -INFINITY;
     const int pf = sd_front_prefetch_on(w);
-#pragma omp parallel num_threads(T) reduction(+ : count) reduction(| : moved) reduction(max : v2, dc, xf)
+#pragma omp parallel num_threads(T) reduction(+ : count) reduction(| : moved) reduction(max : v2, v2s, dc, dcs, xf)
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
         bb_scratch *x = &scratch[tid];
@@ -2358,16 +2420,17 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
             }
             /* its bodies' wall pairs, then its moving bodies */
             count += bt_range(w, law, w->wall_list + i0, o->wn[t], &x->wq);
-            if (moved_out)
+            if (moved_out) {
+                sd_moves mt = {v2, v2s, dc, dcs, xf};
                 moved |= sd_integrate_list(w, w->mov, sd_mov_lower(w->mov, w->mov_n, i0),
-                                           sd_mov_lower(w->mov, w->mov_n, i1), &v2, &dc, &xf);
+                                           sd_mov_lower(w->mov, w->mov_n, i1), &mt);
+                v2 = mt.v2, v2s = mt.v2s, dc = mt.dc, dcs = mt.dcs, xf = mt.xf;
+            }
         }
         if (nthr == T) o->tau[tid] += omp_get_wtime() - t0;
     }
     if (moved_out) *moved_out = moved;
-    *v2max = v2;
-    *dcyl = dc;
-    *xfront = xf;
+    *mv = (sd_moves){v2, v2s, dc, dcs, xf};
     return count;
 }
 #endif
@@ -2428,14 +2491,14 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         sd_status st = owned_update(w, T);
         if (st) return st;
         int moved = 0;
-        double v2 = 0.0, dc = 0.0, xf = -INFINITY;
-        count = bb_owned_pass(w, &law, T, w->bb_scratch, integrated ? &moved : NULL, &v2, &dc, &xf);
+        sd_moves mv = SD_MOVES_NONE;
+        count = bb_owned_pass(w, &law, T, w->bb_scratch, integrated ? &moved : NULL, &mv);
         for (int t = 0; t < T; t++)
             w->wall_skipped += w->owned->wskip[t];
         if (moved) w->need_rebuild = 1;
         if (integrated) {
             *integrated = 1;
-            sd_world_after_moves(w, v2, dc, xf);
+            sd_world_after_moves(w, &mv);
         }
     } else
 #endif

@@ -23,7 +23,8 @@ int sd_cyl_batch_set(int on)
 
 /* A log's rotation and its rebuild bounds (out of line, so that the sphere loop keeps its
  * running maxima in registers): returns the x of its downstream end. */
-static __attribute__((noinline)) double cyl_step(sd_bodies *b, int i, double dt, double lim2, int *moved, double *dc)
+static __attribute__((noinline)) double cyl_step(sd_bodies *b, int i, double dt, double lim2, int *moved, double *dc,
+                                                  double *dcs, int fast)
 {
     sd_vec3 L = v3_madd(b->angmom[i], b->torque[i], dt);
     b->angmom[i] = L;
@@ -45,6 +46,7 @@ static __attribute__((noinline)) double cyl_step(sd_bodies *b, int i, double dt,
      * moves no surface */
     const double step = sqrt(v3_norm2(b->vel[i])) * dt + 1.01 * b->bound_r[i] * sqrt(v3_norm2(v3_sub(a, a_old)));
     *dc = step > *dc ? step : *dc;
+    if (!fast) *dcs = step > *dcs ? step : *dcs;
     return b->pos[i].x + sd_body_x_extent(b, i);
 }
 
@@ -129,8 +131,9 @@ static void cyl_batch_turn(cyl_batch *restrict c, int n, double dt)
 }
 
 /* cyl_step for the logs lg[0 .. n) (body indices; their centres already moved), in batches;
- * returns the largest x of their downstream ends. */
-static double cyl_steps(sd_bodies *b, const int32_t *lg, int n, double dt, double lim2, int *moved, double *dc)
+ * returns the largest x of their downstream ends. nf: the near list's fast marks (or NULL). */
+static double cyl_steps(sd_bodies *b, const int32_t *lg, int n, double dt, double lim2, int *moved, double *dc,
+                        double *dcs, const uint8_t *nf)
 {
     cyl_batch c;
     double xf = -INFINITY;
@@ -162,6 +165,7 @@ static double cyl_steps(sd_bodies *b, const int32_t *lg, int n, double dt, doubl
             b->omega[i] = v3(c.ox[j], c.oy[j], c.oz[j]);
             *moved |= c.d2[j] > lim2;
             *dc = c.step[j] > *dc ? c.step[j] : *dc;
+            if (!(nf && nf[i])) *dcs = c.step[j] > *dcs ? c.step[j] : *dcs;
             const double x = b->pos[i].x + sd_body_x_extent(b, i);
             xf = x > xf ? x : xf;
         }
@@ -180,10 +184,10 @@ static inline int move_block(const int32_t *restrict mov, int kb, int ke, double
                              const double *restrict inv_mass, sd_vec3 *restrict vel, sd_vec3 *restrict pos,
                              sd_vec3 *restrict omega, const sd_vec3 *restrict torque,
                              const double *restrict inv_i_ax, const double *restrict radius,
-                             const uint8_t *restrict shape, double *vmax, double *xfront, int32_t *restrict lg,
-                             int nlg)
+                             const uint8_t *restrict shape, const uint8_t *restrict nf, double *vmax,
+                             double *vslow, double *xfront, int32_t *restrict lg, int nlg)
 {
-    double vm = *vmax, xf = *xfront;
+    double vm = *vmax, vs = *vslow, xf = *xfront;
     for (int k = kb; k < ke; k++) {
         const int i = mov[k];
         const sd_vec3 f = v3_add(force[i], ext[i]);
@@ -203,6 +207,9 @@ static inline int move_block(const int32_t *restrict mov, int kb, int ke, double
              * margin) */
             const double v2 = v3_norm2(vn);
             vm = v2 > vm ? v2 : vm;
+            /* the near list's drift: the spheres not marked fast (nfast), whose pairs are all near */
+            const double v2s = nf && nf[i] ? 0.0 : v2;
+            vs = v2s > vs ? v2s : vs;
             const double x = pn.x + radius[i];
             xf = x > xf ? x : xf;
         } else {
@@ -210,18 +217,21 @@ static inline int move_block(const int32_t *restrict mov, int kb, int ke, double
         }
     }
     *vmax = vm;
+    *vslow = vs;
     *xfront = xf;
     return nlg;
 }
 
-int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *dcyl, double *xfront)
+int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves *mm)
 {
     sd_bodies *b = &w->b;
     const double dt = w->def.dt;
     const sd_vec3 g = w->def.gravity;
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
-    double vm = *v2max, dc = *dcyl, xf = *xfront;
+    double vm = mm->v2, vs = mm->v2s, dc = mm->dc, dcs = mm->dcs, xf = mm->xf;
+    /* the near list's fast marks, when made for this store */
+    const uint8_t *nf = w->nfast_n == b->n ? w->nfast : NULL;
     /* the logs, turned in batches once a batch has gathered (each body's move is its own) */
     int32_t lg[CYL_BATCH + SD_EXT_BLOCK];
     int nlg = 0;
@@ -230,26 +240,24 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v
         /* the external forces of a block just before it moves: its bodies are still in L1 */
         if (w->ext_fn) w->ext_fn(w->ext_ctx, w, mov, kb, ke);
         nlg = move_block(mov, kb, ke, dt, g, b->force, b->ext_force, b->inv_mass, b->vel, b->pos, b->omega,
-                         b->torque, b->inv_i_ax, b->radius, b->shape, &vm, &xf, lg, nlg);
+                         b->torque, b->inv_i_ax, b->radius, b->shape, nf, &vm, &vs, &xf, lg, nlg);
         if (!cyl_batch_on) {
             for (int q = 0; q < nlg; q++) {
-                const double x = cyl_step(b, lg[q], dt, lim2, &moved, &dc);
+                const double x = cyl_step(b, lg[q], dt, lim2, &moved, &dc, &dcs, nf && nf[lg[q]]);
                 xf = x > xf ? x : xf;
             }
             nlg = 0;
         } else if (nlg >= CYL_BATCH) {
-            const double x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc);
+            const double x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc, &dcs, nf);
             xf = x > xf ? x : xf;
             nlg = 0;
         }
     }
     if (nlg > 0) {
-        const double x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc);
+        const double x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc, &dcs, nf);
         xf = x > xf ? x : xf;
     }
-    *v2max = vm;
-    *dcyl = dc;
-    *xfront = xf;
+    *mm = (sd_moves){vm, vs, dc, dcs, xf};
     return moved;
 }
 
@@ -259,17 +267,21 @@ void sd_integrate(sd_world *w)
 {
     const int nm = w->mov_n;
     int moved = 0;
-    double v2 = 0.0, dc = 0.0, xf = -INFINITY;
+    sd_moves mm = SD_MOVES_NONE;
 #ifdef _OPENMP
-#pragma omp parallel reduction(| : moved) reduction(max : v2, dc, xf) if (nm > w->def.parallel_min)
+    double v2 = 0.0, v2s = 0.0, dc = 0.0, dcs = 0.0, xf = -INFINITY;
+#pragma omp parallel reduction(| : moved) reduction(max : v2, v2s, dc, dcs, xf) if (nm > w->def.parallel_min)
     {
         int k0, k1;
         sd_mov_share(w, omp_get_thread_num(), omp_get_num_threads(), &k0, &k1);
-        moved |= sd_integrate_list(w, w->mov, k0, k1, &v2, &dc, &xf);
+        sd_moves t = SD_MOVES_NONE;
+        moved |= sd_integrate_list(w, w->mov, k0, k1, &t);
+        v2 = t.v2, v2s = t.v2s, dc = t.dc, dcs = t.dcs, xf = t.xf;
     }
+    mm = (sd_moves){v2, v2s, dc, dcs, xf};
 #else
-    moved = sd_integrate_list(w, w->mov, 0, nm, &v2, &dc, &xf);
+    moved = sd_integrate_list(w, w->mov, 0, nm, &mm);
 #endif
     if (moved) w->need_rebuild = 1;
-    sd_world_after_moves(w, v2, dc, xf);
+    sd_world_after_moves(w, &mm);
 }

@@ -107,6 +107,7 @@ void sd_world_destroy(sd_world *w)
     free(w->mov);
     free(w->near);
     free(w->near_mark);
+    free(w->nfast);
     free(w->wall_list);
     sd_pair_soa_free(&w->near_soa);
     free(w);
@@ -289,10 +290,11 @@ sd_status sd_world_moving_update(sd_world *w)
     return SD_OK;
 }
 
-void sd_world_after_moves(sd_world *w, double v2max, double dcyl, double xfront)
+void sd_world_after_moves(sd_world *w, const sd_moves *m)
 {
-    const double step = sqrt(v2max) * w->def.dt;
-    w->near_drift += step > dcyl ? step : dcyl;
+    const double step = sqrt(m->v2) * w->def.dt, slow = sqrt(m->v2s) * w->def.dt;
+    /* the near pairs: the bodies not marked fast (all of a fast body's candidates are near) */
+    w->near_drift += slow > m->dcs ? slow : m->dcs;
     /* no sphere can have moved more than ref_drift since the rebuild: the exact test of
      * each against half the margin (what the cylinders get every step) only once that bound
      * is near it, with the same outcome */
@@ -309,7 +311,7 @@ void sd_world_after_moves(sd_world *w, double v2max, double dcyl, double xfront)
         }
         if (moved) w->need_rebuild = 1;
     }
-    w->front = xfront;
+    w->front = m->xf;
     w->front_step = w->step + 1; /* the step that is ending */
     w->front_bn = w->b.n;
 }

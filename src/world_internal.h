@@ -261,6 +261,13 @@ struct sd_world {
     long near_soa_version; /* near_version + 1 when near and near_soa are the current near pairs */
     long near_stamp, near_version;
     double near_drift, near_skin; /* near_skin: the skin it was made with */
+    /* nfast[i]: body i was among the fastest when the near pairs were last made, so every
+     * candidate of it is near (its gaps not tested) and its moves are left out of near_drift:
+     * a few bodies washing out past the dam at 1 m/s set the drift otherwise, and remade the
+     * near pairs every ~15 steps (contact.c near_fast_make; scratch, not saved, sized nfast_n
+     * = the store's bodies then) */
+    uint8_t *nfast;
+    int nfast_cap, nfast_n, nfast_k; /* nfast_k: how many are marked */
     /* near_mark[k]: candidate k was near when the near pairs were last made (both paths), so
      * only it can hold a spring; valid while near_mark_rb == timers.rebuilds (after a rebuild
      * any candidate can: the carried springs). Its second half, near_mark[bb.n + 1 + k], is
@@ -394,6 +401,9 @@ int sd_sc_geom_set(int on);
 /* The wall pass over the bodies with a wall pair near touching only (1, the default) or over
  * all with wall pairs (0); the same bits either way. Returns the previous setting. */
 int sd_wall_near_set(int on);
+/* Whether the near pairs mark the fastest bodies (w->nfast; default on): any setting gives the
+ * same bits. Returns the previous setting. */
+int sd_near_fast_set(int on);
 /* The logs' moves in batches of SIMD lanes (1, the default) or one by one (0); returns the
  * setting before. Either gives the same bits (integrate.c). */
 int sd_cyl_batch_set(int on);
@@ -493,14 +503,19 @@ static inline sd_cyl sd_body_cyl(const sd_bodies *b, int i)
 
 /* integrate.c */
 void sd_integrate(sd_world *w);
+/* The largest moves of a step (sd_integrate_list): |v|² of a sphere, the move of a log's
+ * surface, each over all moving bodies and over those not marked fast (nfast: the near
+ * list's drift), and the farthest downstream point. */
+typedef struct {
+    double v2, v2s, dc, dcs, xf;
+} sd_moves;
+#define SD_MOVES_NONE ((sd_moves){0.0, 0.0, 0.0, 0.0, -INFINITY})
 /* Moves the bodies mov[k0 .. k1) (serial); returns 1 when one of them moved more than half
- * the margin since the last rebuild. *v2max: raised to the largest |v|² of a sphere moved,
- * *dcyl to the largest move of a cylinder's surface, *xfront to the farthest downstream point. */
-int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, double *v2max, double *dcyl, double *xfront);
-/* After the bodies moved: v2max the largest |v|² of a sphere, dcyl the largest move of a
- * cylinder's surface (the near list's drift), xfront
- * the farthest downstream point of a moving body (sd_world_front_x). */
-void sd_world_after_moves(sd_world *w, double v2max, double dcyl, double xfront);
+ * the margin since the last rebuild. *m raised to this block's largest moves. */
+int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves *m);
+/* After the bodies moved (m: the step's largest moves): the near list's and the rebuild's
+ * drift, and the front (sd_world_front_x). */
+void sd_world_after_moves(sd_world *w, const sd_moves *m);
 /* The farthest downstream point (largest x of a surface) of the moving bodies, as they are:
  * kept by the step, computed when the store changed since. -inf when none moves. */
 double sd_world_front_x(const sd_world *w);
