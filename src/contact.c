@@ -1817,6 +1817,7 @@ static int near_fast_make(sd_world *w)
     enum { NB = 64, E0 = 1023 - 40 }; /* octaves of 2^-40 .. 2^23 (m/s)^2 */
     int cnt[NB] = {0};
     uint8_t *bin = w->nfast; /* (each body's octave, for now) */
+#pragma omp parallel for schedule(static) reduction(+ : cnt[:NB]) if (nm > w->def.parallel_min)
     for (int q = 0; q < nm; q++) {
         const int i = w->mov[q];
         double s = sqrt(v3_norm2(b->vel[i]));
@@ -1832,6 +1833,7 @@ static int near_fast_make(sd_world *w)
     while (top > 1 && m + cnt[top - 1] <= k)
         m += cnt[--top];
     /* bins top .. NB-1 are marked (m bodies): none when the fastest octave alone is too many */
+#pragma omp parallel for schedule(static) if (nm > w->def.parallel_min)
     for (int q = 0; q < nm; q++) {
         const int i = w->mov[q];
         w->nfast[i] = (uint8_t)(bin[i] >= top);

@@ -301,9 +301,9 @@ static void test_near_slow(void)
 
 /* The fastest bodies marked (near_fast_make): the six logs thrown onto the lattice outrun
  * every sphere, so they are marked, all their candidates near, and the near pairs' drift is the
- * spheres' alone: the near pairs are remade less than half as often, no touching pair is ever
- * left out, and the state is the same, bit for bit, as with no body marked. Checked on the
- * serial pass and on two owners. */
+ * spheres' alone: the near pairs are remade less than half as often (the serial pass), no
+ * touching pair is ever left out, and the state is the same, bit for bit, as with no body
+ * marked (the serial pass and two owners). */
 static void test_near_fast(void)
 {
     const uint64_t rng0 = rng_state;
@@ -341,7 +341,9 @@ static void test_near_fast(void)
         CHECK(missing[0] == 0 && missing[1] == 0);
         CHECK(checked[1] > 1000);
         CHECK(marked[0] == 0 && marked[1] > 3000); /* the logs, while they fall */
-        CHECK(2 * remade[1] < remade[0]);
+        /* (on two owners the remakes also follow their measured times, so the count is the
+         * serial pass's) */
+        if (threads == 1) CHECK(2 * remade[1] < remade[0]);
     }
     rng_state = rng0;
 }
