@@ -231,8 +231,8 @@ struct sd_world {
     uint8_t *gflag;
     int gflag_cap;
     /* the candidate scan's chunk buffers, kept from one rebuild to the next with what they
-     * grew to (neighbor.c; scratch, not saved): made afresh each time, their ~300 reallocs a
-     * rebuild and cold lines cost a third of the scan on two threads */
+     * grew to (neighbor.c; scratch, not saved): made afresh, they took ~300 reallocs a
+     * rebuild (docs/performance.md §2-000000000000000000) */
     void *scan_bufs;
     int scan_bufs_n;
     int32_t (*trange)[6]; /* per-triangle cell range in the triangle grid */
