@@ -1821,7 +1821,8 @@ static int near_fast_make(sd_world *w)
     for (int q = 0; q < nm; q++) {
         const int i = w->mov[q];
         double s = sqrt(v3_norm2(b->vel[i]));
-        if (b->shape[i] != SD_SHAPE_SPHERE) s += 1.01 * b->bound_r[i] * sqrt(v3_norm2(v3_cross(b->omega[i], b->axis[i])));
+        if (b->shape[i] != SD_SHAPE_SPHERE) /* a log's tilt at its bounding radius */
+            s += 1.01 * b->bound_r[i] * sqrt(v3_norm2(v3_cross(b->omega[i], b->axis[i])));
         uint64_t bits;
         const double s2 = s * s;
         memcpy(&bits, &s2, sizeof bits);
@@ -2320,9 +2321,9 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
         nch += owned_xchunks(o, t);
     long count = 0;
     int moved = 0;
-    double v2 = 0.0, v2s = 0.0, dc = 0.0, dcs = 0.0, xf = -INFINITY;
+    sd_moves mm = SD_MOVES_NONE;
     const int pf = sd_front_prefetch_on(w);
-#pragma omp parallel num_threads(T) reduction(+ : count) reduction(| : moved) reduction(max : v2, v2s, dc, dcs, xf)
+#pragma omp parallel num_threads(T) reduction(+ : count) reduction(| : moved) reduction(moves_max : mm)
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
         bb_scratch *x = &scratch[tid];
@@ -2422,17 +2423,14 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
             }
             /* its bodies' wall pairs, then its moving bodies */
             count += bt_range(w, law, w->wall_list + i0, o->wn[t], &x->wq);
-            if (moved_out) {
-                sd_moves mt = {v2, v2s, dc, dcs, xf};
+            if (moved_out)
                 moved |= sd_integrate_list(w, w->mov, sd_mov_lower(w->mov, w->mov_n, i0),
-                                           sd_mov_lower(w->mov, w->mov_n, i1), &mt);
-                v2 = mt.v2, v2s = mt.v2s, dc = mt.dc, dcs = mt.dcs, xf = mt.xf;
-            }
+                                           sd_mov_lower(w->mov, w->mov_n, i1), &mm);
         }
         if (nthr == T) o->tau[tid] += omp_get_wtime() - t0;
     }
     if (moved_out) *moved_out = moved;
-    *mv = (sd_moves){v2, v2s, dc, dcs, xf};
+    *mv = mm;
     return count;
 }
 #endif

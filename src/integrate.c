@@ -269,16 +269,12 @@ void sd_integrate(sd_world *w)
     int moved = 0;
     sd_moves mm = SD_MOVES_NONE;
 #ifdef _OPENMP
-    double v2 = 0.0, v2s = 0.0, dc = 0.0, dcs = 0.0, xf = -INFINITY;
-#pragma omp parallel reduction(| : moved) reduction(max : v2, v2s, dc, dcs, xf) if (nm > w->def.parallel_min)
+#pragma omp parallel reduction(| : moved) reduction(moves_max : mm) if (nm > w->def.parallel_min)
     {
         int k0, k1;
         sd_mov_share(w, omp_get_thread_num(), omp_get_num_threads(), &k0, &k1);
-        sd_moves t = SD_MOVES_NONE;
-        moved |= sd_integrate_list(w, w->mov, k0, k1, &t);
-        v2 = t.v2, v2s = t.v2s, dc = t.dc, dcs = t.dcs, xf = t.xf;
+        moved |= sd_integrate_list(w, w->mov, k0, k1, &mm);
     }
-    mm = (sd_moves){v2, v2s, dc, dcs, xf};
 #else
     moved = sd_integrate_list(w, w->mov, 0, nm, &mm);
 #endif

@@ -823,6 +823,13 @@ __attribute__((target("avx512f,avx512vl"))) static int scan_cell512(const sd_wor
 
 #define SD_SCAN_JS 512 /* bb_scan's entries gathered before the reach test (at least 64 more than it flushes at) */
 
+/* Body j within reach of a body at pi with bounding radius bri: |pi - pj| <= bri + r_j + margin. */
+static inline int within_reach(const sd_bodies *b, sd_vec3 pi, double bri, double margin, int j)
+{
+    const double reach = bri + b->bound_r[j] + margin;
+    return !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
+}
+
 /* The entries js[0 .. nj) gathered by body i's scan: those within reach, and not two fixed
  * bodies, taken in order (js is overwritten). Returns nonzero when out of memory. */
 static int scan_take(const sd_world *w, int i, double hm, int32_t *js, int nj, cand_buf *out)
@@ -835,17 +842,14 @@ static int scan_take(const sd_world *w, int i, double hm, int32_t *js, int nj, c
     if (!fixed_i) /* (a moving body's partners are not looked up for being fixed: a line each) */
         for (int q = 0; q < nj; q++) {
             const int j = js[q];
-            const double reach = bri + b->bound_r[j] + margin;
             js[nt] = j;
-            nt += !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
+            nt += within_reach(b, pi, bri, margin, j);
         }
     else
         for (int q = 0; q < nj; q++) {
             const int j = js[q];
-            const double reach = bri + b->bound_r[j] + margin;
-            const int in = !(v3_norm2(v3_sub(pi, b->pos[j])) > reach * reach);
             js[nt] = j;
-            nt += in & !b->fixed[j];
+            nt += within_reach(b, pi, bri, margin, j) & !b->fixed[j];
         }
     for (int q = 0; q < nt; q++)
         if (take_pair(w, i, js[q], hm, out)) return 1;

@@ -510,6 +510,20 @@ typedef struct {
     double v2, v2s, dc, dcs, xf;
 } sd_moves;
 #define SD_MOVES_NONE ((sd_moves){0.0, 0.0, 0.0, 0.0, -INFINITY})
+/* *a raised to b, field by field */
+static inline void sd_moves_max(sd_moves *a, const sd_moves *b)
+{
+    a->v2 = b->v2 > a->v2 ? b->v2 : a->v2;
+    a->v2s = b->v2s > a->v2s ? b->v2s : a->v2s;
+    a->dc = b->dc > a->dc ? b->dc : a->dc;
+    a->dcs = b->dcs > a->dcs ? b->dcs : a->dcs;
+    a->xf = b->xf > a->xf ? b->xf : a->xf;
+}
+#ifdef _OPENMP
+/* reduction(moves_max : m) over the threads of a parallel region */
+#pragma omp declare reduction(moves_max:sd_moves : sd_moves_max(&omp_out, &omp_in)) \
+    initializer(omp_priv = SD_MOVES_NONE)
+#endif
 /* Moves the bodies mov[k0 .. k1) (serial); returns 1 when one of them moved more than half
  * the margin since the last rebuild. *m raised to this block's largest moves. */
 int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves *m);
