@@ -1755,6 +1755,7 @@ __attribute__((target("avx2"))) static int near_test256(const sd_world *w, doubl
  * cache line per candidate. The answers first, alone, then their consequences with one
  * seldom-taken branch: the loop that did both as it went, branching on a coin toss, took 18 ns
  * a candidate (docs/performance.md §2-000000000). */
+#define NEAR_BLOCK 512 /* candidates whose answers are made at a time, then kept (owned_update, near_filter) */
 static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, int fresh, int nf)
 {
     const sd_pair *restrict pairs = w->bb.p;
@@ -1858,13 +1859,26 @@ static int near_mark_ready(sd_world *w)
  * records; returns how many. */
 static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pair_soa *soa)
 {
-    const uint8_t *keep = near_keep_range(w, skin, 0, w->bb.n, fresh, sd_bed_start(&w->b));
     const sd_pair *pairs = w->bb.p;
+    const int nbb = w->bb.n, nf = sd_bed_start(&w->b);
     int m = 0;
-    for (int k = 0; k < w->bb.n; k++) {
-        out[m] = k;
-        pair_soa_set(soa, m, &pairs[k]); /* (its records too, while the record is at hand) */
-        m += keep[k];
+    /* in blocks, the near ones found 8 answers at a time (as owned_update) */
+    for (int kb = 0; kb < nbb; kb += NEAR_BLOCK) {
+        const int ke = nbb - kb < NEAR_BLOCK ? nbb : kb + NEAR_BLOCK;
+        const uint8_t *kp = near_keep_range(w, skin, kb, ke, fresh, nf);
+        for (int j8 = 0; j8 < ke - kb; j8 += 8) {
+            uint64_t word = 0;
+            if (ke - kb - j8 >= 8)
+                memcpy(&word, kp + j8, 8);
+            else
+                for (int l = 0; l < ke - kb - j8; l++)
+                    word |= (uint64_t)kp[j8 + l] << 8 * l;
+            for (; word; word &= word - 1) {
+                const int k = kb + j8 + __builtin_ctzll(word) / 8;
+                out[m] = k;
+                pair_soa_set(soa, m++, &pairs[k]); /* (its records too, while the record is at hand) */
+            }
+        }
     }
     return m;
 }
@@ -2249,7 +2263,6 @@ static sd_status owned_update(sd_world *w, int T)
         const int tid = omp_get_thread_num(), nthr = omp_get_num_threads();
         for (int t = tid; t < T; t += nthr) {
             const int k0 = o->K[t], k1 = o->K[t + 1];
-            const uint8_t *kp = near_keep_range(w, skin, k0, k1, fresh, o->nf);
             /* its bodies near a wall, at its bodies' place */
             o->wn[t] = wall_near_range(w, skin, o->B[t], o->B[t + 1], w->wall_list + o->B[t], &o->wskip[t]);
             /* the near ones into its segment in pair order, each cross pair as ~c; xp[j - k0]
@@ -2265,34 +2278,47 @@ static sd_status owned_update(sd_world *w, int T)
                               *restrict sc = o->soa.ck, *restrict list = o->list;
             double *restrict sq = o->soa.sqm;
             const sd_pair *restrict pairs = w->bb.p;
-            for (int k = k0; k < k1; k++) {
-                /* every candidate written, kept or not (then overwritten): no branch on the
-                 * answer, close to a coin toss */
-                const sd_pair *p = &pairs[k];
-                const int keep = kp[k - k0];
-                int cross = 0, ta = t, tb = t;
-                /* both its own or the bed (after o->nf, its partner's owner's: most) */
-                if (!(((unsigned)p->a - i0 < len || p->a >= nf) && ((unsigned)p->b - i0 < len || p->b >= nf))) {
-                    pair_owners(&w->b, p, o->B, T, &ta, &tb);
-                    cross = ta != tb;
+            /* in blocks: the answers of a block (near_keep_range), then its near candidates
+             * only, found 8 answers at a time, while the block's records are still in L1
+             * (writing every candidate's records and overwriting those not kept cost as much
+             * as the tests, with about one candidate in four kept in the paper's flow) */
+            for (int kb = k0; kb < k1; kb += NEAR_BLOCK) {
+                const int ke = k1 - kb < NEAR_BLOCK ? k1 : kb + NEAR_BLOCK;
+                const uint8_t *kp = near_keep_range(w, skin, kb, ke, fresh, nf);
+                for (int j8 = 0; j8 < ke - kb; j8 += 8) {
+                    uint64_t word = 0;
+                    if (ke - kb - j8 >= 8)
+                        memcpy(&word, kp + j8, 8);
+                    else
+                        for (int l = 0; l < ke - kb - j8; l++)
+                            word |= (uint64_t)kp[j8 + l] << 8 * l;
+                    for (; word; word &= word - 1) { /* (the answers are 0 or 1: one bit a byte) */
+                        const int k = kb + j8 + __builtin_ctzll(word) / 8;
+                        const sd_pair *p = &pairs[k];
+                        int cross = 0, ta = t, tb = t;
+                        /* both its own or the bed (after o->nf, its partner's owner's: most) */
+                        if (!(((unsigned)p->a - i0 < len || p->a >= nf) && ((unsigned)p->b - i0 < len || p->b >= nf))) {
+                            pair_owners(&w->b, p, o->B, T, &ta, &tb);
+                            cross = ta != tb;
+                        }
+                        sa[m] = p->a; /* (pair_soa_set) */
+                        sb[m] = p->b;
+                        so[m] = p->off;
+                        sc[m] = ck_pack(p->kind, p->cap);
+                        sq[m] = p->sqrt_m_eff;
+                        list[m] = k;
+                        if (cross) { /* few */
+                            o->cross[xc] = k;
+                            o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
+                            pair_soa_set(&o->xsoa, xc, p);
+                            list[m] = ~xc++;
+                            q++;
+                        }
+                        /* xp[j - k0 + 1]: the cross entries among entries k0 .. j */
+                        xp[m - k0 + 1] = q;
+                        m++;
+                    }
                 }
-                sa[m] = p->a; /* (pair_soa_set) */
-                sb[m] = p->b;
-                so[m] = p->off;
-                sc[m] = ck_pack(p->kind, p->cap);
-                sq[m] = p->sqrt_m_eff;
-                list[m] = k;
-                if (cross & keep) { /* few */
-                    o->cross[xc] = k;
-                    o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
-                    pair_soa_set(&o->xsoa, xc, p);
-                    list[m] = ~xc++;
-                    q++;
-                }
-                /* xp[j - k0 + 1]: the cross entries among entries k0 .. j (an entry not kept
-                 * is overwritten with the next, and so is its count) */
-                xp[m - k0 + 1] = q;
-                m += keep;
             }
             o->seg1[t] = m;
             o->xb[t] = xc; /* its cross pairs: cross[K[t] .. xb[t]-1] */
