@@ -173,8 +173,6 @@ static double cyl_steps(sd_bodies *b, const int32_t *lg, int n, double dt, doubl
     return xf;
 }
 
-#define SD_EXT_BLOCK 128
-
 /* The moves of a block's spheres, and the centres of its logs (their turning left to the
  * caller: their indices appended to lg, whose new count is returned). The arrays through
  * restrict parameters: through b, gcc loaded each array's address again after every store
@@ -185,12 +183,13 @@ static inline int move_block(const int32_t *restrict mov, int kb, int ke, double
                              sd_vec3 *restrict omega, const sd_vec3 *restrict torque,
                              const double *restrict inv_i_ax, const double *restrict radius,
                              const uint8_t *restrict shape, const uint8_t *restrict nf, double *vmax,
-                             double *vslow, double *xfront, int32_t *restrict lg, int nlg)
+                             double *vslow, double *xfront, int32_t *restrict lg, int nlg, const int ext_blk)
 {
     double vm = *vmax, vs = *vslow, xf = *xfront;
     for (int k = kb; k < ke; k++) {
         const int i = mov[k];
-        const sd_vec3 f = v3_add(force[i], ext[i]);
+        /* the external force from the block's buffer (ext_blk: ext[k - kb]) or the store's */
+        const sd_vec3 f = v3_add(force[i], ext[ext_blk ? k - kb : i]);
         const sd_vec3 acc = v3_madd(g, f, inv_mass[i]);
         /* the new velocity and centre kept in registers, not read back from the store right
          * after being written (x and y by one 16-byte store): on AMD Zen 3 a tenth of this
@@ -234,13 +233,19 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves 
     const uint8_t *nf = w->nfast_n == b->n ? w->nfast : NULL;
     /* the logs, turned in batches once a batch has gathered (each body's move is its own) */
     int32_t lg[CYL_BATCH + SD_EXT_BLOCK];
+    sd_vec3 ext[SD_EXT_BLOCK]; /* a block's external forces (ext_fn) */
     int nlg = 0;
     for (int kb = k0; kb < k1; kb += SD_EXT_BLOCK) {
         const int ke = k1 - kb < SD_EXT_BLOCK ? k1 : kb + SD_EXT_BLOCK;
         /* the external forces of a block just before it moves: its bodies are still in L1 */
-        if (w->ext_fn) w->ext_fn(w->ext_ctx, w, mov, kb, ke);
-        nlg = move_block(mov, kb, ke, dt, g, b->force, b->ext_force, b->inv_mass, b->vel, b->pos, b->omega,
-                         b->torque, b->inv_i_ax, b->radius, b->shape, nf, &vm, &vs, &xf, lg, nlg);
+        if (w->ext_fn) {
+            w->ext_fn(w->ext_ctx, w, mov, kb, ke, ext);
+            nlg = move_block(mov, kb, ke, dt, g, b->force, ext, b->inv_mass, b->vel, b->pos, b->omega, b->torque,
+                             b->inv_i_ax, b->radius, b->shape, nf, &vm, &vs, &xf, lg, nlg, 1);
+        } else {
+            nlg = move_block(mov, kb, ke, dt, g, b->force, b->ext_force, b->inv_mass, b->vel, b->pos, b->omega,
+                             b->torque, b->inv_i_ax, b->radius, b->shape, nf, &vm, &vs, &xf, lg, nlg, 0);
+        }
         if (!cyl_batch_on) {
             for (int q = 0; q < nlg; q++) {
                 const double x = cyl_step(b, lg[q], dt, lim2, &moved, &dc, &dcs, nf && nf[lg[q]]);

@@ -131,30 +131,30 @@ enum { FLUID_BATCH = 64 };
 typedef struct {
     double px[FLUID_BATCH], py[FLUID_BATCH], pz[FLUID_BATCH], vx[FLUID_BATCH], vy[FLUID_BATCH], vz[FLUID_BATCH];
     double r[FLUID_BATCH], cap[FLUID_BATCH], fx[FLUID_BATCH], fy[FLUID_BATCH], fz[FLUID_BATCH];
-    int idx[FLUID_BATCH], m;
+    int idx[FLUID_BATCH], m; /* idx: the body's place in the block's forces (out[]) */
 } fluid_batch;
 
-static void fluid_flush(fluid_batch *q, const sd_fluid_params *fp, double h_d, sd_bodies *b)
+static void fluid_flush(fluid_batch *q, const sd_fluid_params *fp, double h_d, sd_vec3 *out)
 {
     sd_fluid_sphere_batch(fp, h_d, q->m, q->px, q->py, q->pz, q->vx, q->vy, q->vz, q->r, q->cap, q->fx, q->fy, q->fz);
     for (int j = 0; j < q->m; j++)
-        b->ext_force[q->idx[j]] = v3(q->fx[j], q->fy[j], q->fz[j]);
+        out[q->idx[j]] = v3(q->fx[j], q->fy[j], q->fz[j]);
     q->m = 0;
 }
 
 #ifdef SD_FLUID512
 /* The spheres among mov[k0 .. k1) in AVX-512, 8 bodies at a time, straight from the store
- * (gathers by index, the forces scattered back): sd_fluid_sphere_batch's operations in its
- * order, so the same bits, without the copy of each body into the batch and out. The logs
- * among them are left to the caller. */
+ * (gathers by index, the forces scattered into out[k - k0]): sd_fluid_sphere_batch's
+ * operations in its order, so the same bits, without the copy of each body into the batch and
+ * out. The logs among them are left to the caller. */
 __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const struct fluid_ctx *fc, sd_world *w,
                                                                          const int32_t *mov, int k0, int k1,
-                                                                         int32_t *logs, int *nlogs)
+                                                                         int32_t *logs, int *nlogs, sd_vec3 *out)
 {
     const sd_fluid_params *p = &fc->fp;
     sd_bodies *b = &w->b;
     const double *pos = &b->pos[0].x, *vel = &b->vel[0].x, *rad = b->radius;
-    double *ext = &b->ext_force[0].x;
+    double *ext = &out[0].x;
     const uint8_t *shape = b->shape;
     const double h = p->h, hd = fc->h_d >= h ? fc->h_d : h;
     double al, be;
@@ -216,24 +216,26 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
         const __m512d tx = _mm512_add_pd(_mm512_mul_pd(rx, sk), _mm512_mul_pd(gx, bs)),
                       ty = _mm512_add_pd(_mm512_mul_pd(ry, sk), _mm512_mul_pd(gy, bs)),
                       tz = _mm512_add_pd(_mm512_mul_pd(rz, sk), _mm512_mul_pd(gz, bs));
-        /* dry spheres get zero; every sphere lane is written */
-        _mm512_mask_i32scatter_pd(ext, sph, i3, _mm512_maskz_mov_pd(wet, tx), 8);
-        _mm512_mask_i32scatter_pd(ext + 1, sph, i3, _mm512_maskz_mov_pd(wet, ty), 8);
-        _mm512_mask_i32scatter_pd(ext + 2, sph, i3, _mm512_maskz_mov_pd(wet, tz), 8);
+        /* dry spheres get zero; every sphere lane is written, at its place in the block */
+        const __m256i o = _mm256_add_epi32(_mm256_set1_epi32(k - k0), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        const __m256i o3 = _mm256_add_epi32(o, _mm256_add_epi32(o, o));
+        _mm512_mask_i32scatter_pd(ext, sph, o3, _mm512_maskz_mov_pd(wet, tx), 8);
+        _mm512_mask_i32scatter_pd(ext + 1, sph, o3, _mm512_maskz_mov_pd(wet, ty), 8);
+        _mm512_mask_i32scatter_pd(ext + 2, sph, o3, _mm512_maskz_mov_pd(wet, tz), 8);
     }
 }
 /* The spheres among mov[k0 .. k1) in AVX2, 4 bodies at a time while 4 remain (returns where it
  * stopped; the rest go through the batch): fluid_spheres512's operations, so the same bits, with
  * each body's centre and velocity read as a row (a masked 32-byte load) and its force written
- * back as one. The logs among them are left to the caller. */
+ * into out[k - k0] as one. The logs among them are left to the caller. */
 __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_ctx *fc, sd_world *w, const int32_t *mov,
-                                                            int k0, int k1, int32_t *logs, int *nlogs)
+                                                            int k0, int k1, int32_t *logs, int *nlogs, sd_vec3 *out)
 {
     const sd_fluid_params *p = &fc->fp;
     sd_bodies *b = &w->b;
     const double *pos = &b->pos[0].x, *vel = &b->vel[0].x, *rad = b->radius;
     const uint8_t *shape = b->shape;
-    sd_vec3 *const ext = b->ext_force; /* (in a local: the 16-byte stores may alias b) */
+    sd_vec3 *const ext = out - k0; /* (ext[k]: body mov[k]'s) */
     const double h = p->h, hd = fc->h_d >= h ? fc->h_d : h;
     double al, be;
     sd_fluid_capture_coeffs(h, hd, &al, &be);
@@ -302,7 +304,6 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
         for (int q = 0; q < ng; q++) {
             const __m256d rx = RX[q], ry = RY[q], rz = RZ[q], speed = SP[q], r = RA[q], wet = WT[q];
             const int sph = SPH[q], kq = KK[q];
-            const int i0 = mov[kq], i1 = mov[kq + 1], i2 = mov[kq + 2], i3 = mov[kq + 3];
             const __m256d area = _mm256_mul_pd(_mm256_mul_pd(pi, r), r),
                           volume = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(c43pi, r), r), r);
             const __m256d sk = _mm256_mul_pd(_mm256_mul_pd(kd, area), speed), bs = _mm256_mul_pd(mrho, volume);
@@ -313,11 +314,10 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
             /* back as rows (x, y, z, -), each sphere's written */
             __m256d row[4];
             sd_transpose4(tx, ty, tz, zero, row);
-            const int idx[4] = {i0, i1, i2, i3};
             for (int l = 0; l < 4; l++)
                 if (sph >> l & 1) { /* x and y in one 16-byte store, z alone (no masked store: slow on AMD) */
-                    _mm_storeu_pd(&ext[idx[l]].x, _mm256_castpd256_pd128(row[l]));
-                    ext[idx[l]].z = _mm_cvtsd_f64(_mm256_extractf128_pd(row[l], 1));
+                    _mm_storeu_pd(&ext[kq + l].x, _mm256_castpd256_pd128(row[l]));
+                    ext[kq + l].z = _mm_cvtsd_f64(_mm256_extractf128_pd(row[l], 1));
                 }
         }
     }
@@ -326,7 +326,7 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
 #endif
 
 /* The fluid force on log i, one by one (sd_fluid_force_total). */
-static void fluid_log(const struct fluid_ctx *fc, sd_bodies *b, int i)
+static sd_vec3 fluid_log(const struct fluid_ctx *fc, const sd_bodies *b, int i)
 {
     sd_fluid_element e;
     e.shape = b->shape[i];
@@ -337,19 +337,19 @@ static void fluid_log(const struct fluid_ctx *fc, sd_bodies *b, int i)
     e.length = 2.0 * b->hl[i];
     /* the capture profile applies upstream of the dam; passed elements keep the flow one */
     const sd_fluid_phase ph = (fc->capture && b->pos[i].x < fc->xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
-    b->ext_force[i] = sd_fluid_force_total(&fc->fp, ph, fc->h_d, &e);
+    return sd_fluid_force_total(&fc->fp, ph, fc->h_d, &e);
 }
 
 #define SD_FLUID_LOGS 128 /* the bodies of a block whose logs the lanes list (SD_EXT_BLOCK) */
 
-/* The fluid forces on the moving bodies mov[k0 .. k1): called by the world's step for each
- * block of up to 128 of a thread's bodies just before it moves them (sd_world.ext_fn), so
- * their data are still in that core's L1 when they move. Spheres in batches (sd_fluid_sphere_batch: the same bits,
- * vectorized), logs one by one. */
-static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int k1)
+/* The fluid forces on the moving bodies mov[k0 .. k1), into out[k - k0]: called by the world's
+ * step for each block of up to SD_EXT_BLOCK of a thread's bodies just before it moves them
+ * (sd_world.ext_fn), so their data are still in that core's L1 when they move. Spheres in
+ * batches (sd_fluid_sphere_batch: the same bits, vectorized), logs one by one. */
+static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int k1, sd_vec3 *out)
 {
     const struct fluid_ctx *fc = ctx;
-    sd_bodies *b = &w->b;
+    const sd_bodies *b = &w->b;
     const sd_fluid_params *fp = &fc->fp;
     const double xd = fc->xd, h_d = fc->h_d;
     const int capture = fc->capture;
@@ -364,10 +364,10 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
     int32_t *lp = k1 - k0 <= SD_FLUID_LOGS ? logs : NULL;
 #ifdef SD_FLUID512
     if (sd_simd_level() == SD_SIMD_AVX512) {
-        fluid_spheres512(fc, w, mov, k0, k1, lp, &nlogs);
+        fluid_spheres512(fc, w, mov, k0, k1, lp, &nlogs, out);
         kv = k1;
     } else if (sd_simd_level() == SD_SIMD_AVX2)
-        kv = fluid_spheres256(fc, w, mov, k0, k1, lp, &nlogs);
+        kv = fluid_spheres256(fc, w, mov, k0, k1, lp, &nlogs, out);
 #else
     lp = NULL;
 #endif
@@ -383,19 +383,19 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
             if (k < kv) continue;
             const int j = q.m++;
             const sd_vec3 p = pos[i], v = vel[i];
-            q.idx[j] = i;
+            q.idx[j] = k - k0;
             q.px[j] = p.x, q.py[j] = p.y, q.pz[j] = p.z;
             q.vx[j] = v.x, q.vy[j] = v.y, q.vz[j] = v.z;
             q.r[j] = rad[i];
             q.cap[j] = (capture && p.x < xd) ? 1.0 : 0.0;
-            if (q.m == FLUID_BATCH) fluid_flush(&q, fp, h_d, b);
+            if (q.m == FLUID_BATCH) fluid_flush(&q, fp, h_d, out);
             continue;
         }
-        fluid_log(fc, b, i);
+        out[k - k0] = fluid_log(fc, b, i);
     }
     for (int l = 0; l < nlogs; l++)
-        fluid_log(fc, b, mov[logs[l]]);
-    if (q.m > 0) fluid_flush(&q, fp, h_d, b);
+        out[logs[l] - k0] = fluid_log(fc, b, mov[logs[l]]);
+    if (q.m > 0) fluid_flush(&q, fp, h_d, out);
 }
 
 /* The fluid forces of the current phase for the coming step: handed to the world, which calls

@@ -160,9 +160,12 @@ typedef struct {
     int passes; /* passes timed in tau */
 } sd_owned;
 
-/* External forces of a step on the moving bodies mov[k0 .. k1) (into ext_force), called just
- * before they move, by the thread that moves them, a block of up to 128 bodies at a time. */
-typedef void (*sd_ext_force_fn)(void *ctx, struct sd_world *w, const int32_t *mov, int k0, int k1);
+/* External forces of a step on the moving bodies mov[k0 .. k1), into out[k - k0] (not into
+ * ext_force, which such a function overrides: a block's buffer stays in L1, where the store's
+ * array cost a line's fetch and write-back per body and step), called just before they move,
+ * by the thread that moves them, a block of up to SD_EXT_BLOCK bodies at a time. */
+#define SD_EXT_BLOCK 128
+typedef void (*sd_ext_force_fn)(void *ctx, struct sd_world *w, const int32_t *mov, int k0, int k1, sd_vec3 *out);
 
 /* The bed bodies nb0 .. n-1 as the last full rebuild placed them in the body grid (lo, cell,
  * nx, ny; the grid's nz may change, the bed's cells do not): the union of their boxes (its low
@@ -186,7 +189,7 @@ typedef struct {
 
 struct sd_world {
     sd_world_def def;
-    sd_ext_force_fn ext_fn; /* NULL: ext_force kept as it is (set by the driver, not saved) */
+    sd_ext_force_fn ext_fn; /* NULL: ext_force applies (set by the driver, not saved) */
     void *ext_ctx;
     sd_bodies b;
     sd_walls w;
