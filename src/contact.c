@@ -486,6 +486,7 @@ static inline double bits_and(double x, uint64_t mask)
 typedef struct {
     const int32_t *a, *b, *off, *ck;
     const double *sqm;
+    uint8_t *act; /* (written by the touch filter) */
 } soa_view;
 
 void sd_pair_soa_free(sd_pair_soa *s)
@@ -495,6 +496,7 @@ void sd_pair_soa_free(sd_pair_soa *s)
     free(s->off);
     free(s->ck);
     free(s->sqm);
+    free(s->act);
     memset(s, 0, sizeof *s);
 }
 
@@ -515,7 +517,9 @@ static int pair_soa_reserve(sd_pair_soa *s, int n)
     if (t.ck) s->ck = t.ck;
     t.sqm = realloc(s->sqm, (size_t)cap * sizeof(double));
     if (t.sqm) s->sqm = t.sqm;
-    if (!t.a || !t.b || !t.off || !t.ck || !t.sqm) return 1;
+    t.act = realloc(s->act, (size_t)cap);
+    if (t.act) s->act = t.act;
+    if (!t.a || !t.b || !t.off || !t.ck || !t.sqm || !t.act) return 1;
     s->cap = cap;
     return 0;
 }
@@ -527,19 +531,20 @@ static inline int32_t ck_pack(int kind, int cap)
 }
 static inline int ck_kind(int32_t ck) { return (int)((uint32_t)ck >> 16); }
 
-/* Entry j of s from the record p. */
-static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p)
+/* Entry j of s from the record p (and its first slot in hist). */
+static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p, const sd_hist *hist)
 {
     s->a[j] = p->a;
     s->b[j] = p->b;
     s->off[j] = p->off;
     s->ck[j] = ck_pack(p->kind, p->cap);
     s->sqm[j] = p->sqrt_m_eff;
+    s->act[j] = (uint8_t)(hist[p->off].feature >= 0);
 }
 
 static soa_view soa_at(const sd_pair_soa *s, int j0)
 {
-    return (soa_view){s->a + j0, s->b + j0, s->off + j0, s->ck + j0, s->sqm + j0};
+    return (soa_view){s->a + j0, s->b + j0, s->off + j0, s->ck + j0, s->sqm + j0, s->act + j0};
 }
 
 /* Step 1 of bb_chunk (the touch filter) for the chunk's entries i0 .. i1: which pairs touch,
@@ -567,17 +572,16 @@ static inline void ss_filter_range(const sd_world *w, const int32_t *ks, const s
         const double dx = pa.x - pb.x, dy = pa.y - pb.y, dz = pa.z - pb.z;
         const double ra = rad[ia], rb = rad[ib], rs = ra + rb;
         const int t = !(dx * dx + dy * dy + dz * dz >= rs * rs);
-        sd_hist *h = &hist[off];
-        const int was = h->feature;
+        /* the slot's feature from the entry's flag (0 with a spring, else -1) */
+        const int act = v->act[i], was = act - 1;
         used[i] = t;
         q->dx[m] = dx, q->dy[m] = dy, q->dz[m] = dz;
         q->ra[m] = ra, q->rb[m] = rb, q->sqm[m] = v->sqm[i];
         q->ia[m] = ia, q->ib[m] = ib, q->off[m] = off, q->was[m] = was, q->sel[m] = i;
         m += t;
-        /* a contact that has just ended loses its spring: stored whatever t is, with no
-         * branch on it (gcc turned a conditional store into a branch on t, mispredicted for
-         * half the pairs of a flowing sheet: half the filter's time) */
-        h->feature = was | (t - 1);
+        v->act[i] = (uint8_t)t;
+        /* a contact that has just ended loses its spring (few in a step) */
+        if (act & !t) hist[off].feature = -1;
     }
     *mp = m;
 }
@@ -684,6 +688,10 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
         const __m256i was = _mm256_i32gather_epi32((const int *)((const char *)hist + offsetof(sd_hist, feature)),
                                                    _mm256_slli_epi32(off, 2), 8);
         _mm256_mask_storeu_epi32(used + i, ss, _mm256_maskz_mov_epi32(t, one));
+        /* the entries' flags: a spring after this step where they touch (soa_view.act; this
+         * form reads the slots themselves) */
+        for (int l = 0; l < 8; l++)
+            v->act[i + l] = (uint8_t)(t >> l & 1);
         /* was | (t - 1): stored only where it changes (a contact that has just ended) */
         __mmask8 gone = (__mmask8)(~t & ss & _mm256_cmpneq_epi32_mask(was, none));
         if (gone) {
@@ -775,13 +783,16 @@ __attribute__((target("avx2"))) static inline void diff_lanes(const double *p, c
 static int32_t perm_pd[16][8];
 static uint8_t shuf_i32[16][16];
 static int32_t bit_i32[16][4]; /* lane k: bit k of the mask, 0 or 1 */
+static uint32_t bit_u8[16];     /* byte k: bit k of the mask, 0 or 1 */
 
 __attribute__((constructor)) static void simd_tables_init(void)
 {
     for (int mask = 0; mask < 16; mask++) {
         int n = 0;
+        bit_u8[mask] = 0;
         for (int k = 0; k < 4; k++) {
             bit_i32[mask][k] = (mask >> k) & 1;
+            bit_u8[mask] |= (uint32_t)((mask >> k) & 1) << (8 * k);
             if (!((mask >> k) & 1)) continue;
             perm_pd[mask][2 * n] = 2 * k, perm_pd[mask][2 * n + 1] = 2 * k + 1;
             for (int c = 0; c < 4; c++)
@@ -812,6 +823,7 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
      * loaded each address from *v again after them */
     const int32_t *const va = v->a, *const vb = v->b, *const voff = v->off, *const vck = v->ck;
     const double *const vsqm = v->sqm;
+    uint8_t *const vact = v->act;
     int m = *mp;
     const __m128i kind = _mm_set1_epi32((int)0xFFFF0000u), lane = _mm_setr_epi32(0, 1, 2, 3);
     for (; i + 4 <= n; i += 4) {
@@ -821,7 +833,6 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
             _mm_cmpeq_epi32(_mm_and_si128(_mm_loadu_si128((const __m128i *)(vck + i)), kind), _mm_setzero_si128())));
         const int a0 = va[i], a1 = va[i + 1], a2 = va[i + 2], a3 = va[i + 3];
         const int b0 = vb[i], b1 = vb[i + 1], b2 = vb[i + 2], b3 = vb[i + 3];
-        const int o0 = voff[i], o1 = voff[i + 1], o2 = voff[i + 2], o3 = voff[i + 3];
         __m256d dx, dy, dz;
         diff_lanes(pos, va + i, vb + i, &dx, &dy, &dz);
         const __m256d ra = _mm256_setr_pd(rad[a0], rad[a1], rad[a2], rad[a3]);
@@ -831,11 +842,19 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
             _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
         /* t = !(d2 >= rs^2), as the scalar loop (true for an unordered pair too) */
         const int t = _mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(rs, rs), _CMP_NGE_UQ)) & ss;
-        const __m128i was = _mm_setr_epi32(hist[o0].feature, hist[o1].feature, hist[o2].feature, hist[o3].feature);
+        /* the slots' features from the entries' flags (0 with a spring, else -1), not from the
+         * slots: a line of its own for each near pair, most of them apart in a flow (the
+         * slots' load was a tenth of this loop's samples in the paper's capture) */
+        uint32_t act4;
+        memcpy(&act4, vact + i, sizeof act4);
+        const __m128i was = _mm_sub_epi32(_mm_cvtepu8_epi32(_mm_cvtsi32_si128((int)act4)), _mm_set1_epi32(1));
+        const int had = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(was, _mm_setzero_si128())));
         _mm_storeu_si128((__m128i *)(used + i), _mm_loadu_si128((const __m128i *)bit_i32[t]));
-        /* was | (t - 1): stored only where it changes (a contact that has just ended; few in a
-         * step, so the branch is seldom taken) */
-        int gone = ~t & ~_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(was, _mm_set1_epi32(-1)))) & ss;
+        /* the flags for the next step: a spring where they touch now */
+        memcpy(vact + i, &bit_u8[t], sizeof act4);
+        /* a contact that has just ended loses its spring (few in a step, so the branch is
+         * seldom taken) */
+        int gone = ~t & had & ss;
         for (; gone; gone &= gone - 1)
             hist[voff[i + __builtin_ctz((unsigned)gone)]].feature = -1;
         const __m256i pp = _mm256_loadu_si256((const __m256i *)perm_pd[t]);
@@ -1510,6 +1529,7 @@ typedef struct {
     int32_t ks[SS_CHUNK];
     int32_t ka[SS_CHUNK], kb[SS_CHUNK], koff[SS_CHUNK], kck[SS_CHUNK]; /* ks's records (soa_view) */
     double ksqm[SS_CHUNK];
+    uint8_t kact[SS_CHUNK + 8];
     int act[SS_CHUNK];
     bt_batch wq;
 } bb_scratch;
@@ -1876,7 +1896,7 @@ static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pai
             for (; word; word &= word - 1) {
                 const int k = kb + j8 + __builtin_ctzll(word) / 8;
                 out[m] = k;
-                pair_soa_set(soa, m++, &pairs[k]); /* (its records too, while the record is at hand) */
+                pair_soa_set(soa, m++, &pairs[k], w->bb.hist); /* (its records too, while the record is at hand) */
             }
         }
     }
@@ -2277,7 +2297,9 @@ static sd_status owned_update(sd_world *w, int T)
             int32_t *restrict sa = o->soa.a, *restrict sb = o->soa.b, *restrict so = o->soa.off,
                               *restrict sc = o->soa.ck, *restrict list = o->list;
             double *restrict sq = o->soa.sqm;
+            uint8_t *restrict sf = o->soa.act;
             const sd_pair *restrict pairs = w->bb.p;
+            const sd_hist *restrict hist = w->bb.hist;
             /* in blocks: the answers of a block (near_keep_range), then its near candidates
              * only, found 8 answers at a time, while the block's records are still in L1
              * (writing every candidate's records and overwriting those not kept cost as much
@@ -2306,11 +2328,12 @@ static sd_status owned_update(sd_world *w, int T)
                         so[m] = p->off;
                         sc[m] = ck_pack(p->kind, p->cap);
                         sq[m] = p->sqrt_m_eff;
+                        sf[m] = (uint8_t)(hist[p->off].feature >= 0);
                         list[m] = k;
                         if (cross) { /* few */
                             o->cross[xc] = k;
                             o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
-                            pair_soa_set(&o->xsoa, xc, p);
+                            pair_soa_set(&o->xsoa, xc, p, hist);
                             list[m] = ~xc++;
                             q++;
                         }
@@ -2420,11 +2443,14 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     if (o->list[j] >= 0) {
                         x->ks[n] = o->list[j];
                         x->ka[n] = o->soa.a[j], x->kb[n] = o->soa.b[j], x->koff[n] = o->soa.off[j];
-                        x->kck[n] = o->soa.ck[j], x->ksqm[n] = o->soa.sqm[j];
+                        x->kck[n] = o->soa.ck[j], x->ksqm[n] = o->soa.sqm[j], x->kact[n] = o->soa.act[j];
                         n++;
                     }
-                const soa_view v = {x->ka, x->kb, x->koff, x->kck, x->ksqm};
+                const soa_view v = {x->ka, x->kb, x->koff, x->kck, x->ksqm, x->kact};
                 bb_chunk(w, law, x->ks, &v, n, x->out, x->used, &x->q, NULL);
+                /* the flags the filter left, back to the entries */
+                for (int j = j0, i = 0; j < j1; j++)
+                    if (o->list[j] >= 0) o->soa.act[j] = x->kact[i++];
                 /* the entries in contact, in list order: act = (entry j) << 8 | (own result i) */
                 int na = 0, i = 0;
                 for (int j = j0; j < j1; j++) {
