@@ -50,11 +50,14 @@ static void grow_field(void *array, size_t elem, const char *name, void *ctx)
     grow_ctx *g = ctx;
     void **p = array;
     if (g->failed) return;
-    void *q = realloc(*p, (size_t)g->cap * elem);
+    /* one element past the capacity, zeroed: SIMD code reads a vec3 as a 32-byte row (x, y, z
+     * and the next element's first 8 bytes), so the last element must have bytes after it */
+    void *q = realloc(*p, (size_t)(g->cap + 1) * elem);
     if (!q) {
         g->failed = 1;
         return;
     }
+    memset((char *)q + (size_t)g->cap * elem, 0, elem);
     *p = q;
 }
 

@@ -26,9 +26,13 @@ __attribute__((target("avx2"))) static inline void sd_transpose4(__m256d a, __m2
     r[3] = _mm256_permute2f128_pd(hi_ab, hi_cd, 0x31);
 }
 
-/* vec3 i of the array at p (3 doubles each) as the row (x, y, z, 0): a masked load, which reads
- * nothing past z (the last element of an array has nothing after it) */
+/* vec3 i of the array at p (3 doubles each) as the row (x, y, z, w), w the next element's x and
+ * never used: a plain 32-byte load (the body store keeps an element past its capacity) */
+#ifdef SD_XYZ_MASKED
 #define SD_XYZ_LOAD(p, i) _mm256_maskload_pd((p) + 3 * (i), _mm256_setr_epi64x(-1, -1, -1, 0))
+#else
+#define SD_XYZ_LOAD(p, i) _mm256_loadu_pd((p) + 3 * (i))
+#endif
 #endif
 
 #endif
