@@ -2393,8 +2393,9 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
             /* into the cross pairs' own arrays, in cross order: the lines each owner then
              * reads from the other's cache are packed, not one or two per pair of the store */
             for (int i = 0; i < n; i++) {
-                o->xout[c + i] = x->out[i];
-                o->xact[c + i] = (uint8_t)(x->used[i] > 0);
+                const int u = x->used[i] > 0;
+                if (u) o->xout[c + i] = x->out[i]; /* (read only where xact is set) */
+                o->xact[c + i] = (uint8_t)u;
                 count += x->used[i];
             }
         }
