@@ -1813,9 +1813,14 @@ static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, 
  * remade the near pairs every ~15 steps. Marked: the bodies in the top octaves of the squared
  * surface speed (|v|, plus a log's tilt at its bounding radius, |omega x a| r_b) that together
  * hold at most one moving body in SD_NEAR_FAST_SHARE; their few extra pairs are tested at each
- * step. Which bodies are marked does not change the bits. Returns how many. */
+ * step. Which bodies are marked does not change the bits. Returns how many.
+ * Off by default since the near pairs are remade in blocks (owned_update): a remake then cost
+ * ~0.14 ms on two threads, and the marks' own costs (the speeds' histogram, ~35 us a remake,
+ * and every candidate of a marked body tested at each step) came to more than the remakes they
+ * save: with them off, an A/B in one process (blocks of 500 steps alternated) ran the capture
+ * 3.4-5.7 % faster, the flow 1.6 % and the packing 1.2 % (docs/performance.md). */
 #define SD_NEAR_FAST_SHARE 32
-static int near_fast_on = 1;
+static int near_fast_on = 0;
 
 int sd_near_fast_set(int on)
 {

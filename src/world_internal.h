@@ -408,8 +408,8 @@ int sd_sc_geom_set(int on);
 /* The wall pass over the bodies with a wall pair near touching only (1, the default) or over
  * all with wall pairs (0); the same bits either way. Returns the previous setting. */
 int sd_wall_near_set(int on);
-/* Whether the near pairs mark the fastest bodies (w->nfast; default on): any setting gives the
- * same bits. Returns the previous setting. */
+/* Whether the near pairs mark the fastest bodies (w->nfast; default off, contact.c): any
+ * setting gives the same bits. Returns the previous setting. */
 int sd_near_fast_set(int on);
 /* The logs' moves in batches of SIMD lanes (1, the default) or one by one (0); returns the
  * setting before. Either gives the same bits (integrate.c). */
