@@ -1832,12 +1832,17 @@ int sd_near_fast_set(int on)
 static int near_fast_make(sd_world *w)
 {
     const sd_bodies *b = &w->b;
+    w->nfast_k = 0;
+    if (!near_fast_on) { /* none marked, and no marks for the moves to read (nfast_n) */
+        w->nfast_n = -1;
+        return 0;
+    }
     if (sd_grow((void **)&w->nfast, &w->nfast_cap, b->n + 1, 1)) return -1;
     memset(w->nfast, 0, (size_t)b->n + 1);
     w->nfast_n = b->n;
     w->nfast_k = 0;
     const int nm = w->mov_n, k = nm / SD_NEAR_FAST_SHARE;
-    if (!near_fast_on || k < 1 || w->mov_bn != b->n) return 0;
+    if (k < 1 || w->mov_bn != b->n) return 0;
     /* the squared surface speeds by octave (their exponent), then the lowest octave at which
      * the marked ones stay within k */
     enum { NB = 64, E0 = 1023 - 40 }; /* octaves of 2^-40 .. 2^23 (m/s)^2 */
