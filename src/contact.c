@@ -1529,7 +1529,7 @@ typedef struct {
     int32_t ks[SS_CHUNK];
     int32_t ka[SS_CHUNK], kb[SS_CHUNK], koff[SS_CHUNK], kck[SS_CHUNK]; /* ks's records (soa_view) */
     double ksqm[SS_CHUNK];
-    uint8_t kact[SS_CHUNK + 8];
+    uint8_t kact[SS_CHUNK]; /* ks's spring flags (soa_view.act) */
     int act[SS_CHUNK];
     bt_batch wq;
 } bb_scratch;
@@ -1840,7 +1840,6 @@ static int near_fast_make(sd_world *w)
     if (sd_grow((void **)&w->nfast, &w->nfast_cap, b->n + 1, 1)) return -1;
     memset(w->nfast, 0, (size_t)b->n + 1);
     w->nfast_n = b->n;
-    w->nfast_k = 0;
     const int nm = w->mov_n, k = nm / SD_NEAR_FAST_SHARE;
     if (k < 1 || w->mov_bn != b->n) return 0;
     /* the squared surface speeds by octave (their exponent), then the lowest octave at which

@@ -179,6 +179,8 @@ static void test_static(int dense)
 static long near_logs_out;  /* log pairs left out of the near list, summed over the checks */
 static long near_by_owners; /* checks of the owners' segments (two threads) */
 
+static long flags_wrong, flags_checked; /* near_check: spring flags against their slots */
+
 static void near_check(const sd_world *w, long *checked, long *shorter, long *missing)
 {
     if (sd_neighbor_needs_rebuild(w) || w->near_stamp != w->timers.rebuilds ||
@@ -192,15 +194,28 @@ static void near_check(const sd_world *w, long *checked, long *shorter, long *mi
         CHECK(!"scene too large for near_check");
         return;
     }
+    /* each near sphere pair's flag (sd_pair_soa.act) says whether its slot holds a spring,
+     * as the slot does: the touch filter reads the flag instead */
+    const sd_hist *hist = w->bb.hist;
     if (w->near_soa_version == w->near_version + 1) {
-        for (int j = 0; j < w->near_n; j++)
+        for (int j = 0; j < w->near_n; j++) {
             near[nn++] = w->near[j];
+            const sd_pair *p = &w->bb.p[w->near[j]];
+            if (p->kind == SD_PAIR_SS) flags_wrong += w->near_soa.act[j] != (hist[p->off].feature >= 0);
+            flags_checked += p->kind == SD_PAIR_SS;
+        }
     } else if (w->owned && w->owned->stamp == w->near_version) {
         const sd_owned *o = w->owned;
         near_by_owners++;
         for (int t = 0; t < o->T; t++)
-            for (int j = o->K[t]; j < o->seg1[t]; j++)
-                near[nn++] = o->list[j] >= 0 ? o->list[j] : o->cross[~o->list[j]];
+            for (int j = o->K[t]; j < o->seg1[t]; j++) {
+                const int own = o->list[j] >= 0;
+                near[nn++] = own ? o->list[j] : o->cross[~o->list[j]];
+                const sd_pair *p = &w->bb.p[near[nn - 1]];
+                const uint8_t act = own ? o->soa.act[j] : o->xsoa.act[~o->list[j]];
+                if (p->kind == SD_PAIR_SS) flags_wrong += act != (hist[p->off].feature >= 0);
+                flags_checked += p->kind == SD_PAIR_SS;
+            }
     } else {
         CHECK(!"no current near list");
         return;
@@ -912,6 +927,9 @@ int main(void)
     test_rebuild_threads();
     test_moving_index();
     printf("near-list checks of the owners' segments (two or more threads): %ld\n", near_by_owners);
+    printf("near sphere pairs whose spring flag was checked against the slot: %ld, wrong %ld\n", flags_checked,
+           flags_wrong);
+    CHECK(flags_checked > 100000 && flags_wrong == 0);
 #ifdef _OPENMP
     if (omp_get_max_threads() > 1) CHECK(near_by_owners > 1000);
 #endif
