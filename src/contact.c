@@ -808,7 +808,7 @@ __attribute__((constructor)) static void simd_tables_init(void)
 }
 
 /* Step 1 of bb_chunk in AVX2, 4 pairs at a time: ss_filter_range's operations in its order
- * (same bits), the centres read as rows (a masked 32-byte load each) and turned into lanes,
+ * (same bits), the centres read as rows (SD_XYZ_LOAD) and turned into lanes,
  * the touching pairs packed into the batch by a permutation from a table and stored 4 lanes
  * wide (the arrays are padded by SS_PAD). The log pairs of a group take the scalar loop's path
  * after its sphere lanes, in pair order, as in ss_filter512. Runs while 4 pairs remain and

@@ -226,8 +226,8 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
 }
 /* The spheres among mov[k0 .. k1) in AVX2, 4 bodies at a time while 4 remain (returns where it
  * stopped; the rest go through the batch): fluid_spheres512's operations, so the same bits, with
- * each body's centre and velocity read as a row (a masked 32-byte load) and its force written
- * into out[k - k0] as one. The logs among them are left to the caller. */
+ * each body's centre and velocity read as a row (SD_XYZ_LOAD) and its force written into
+ * out[k - k0] as one. The logs among them are left to the caller. */
 __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_ctx *fc, sd_world *w, const int32_t *mov,
                                                             int k0, int k1, int32_t *logs, int *nlogs, sd_vec3 *out)
 {
@@ -235,7 +235,7 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
     sd_bodies *b = &w->b;
     const double *pos = &b->pos[0].x, *vel = &b->vel[0].x, *rad = b->radius;
     const uint8_t *shape = b->shape;
-    sd_vec3 *const ext = out - k0; /* (ext[k]: body mov[k]'s) */
+    sd_vec3 *const ext = out; /* (ext[k - k0]: body mov[k]'s) */
     const double h = p->h, hd = fc->h_d >= h ? fc->h_d : h;
     double al, be;
     sd_fluid_capture_coeffs(h, hd, &al, &be);
@@ -316,8 +316,8 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
             sd_transpose4(tx, ty, tz, zero, row);
             for (int l = 0; l < 4; l++)
                 if (sph >> l & 1) { /* x and y in one 16-byte store, z alone (no masked store: slow on AMD) */
-                    _mm_storeu_pd(&ext[kq + l].x, _mm256_castpd256_pd128(row[l]));
-                    ext[kq + l].z = _mm_cvtsd_f64(_mm256_extractf128_pd(row[l], 1));
+                    _mm_storeu_pd(&ext[kq - k0 + l].x, _mm256_castpd256_pd128(row[l]));
+                    ext[kq - k0 + l].z = _mm_cvtsd_f64(_mm256_extractf128_pd(row[l], 1));
                 }
         }
     }
