@@ -1884,6 +1884,28 @@ static int near_mark_ready(sd_world *w)
     return fresh;
 }
 
+/* The near ones among candidates kb .. ke-1 (ke - kb <= NEAR_BLOCK), ascending, into near[];
+ * returns how many. Their answers made (near_keep_range), then found 8 at a time (a 64-bit word
+ * of answer bytes, each 0 or 1), while the block's records are still in L1: writing every
+ * candidate's records and overwriting those not kept cost as much as the tests, with about one
+ * candidate in four kept in the paper's flow. */
+static int near_block(sd_world *w, double skin, int kb, int ke, int fresh, int nf, int32_t *near)
+{
+    const uint8_t *kp = near_keep_range(w, skin, kb, ke, fresh, nf);
+    int n = 0;
+    for (int j8 = 0; j8 < ke - kb; j8 += 8) {
+        uint64_t word = 0;
+        if (ke - kb - j8 >= 8)
+            memcpy(&word, kp + j8, 8);
+        else
+            for (int l = 0; l < ke - kb - j8; l++)
+                word |= (uint64_t)kp[j8 + l] << 8 * l;
+        for (; word; word &= word - 1)
+            near[n++] = kb + j8 + __builtin_ctzll(word) / 8;
+    }
+    return n;
+}
+
 /* The candidates worth testing (near_update), into out in ascending order, with their
  * records; returns how many. */
 static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pair_soa *soa)
@@ -1891,22 +1913,13 @@ static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pai
     const sd_pair *pairs = w->bb.p;
     const int nbb = w->bb.n, nf = sd_bed_start(&w->b);
     int m = 0;
-    /* in blocks, the near ones found 8 answers at a time (as owned_update) */
+    int32_t near[NEAR_BLOCK];
     for (int kb = 0; kb < nbb; kb += NEAR_BLOCK) {
         const int ke = nbb - kb < NEAR_BLOCK ? nbb : kb + NEAR_BLOCK;
-        const uint8_t *kp = near_keep_range(w, skin, kb, ke, fresh, nf);
-        for (int j8 = 0; j8 < ke - kb; j8 += 8) {
-            uint64_t word = 0;
-            if (ke - kb - j8 >= 8)
-                memcpy(&word, kp + j8, 8);
-            else
-                for (int l = 0; l < ke - kb - j8; l++)
-                    word |= (uint64_t)kp[j8 + l] << 8 * l;
-            for (; word; word &= word - 1) {
-                const int k = kb + j8 + __builtin_ctzll(word) / 8;
-                out[m] = k;
-                pair_soa_set(soa, m++, &pairs[k], w->bb.hist); /* (its records too, while the record is at hand) */
-            }
+        const int nn = near_block(w, skin, kb, ke, fresh, nf, near);
+        for (int q = 0; q < nn; q++) {
+            out[m] = near[q];
+            pair_soa_set(soa, m++, &pairs[near[q]], w->bb.hist); /* (its records too, while the record is at hand) */
         }
     }
     return m;
@@ -2309,47 +2322,36 @@ static sd_status owned_update(sd_world *w, int T)
             uint8_t *restrict sf = o->soa.act;
             const sd_pair *restrict pairs = w->bb.p;
             const sd_hist *restrict hist = w->bb.hist;
-            /* in blocks: the answers of a block (near_keep_range), then its near candidates
-             * only, found 8 answers at a time, while the block's records are still in L1
-             * (writing every candidate's records and overwriting those not kept cost as much
-             * as the tests, with about one candidate in four kept in the paper's flow) */
+            int32_t near[NEAR_BLOCK];
             for (int kb = k0; kb < k1; kb += NEAR_BLOCK) {
                 const int ke = k1 - kb < NEAR_BLOCK ? k1 : kb + NEAR_BLOCK;
-                const uint8_t *kp = near_keep_range(w, skin, kb, ke, fresh, nf);
-                for (int j8 = 0; j8 < ke - kb; j8 += 8) {
-                    uint64_t word = 0;
-                    if (ke - kb - j8 >= 8)
-                        memcpy(&word, kp + j8, 8);
-                    else
-                        for (int l = 0; l < ke - kb - j8; l++)
-                            word |= (uint64_t)kp[j8 + l] << 8 * l;
-                    for (; word; word &= word - 1) { /* (the answers are 0 or 1: one bit a byte) */
-                        const int k = kb + j8 + __builtin_ctzll(word) / 8;
-                        const sd_pair *p = &pairs[k];
-                        int cross = 0, ta = t, tb = t;
-                        /* both its own or the bed (after o->nf, its partner's owner's: most) */
-                        if (!(((unsigned)p->a - i0 < len || p->a >= nf) && ((unsigned)p->b - i0 < len || p->b >= nf))) {
-                            pair_owners(&w->b, p, o->B, T, &ta, &tb);
-                            cross = ta != tb;
-                        }
-                        sa[m] = p->a; /* (pair_soa_set) */
-                        sb[m] = p->b;
-                        so[m] = p->off;
-                        sc[m] = ck_pack(p->kind, p->cap);
-                        sq[m] = p->sqrt_m_eff;
-                        sf[m] = (uint8_t)(hist[p->off].feature >= 0);
-                        list[m] = k;
-                        if (cross) { /* few */
-                            o->cross[xc] = k;
-                            o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
-                            pair_soa_set(&o->xsoa, xc, p, hist);
-                            list[m] = ~xc++;
-                            q++;
-                        }
-                        /* xp[j - k0 + 1]: the cross entries among entries k0 .. j */
-                        xp[m - k0 + 1] = q;
-                        m++;
+                const int nn = near_block(w, skin, kb, ke, fresh, nf, near);
+                for (int qn = 0; qn < nn; qn++) {
+                    const int k = near[qn];
+                    const sd_pair *p = &pairs[k];
+                    int cross = 0, ta = t, tb = t;
+                    /* both its own or the bed (after o->nf, its partner's owner's: most) */
+                    if (!(((unsigned)p->a - i0 < len || p->a >= nf) && ((unsigned)p->b - i0 < len || p->b >= nf))) {
+                        pair_owners(&w->b, p, o->B, T, &ta, &tb);
+                        cross = ta != tb;
                     }
+                    sa[m] = p->a; /* (pair_soa_set) */
+                    sb[m] = p->b;
+                    so[m] = p->off;
+                    sc[m] = ck_pack(p->kind, p->cap);
+                    sq[m] = p->sqrt_m_eff;
+                    sf[m] = (uint8_t)(hist[p->off].feature >= 0);
+                    list[m] = k;
+                    if (cross) { /* few */
+                        o->cross[xc] = k;
+                        o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
+                        pair_soa_set(&o->xsoa, xc, p, hist);
+                        list[m] = ~xc++;
+                        q++;
+                    }
+                    /* xp[j - k0 + 1]: the cross entries among entries k0 .. j */
+                    xp[m - k0 + 1] = q;
+                    m++;
                 }
             }
             o->seg1[t] = m;
