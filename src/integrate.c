@@ -7,12 +7,32 @@
 #include "core/simd.h"
 #include "world_internal.h"
 
+#include <string.h>
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(SD_NO_CLONES)
+#define SD_MOVE256 1 /* (core/simd.h has included immintrin.h) */
+#endif
+
 #ifdef _OPENMP
 #include <omp.h>
 #endif
 
 /* The logs moved in batches (cyl_steps), or one by one (cyl_step; sd_cyl_batch_set). */
 static int cyl_batch_on = 1;
+
+/* The spheres moved four at a time in AVX2 lanes where the CPU has them (move_block256), or
+ * one by one (sd_move_lanes_set(0)): the same bits. */
+static int move_lanes_on = 1;
+static _Thread_local long move_lanes_groups; /* the groups of four moved in lanes, by this thread */
+
+long sd_move_lanes_count(void) { return move_lanes_groups; }
+
+int sd_move_lanes_set(int on)
+{
+    const int was = move_lanes_on;
+    move_lanes_on = on != 0;
+    return was;
+}
 
 int sd_cyl_batch_set(int on)
 {
@@ -173,6 +193,46 @@ static double cyl_steps(sd_bodies *b, const int32_t *lg, int n, double dt, doubl
     return xf;
 }
 
+/* One body's move (move_block's loop body): e its external force. A log's centre moves here,
+ * its turning is left to the caller (its index appended to lg). */
+static inline __attribute__((always_inline)) void move_one(int i, sd_vec3 e, double dt, sd_vec3 g,
+                                                           const sd_vec3 *restrict force,
+                                                           const double *restrict inv_mass, sd_vec3 *restrict vel,
+                                                           sd_vec3 *restrict pos, sd_vec3 *restrict omega,
+                                                           const sd_vec3 *restrict torque,
+                                                           const double *restrict inv_i_ax,
+                                                           const double *restrict radius,
+                                                           const uint8_t *restrict shape, const uint8_t *restrict nf,
+                                                           double *vm, double *vs, double *xf, int32_t *restrict lg,
+                                                           int *nlg)
+{
+    const sd_vec3 f = v3_add(force[i], e);
+    const sd_vec3 acc = v3_madd(g, f, inv_mass[i]);
+    /* the new velocity and centre kept in registers, not read back from the store right
+     * after being written (x and y by one 16-byte store): on AMD Zen 3 a tenth of this
+     * loop's samples sat on the read of y, as if it waited for the store. The same values
+     * either way. */
+    const sd_vec3 vn = v3_madd(vel[i], acc, dt);
+    const sd_vec3 pn = v3_madd(pos[i], vn, dt);
+    vel[i] = vn;
+    pos[i] = pn;
+    if (shape[i] == SD_SHAPE_SPHERE) {
+        omega[i] = v3_madd(omega[i], torque[i], dt * inv_i_ax[i]);
+        /* a sphere's displacement since the rebuild is bounded by the summed largest |v| dt
+         * (sd_world_after_moves checks it exactly only when that bound nears half the
+         * margin) */
+        const double v2 = v3_norm2(vn);
+        *vm = v2 > *vm ? v2 : *vm;
+        /* the near list's drift: the spheres not marked fast (nfast), whose pairs are all near */
+        const double v2s = nf && nf[i] ? 0.0 : v2;
+        *vs = v2s > *vs ? v2s : *vs;
+        const double x = pn.x + radius[i];
+        *xf = x > *xf ? x : *xf;
+    } else {
+        lg[(*nlg)++] = i;
+    }
+}
+
 /* The moves of a block's spheres, and the centres of its logs (their turning left to the
  * caller: their indices appended to lg, whose new count is returned). The arrays through
  * restrict parameters: through b, gcc loaded each array's address again after every store
@@ -189,37 +249,102 @@ static inline int move_block(const int32_t *restrict mov, int kb, int ke, double
     for (int k = kb; k < ke; k++) {
         const int i = mov[k];
         /* the external force from the block's buffer (ext_blk: ext[k - kb]) or the store's */
-        const sd_vec3 f = v3_add(force[i], ext[ext_blk ? k - kb : i]);
-        const sd_vec3 acc = v3_madd(g, f, inv_mass[i]);
-        /* the new velocity and centre kept in registers, not read back from the store right
-         * after being written (x and y by one 16-byte store): on AMD Zen 3 a tenth of this
-         * loop's samples sat on the read of y, as if it waited for the store. The same values
-         * either way. */
-        const sd_vec3 vn = v3_madd(vel[i], acc, dt);
-        const sd_vec3 pn = v3_madd(pos[i], vn, dt);
-        vel[i] = vn;
-        pos[i] = pn;
-        if (shape[i] == SD_SHAPE_SPHERE) {
-            omega[i] = v3_madd(omega[i], torque[i], dt * inv_i_ax[i]);
-            /* a sphere's displacement since the rebuild is bounded by the summed largest |v| dt
-             * (sd_world_after_moves checks it exactly only when that bound nears half the
-             * margin) */
-            const double v2 = v3_norm2(vn);
-            vm = v2 > vm ? v2 : vm;
-            /* the near list's drift: the spheres not marked fast (nfast), whose pairs are all near */
-            const double v2s = nf && nf[i] ? 0.0 : v2;
-            vs = v2s > vs ? v2s : vs;
-            const double x = pn.x + radius[i];
-            xf = x > xf ? x : xf;
-        } else {
-            lg[nlg++] = i;
-        }
+        move_one(i, ext[ext_blk ? k - kb : i], dt, g, force, inv_mass, vel, pos, omega, torque, inv_i_ax, radius,
+                 shape, nf, &vm, &vs, &xf, lg, &nlg);
     }
     *vmax = vm;
     *vslow = vs;
     *xfront = xf;
     return nlg;
 }
+
+#ifdef SD_MOVE256
+/* move_block in AVX2 lanes, for four spheres at a time that sit next to each other in the store
+ * (i .. i + 3, the moving bodies' usual order): their rows of 3 doubles make 12 doubles in a
+ * row, three 256-bit registers, and the moves are the same operations on each element (the
+ * per-body factors 1/m and Δt/I spread to the elements by permutes); |v|^2 and the front take
+ * the rows apart into x, y, z lanes. The same bits as move_one: the same IEEE operations in
+ * the same order, nothing contracted, and maxima taken in any order give the same maximum.
+ * Any other body (a log, a fixed body between, a block's last 1-3) goes through move_one.
+ * Not used with the fast marks (nf), which keep their own drift. */
+__attribute__((target("avx2"))) static int move_block256(const int32_t *restrict mov, int kb, int ke, double dt,
+                                                         sd_vec3 g, const sd_vec3 *restrict force,
+                                                         const sd_vec3 *restrict ext, const double *restrict inv_mass,
+                                                         sd_vec3 *restrict vel, sd_vec3 *restrict pos,
+                                                         sd_vec3 *restrict omega, const sd_vec3 *restrict torque,
+                                                         const double *restrict inv_i_ax,
+                                                         const double *restrict radius, const uint8_t *restrict shape,
+                                                         double *vmax, double *vslow, double *xfront,
+                                                         int32_t *restrict lg, int nlg, const int ext_blk)
+{
+    double vm = *vmax, vs = *vslow, xf = *xfront;
+    const __m256d vdt = _mm256_set1_pd(dt);
+    /* g spread over the rows' elements: x y z x | y z x y | z x y z */
+    const __m256d g0 = _mm256_setr_pd(g.x, g.y, g.z, g.x), g1 = _mm256_setr_pd(g.y, g.z, g.x, g.y),
+                  g2 = _mm256_setr_pd(g.z, g.x, g.y, g.z);
+    __m256d vm4 = _mm256_set1_pd(-INFINITY), xf4 = vm4;
+    const uint32_t four = 0x01010101u * SD_SHAPE_SPHERE;
+    long groups = 0;
+    for (int k = kb; k < ke; k++) {
+        const int i = mov[k];
+        uint32_t sh = 0;
+        if (k + 4 <= ke) memcpy(&sh, shape + i, sizeof sh);
+        if (k + 4 > ke || mov[k + 3] != i + 3 || sh != four) {
+            move_one(i, ext[ext_blk ? k - kb : i], dt, g, force, inv_mass, vel, pos, omega, torque, inv_i_ax, radius,
+                     shape, NULL, &vm, &vs, &xf, lg, &nlg);
+            continue;
+        }
+        const double *fp = &force[i].x, *ep = &ext[ext_blk ? k - kb : i].x;
+        double *vp = &vel[i].x, *pp = &pos[i].x, *op = &omega[i].x;
+        const double *tp = &torque[i].x;
+        /* 1/m and Δt/I of bodies 0..3 spread as b0 b0 b0 b1 | b1 b1 b2 b2 | b2 b3 b3 b3 */
+        const __m256d im = _mm256_loadu_pd(inv_mass + i);
+        const __m256d sa = _mm256_mul_pd(vdt, _mm256_loadu_pd(inv_i_ax + i));
+        const __m256d m0 = _mm256_permute4x64_pd(im, 0x40), m1 = _mm256_permute4x64_pd(im, 0xA5),
+                      m2 = _mm256_permute4x64_pd(im, 0xFE);
+        const __m256d s0 = _mm256_permute4x64_pd(sa, 0x40), s1 = _mm256_permute4x64_pd(sa, 0xA5),
+                      s2 = _mm256_permute4x64_pd(sa, 0xFE);
+        __m256d v[3], p[3];
+        const __m256d m[3] = {m0, m1, m2}, s[3] = {s0, s1, s2}, gg[3] = {g0, g1, g2};
+        for (int r = 0; r < 3; r++) {
+            const __m256d f = _mm256_add_pd(_mm256_loadu_pd(fp + 4 * r), _mm256_loadu_pd(ep + 4 * r));
+            const __m256d acc = _mm256_add_pd(gg[r], _mm256_mul_pd(m[r], f));
+            v[r] = _mm256_add_pd(_mm256_loadu_pd(vp + 4 * r), _mm256_mul_pd(vdt, acc));
+            p[r] = _mm256_add_pd(_mm256_loadu_pd(pp + 4 * r), _mm256_mul_pd(vdt, v[r]));
+            _mm256_storeu_pd(vp + 4 * r, v[r]);
+            _mm256_storeu_pd(pp + 4 * r, p[r]);
+            const __m256d om = _mm256_add_pd(_mm256_loadu_pd(op + 4 * r), _mm256_mul_pd(s[r], _mm256_loadu_pd(tp + 4 * r)));
+            _mm256_storeu_pd(op + 4 * r, om);
+        }
+        /* rows a = x0 y0 z0 x1, b = y1 z1 x2 y2, c = z2 x3 y3 z3 into lanes x, y, z */
+        const __m256d vP = _mm256_permute2f128_pd(v[0], v[2], 0x20), vQ = _mm256_permute2f128_pd(v[0], v[2], 0x31);
+        const __m256d vx = _mm256_blend_pd(_mm256_blend_pd(vP, vQ, 0x2), v[1], 0x4);
+        const __m256d vy = _mm256_shuffle_pd(_mm256_blend_pd(vP, v[1], 0xC), _mm256_blend_pd(v[1], vQ, 0xC), 0x5);
+        const __m256d vz = _mm256_blend_pd(_mm256_blend_pd(vQ, vP, 0x4), v[1], 0x2);
+        const __m256d v2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)),
+                                         _mm256_mul_pd(vz, vz));
+        vm4 = _mm256_max_pd(v2, vm4); /* v2 > vm4 ? v2 : vm4, as move_one */
+        const __m256d pP = _mm256_permute2f128_pd(p[0], p[2], 0x20), pQ = _mm256_permute2f128_pd(p[0], p[2], 0x31);
+        const __m256d px = _mm256_blend_pd(_mm256_blend_pd(pP, pQ, 0x2), p[1], 0x4);
+        xf4 = _mm256_max_pd(_mm256_add_pd(px, _mm256_loadu_pd(radius + i)), xf4);
+        k += 3;
+        groups++;
+    }
+    move_lanes_groups += groups;
+    double l[8];
+    _mm256_storeu_pd(l, vm4);
+    _mm256_storeu_pd(l + 4, xf4);
+    for (int j = 0; j < 4; j++) {
+        vm = l[j] > vm ? l[j] : vm;
+        vs = l[j] > vs ? l[j] : vs; /* (no fast marks: each sphere's v2s is its v2) */
+        xf = l[4 + j] > xf ? l[4 + j] : xf;
+    }
+    *vmax = vm;
+    *vslow = vs;
+    *xfront = xf;
+    return nlg;
+}
+#endif
 
 int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves *mm)
 {
@@ -235,11 +360,25 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves 
     int32_t lg[CYL_BATCH + SD_EXT_BLOCK];
     sd_vec3 ext[SD_EXT_BLOCK]; /* a block's external forces (ext_fn) */
     int nlg = 0;
+#ifdef SD_MOVE256
+    const int lanes = move_lanes_on && !nf && sd_simd_level() >= SD_SIMD_AVX2;
+#endif
     for (int kb = k0; kb < k1; kb += SD_EXT_BLOCK) {
         const int ke = k1 - kb < SD_EXT_BLOCK ? k1 : kb + SD_EXT_BLOCK;
         /* the external forces of a block just before it moves: its bodies are still in L1 */
+        if (w->ext_fn) w->ext_fn(w->ext_ctx, w, mov, kb, ke, ext);
+#ifdef SD_MOVE256
+        if (lanes) {
+            if (w->ext_fn)
+                nlg = move_block256(mov, kb, ke, dt, g, b->force, ext, b->inv_mass, b->vel, b->pos, b->omega,
+                                    b->torque, b->inv_i_ax, b->radius, b->shape, &vm, &vs, &xf, lg, nlg, 1);
+            else
+                nlg = move_block256(mov, kb, ke, dt, g, b->force, b->ext_force, b->inv_mass, b->vel, b->pos,
+                                    b->omega, b->torque, b->inv_i_ax, b->radius, b->shape, &vm, &vs, &xf, lg, nlg,
+                                    0);
+        } else
+#endif
         if (w->ext_fn) {
-            w->ext_fn(w->ext_ctx, w, mov, kb, ke, ext);
             nlg = move_block(mov, kb, ke, dt, g, b->force, ext, b->inv_mass, b->vel, b->pos, b->omega, b->torque,
                              b->inv_i_ax, b->radius, b->shape, nf, &vm, &vs, &xf, lg, nlg, 1);
         } else {

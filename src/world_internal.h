@@ -414,6 +414,8 @@ int sd_near_fast_set(int on);
 /* The logs' moves in batches of SIMD lanes (1, the default) or one by one (0); returns the
  * setting before. Either gives the same bits (integrate.c). */
 int sd_cyl_batch_set(int on);
+int sd_move_lanes_set(int on); /* integrate.c: the spheres moved in AVX2 lanes (on by default) */
+long sd_move_lanes_count(void); /* the groups of four spheres the calling thread moved in lanes */
 /* Sphere-log lanes filled by the AVX2 geometry since the start (for the tests). */
 long sd_sc_geom_count(void);
 long sd_sc_lanes_count(long *redo);

@@ -472,16 +472,31 @@ typedef struct {
     long rebuilds;
 } heap_end;
 
-static heap_end heap_run(int batch, long steps)
+static heap_end heap_run(int batch, long steps, int lanes, int logs_only)
 {
-    const int was = sd_cyl_batch_set(batch);
+    const int was = sd_cyl_batch_set(batch), was_lanes = sd_move_lanes_set(lanes);
     sd_world *w = make_world(v3(0, 0, -G), 1e-5, 0.404);
     add_floor(w, -0.3, 0.3, -0.3, 0.3, 6, 6);
     int n = 0;
     for (int k = 0; k < 90; k++) {
         const double x = -0.2 + 0.1 * (k % 5), y = -0.2 + 0.1 * (k / 5 % 5), z = 0.02 + 0.03 * (k / 25);
-        if (k % 9 == 4) { /* a sphere now and then, between the logs in the store */
-            add_ball(w, v3(x, y, z), 0.008, 2650.0);
+        /* a sphere now and then, between the logs in the store; or mostly spheres, in runs of
+         * eight between two logs (sizes and densities apart, so that each has its own 1/m and
+         * 1/I) */
+        if (logs_only ? k % 9 == 4 : k % 9 != 4) {
+            if (logs_only) {
+                add_ball(w, v3(x, y, z), 0.008, 2650.0);
+                continue;
+            }
+            /* thrown at each other, spinning, so that they touch within the run and each
+             * one's force and torque count */
+            sd_sphere_def sp = sd_sphere_def_default();
+            sp.pos = v3(x, y, z);
+            sp.radius = 0.006 + 0.0003 * (k % 7);
+            sp.density = 2650.0 - 40.0 * (k % 5);
+            sp.vel = v3(3.0 * sin(1.7 * k), 3.0 * cos(1.1 * k), -1.0 + 0.5 * sin(0.9 * k));
+            sp.omega = v3(40.0 * sin(0.3 * k), 30.0 * cos(0.7 * k), 20.0 * sin(1.9 * k));
+            CHECK(sd_world_add_sphere(w, &sp) >= 0);
             continue;
         }
         const double t = 0.7 * k;
@@ -496,17 +511,18 @@ static heap_end heap_run(int batch, long steps)
                 v3(0.1 * sin(t), 0.0, -0.2), om, 0);
         n++;
     }
-    CHECK(n == 80);
+    CHECK(n == (logs_only ? 80 : 10));
     CHECK(sd_world_run(w, steps) == SD_OK);
     const heap_end e = {sd_world_state_hash(w), w->near_drift, w->front, w->timers.rebuilds};
     sd_world_destroy(w);
     sd_cyl_batch_set(was);
+    sd_move_lanes_set(was_lanes);
     return e;
 }
 
 static void test_batched_moves(void)
 {
-    const heap_end one = heap_run(0, 4000), bat = heap_run(1, 4000);
+    const heap_end one = heap_run(0, 4000, 1, 1), bat = heap_run(1, 4000, 1, 1);
     printf("7 logs moved in batches: state hash %016llx, near drift %.17g m, front %.17g m, %ld rebuilds; one by "
            "one %016llx, %.17g, %.17g, %ld\n",
            (unsigned long long)bat.hash, bat.near_drift, bat.front, bat.rebuilds, (unsigned long long)one.hash,
@@ -516,6 +532,30 @@ static void test_batched_moves(void)
     CHECK(memcmp(&one.front, &bat.front, sizeof(double)) == 0);
     CHECK(one.rebuilds == bat.rebuilds);
     CHECK(one.rebuilds > 1);
+}
+
+/* ---- 8. the spheres moved four at a time in lanes (integrate.c move_block256) -------------- */
+/* against one by one (move_one): the same state, near drift, front and rebuilds, on a heap of
+ * spheres in runs of eight between logs (groups of four, and the remainders around the logs
+ * one by one) */
+static void test_sphere_lanes(void)
+{
+    const long g0 = sd_move_lanes_count();
+    const heap_end on = heap_run(1, 4000, 1, 0);
+    const long g1 = sd_move_lanes_count();
+    const heap_end off = heap_run(1, 4000, 0, 0);
+    const long g2 = sd_move_lanes_count();
+    printf("8 spheres moved in lanes (%ld groups of four): state hash %016llx, near drift %.17g m, front %.17g m, %ld "
+           "rebuilds; one by one %016llx, %.17g, %.17g, %ld\n",
+           g1 - g0, (unsigned long long)on.hash, on.near_drift, on.front, on.rebuilds, (unsigned long long)off.hash,
+           off.near_drift, off.front, off.rebuilds);
+    CHECK(on.hash == off.hash);
+    CHECK(memcmp(&on.near_drift, &off.near_drift, sizeof(double)) == 0);
+    CHECK(memcmp(&on.front, &off.front, sizeof(double)) == 0);
+    CHECK(on.rebuilds == off.rebuilds);
+    CHECK(on.rebuilds > 1);
+    CHECK(g2 == g1); /* none with the lanes off */
+    if (sd_simd_level() >= SD_SIMD_AVX2) CHECK(g1 - g0 >= 4000L * 10); /* 80 spheres: at least 10 groups a step */
 }
 
 int main(void)
@@ -532,5 +572,6 @@ int main(void)
     pipe_impact(0.03, 0.404, 0.03);
     pipe_impact(0.03, 0.0, 0.01);
     test_batched_moves();
+    test_sphere_lanes();
     return check_report("test_logs");
 }
