@@ -284,7 +284,7 @@ __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict
                   g2 = _mm256_setr_pd(g.z, g.x, g.y, g.z);
     __m256d vm4 = _mm256_set1_pd(-INFINITY), xf4 = vm4;
     const uint32_t four = 0x01010101u * SD_SHAPE_SPHERE;
-    long groups = 0;
+    int ones = 0; /* the bodies moved one by one (the rest in groups: no count in the lanes' path) */
     for (int k = kb; k < ke; k++) {
         const int i = mov[k];
         uint32_t sh = 0;
@@ -292,6 +292,7 @@ __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict
         if (k + 4 > ke || mov[k + 3] != i + 3 || sh != four) {
             move_one(i, ext[ext_blk ? k - kb : i], dt, g, force, inv_mass, vel, pos, omega, torque, inv_i_ax, radius,
                      shape, NULL, &vm, &vs, &xf, lg, &nlg);
+            ones++;
             continue;
         }
         const double *fp = &force[i].x, *ep = &ext[ext_blk ? k - kb : i].x;
@@ -316,21 +317,17 @@ __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict
             const __m256d om = _mm256_add_pd(_mm256_loadu_pd(op + 4 * r), _mm256_mul_pd(s[r], _mm256_loadu_pd(tp + 4 * r)));
             _mm256_storeu_pd(op + 4 * r, om);
         }
-        /* rows a = x0 y0 z0 x1, b = y1 z1 x2 y2, c = z2 x3 y3 z3 into lanes x, y, z */
-        const __m256d vP = _mm256_permute2f128_pd(v[0], v[2], 0x20), vQ = _mm256_permute2f128_pd(v[0], v[2], 0x31);
-        const __m256d vx = _mm256_blend_pd(_mm256_blend_pd(vP, vQ, 0x2), v[1], 0x4);
-        const __m256d vy = _mm256_shuffle_pd(_mm256_blend_pd(vP, v[1], 0xC), _mm256_blend_pd(v[1], vQ, 0xC), 0x5);
-        const __m256d vz = _mm256_blend_pd(_mm256_blend_pd(vQ, vP, 0x4), v[1], 0x2);
+        __m256d vx, vy, vz, px, py, pz;
+        sd_rows3_lanes(v[0], v[1], v[2], &vx, &vy, &vz);
         const __m256d v2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)),
                                          _mm256_mul_pd(vz, vz));
         vm4 = _mm256_max_pd(v2, vm4); /* v2 > vm4 ? v2 : vm4, as move_one */
-        const __m256d pP = _mm256_permute2f128_pd(p[0], p[2], 0x20), pQ = _mm256_permute2f128_pd(p[0], p[2], 0x31);
-        const __m256d px = _mm256_blend_pd(_mm256_blend_pd(pP, pQ, 0x2), p[1], 0x4);
+        sd_rows3_lanes(p[0], p[1], p[2], &px, &py, &pz);
+        (void)py, (void)pz; /* (compiled away) */
         xf4 = _mm256_max_pd(_mm256_add_pd(px, _mm256_loadu_pd(radius + i)), xf4);
         k += 3;
-        groups++;
     }
-    move_lanes_groups += groups;
+    move_lanes_groups += (ke - kb - ones) / 4;
     double l[8];
     _mm256_storeu_pd(l, vm4);
     _mm256_storeu_pd(l + 4, xf4);

@@ -268,11 +268,19 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
                 for (int l = 0; l < 4; l++)
                     if (!(sph >> l & 1)) logs[(*nlogs)++] = k + l;
             if (!sph) continue;
-            __m256d P[4], V[4];
-            sd_transpose4(SD_XYZ_LOAD(pos, i0), SD_XYZ_LOAD(pos, i1), SD_XYZ_LOAD(pos, i2), SD_XYZ_LOAD(pos, i3), P);
-            sd_transpose4(SD_XYZ_LOAD(vel, i0), SD_XYZ_LOAD(vel, i1), SD_XYZ_LOAD(vel, i2), SD_XYZ_LOAD(vel, i3), V);
-            const __m256d px = P[0], py = P[1], pz = P[2], vx = V[0], vy = V[1], vz = V[2];
-            const __m256d r = _mm256_setr_pd(rad[i0], rad[i1], rad[i2], rad[i3]);
+            __m256d px, py, pz, vx, vy, vz, r;
+            if (i3 == i0 + 3) { /* four bodies next to each other in the store (nearly always) */
+                const double *pp = pos + 3 * i0, *vp = vel + 3 * i0;
+                sd_rows3_lanes(_mm256_loadu_pd(pp), _mm256_loadu_pd(pp + 4), _mm256_loadu_pd(pp + 8), &px, &py, &pz);
+                sd_rows3_lanes(_mm256_loadu_pd(vp), _mm256_loadu_pd(vp + 4), _mm256_loadu_pd(vp + 8), &vx, &vy, &vz);
+                r = _mm256_loadu_pd(rad + i0);
+            } else {
+                __m256d P[4], V[4];
+                sd_transpose4(SD_XYZ_LOAD(pos, i0), SD_XYZ_LOAD(pos, i1), SD_XYZ_LOAD(pos, i2), SD_XYZ_LOAD(pos, i3), P);
+                sd_transpose4(SD_XYZ_LOAD(vel, i0), SD_XYZ_LOAD(vel, i1), SD_XYZ_LOAD(vel, i2), SD_XYZ_LOAD(vel, i3), V);
+                px = P[0], py = P[1], pz = P[2], vx = V[0], vy = V[1], vz = V[2];
+                r = _mm256_setr_pd(rad[i0], rad[i1], rad[i2], rad[i3]);
+            }
             /* z = p.n - z_bed (sd_fluid_height), clamped at the bed as z < 0 ? 0 : z */
             const __m256d z = _mm256_sub_pd(
                 _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(px, nx), _mm256_mul_pd(py, ny)), _mm256_mul_pd(pz, nz)), zb);
@@ -311,6 +319,15 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
             const __m256d tx = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(rx, sk), _mm256_mul_pd(gx, bs))),
                           ty = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(ry, sk), _mm256_mul_pd(gy, bs))),
                           tz = _mm256_and_pd(wet, _mm256_add_pd(_mm256_mul_pd(rz, sk), _mm256_mul_pd(gz, bs)));
+            if (sph == 15) { /* four spheres: their forces as 12 doubles in a row */
+                __m256d ra, rb, rc;
+                sd_lanes_rows3(tx, ty, tz, &ra, &rb, &rc);
+                double *e = &ext[kq - k0].x;
+                _mm256_storeu_pd(e, ra);
+                _mm256_storeu_pd(e + 4, rb);
+                _mm256_storeu_pd(e + 8, rc);
+                continue;
+            }
             /* back as rows (x, y, z, -), each sphere's written */
             __m256d row[4];
             sd_transpose4(tx, ty, tz, zero, row);
