@@ -485,7 +485,7 @@ static inline double bits_and(double x, uint64_t mask)
  * the touch filter reads of each pair, in entry order. */
 typedef struct {
     const int32_t *a, *b, *off, *ck;
-    const double *sqm;
+    const double *sqm, *rs2;
     uint8_t *act; /* (written by the touch filter) */
 } soa_view;
 
@@ -496,6 +496,7 @@ void sd_pair_soa_free(sd_pair_soa *s)
     free(s->off);
     free(s->ck);
     free(s->sqm);
+    free(s->rs2);
     free(s->act);
     memset(s, 0, sizeof *s);
 }
@@ -517,9 +518,11 @@ static int pair_soa_reserve(sd_pair_soa *s, int n)
     if (t.ck) s->ck = t.ck;
     t.sqm = realloc(s->sqm, (size_t)cap * sizeof(double));
     if (t.sqm) s->sqm = t.sqm;
+    t.rs2 = realloc(s->rs2, (size_t)cap * sizeof(double));
+    if (t.rs2) s->rs2 = t.rs2;
     t.act = realloc(s->act, (size_t)cap);
     if (t.act) s->act = t.act;
-    if (!t.a || !t.b || !t.off || !t.ck || !t.sqm || !t.act) return 1;
+    if (!t.a || !t.b || !t.off || !t.ck || !t.sqm || !t.rs2 || !t.act) return 1;
     s->cap = cap;
     return 0;
 }
@@ -531,9 +534,17 @@ static inline int32_t ck_pack(int kind, int cap)
 }
 static inline int ck_kind(int32_t ck) { return (int)((uint32_t)ck >> 16); }
 
-/* Entry j of s from the record p (and its first slot in hist). */
-static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p, const sd_hist *hist)
+/* (r_a + r_b)^2 of a pair's bodies, as the touch filters square it */
+static inline double pair_rs2(const double *rad, const sd_pair *p)
 {
+    const double rs = rad[p->a] + rad[p->b];
+    return rs * rs;
+}
+
+/* Entry j of s from the record p (and its first slot in hist; rad: the bodies' radii). */
+static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p, const sd_hist *hist, const double *rad)
+{
+    s->rs2[j] = pair_rs2(rad, p);
     s->a[j] = p->a;
     s->b[j] = p->b;
     s->off[j] = p->off;
@@ -544,7 +555,7 @@ static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p, const s
 
 static soa_view soa_at(const sd_pair_soa *s, int j0)
 {
-    return (soa_view){s->a + j0, s->b + j0, s->off + j0, s->ck + j0, s->sqm + j0, s->act + j0};
+    return (soa_view){s->a + j0, s->b + j0, s->off + j0, s->ck + j0, s->sqm + j0, s->rs2 + j0, s->act + j0};
 }
 
 /* Step 1 of bb_chunk (the touch filter) for the chunk's entries i0 .. i1: which pairs touch,
@@ -592,9 +603,11 @@ static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m
 {
     const sd_hist *restrict hist = w->bb.hist;
     const sd_vec3 *restrict vel = w->b.vel, *restrict omega = w->b.omega;
+    const double *restrict rad = w->b.radius;
     for (int j = j0; j < m; j++) {
         const int ia = q->ia[j], ib = q->ib[j];
         const sd_hist *h = &hist[q->off[j]];
+        q->ra[j] = rad[ia], q->rb[j] = rad[ib]; /* (the AVX2 filter leaves them to the gather) */
         const sd_vec3 va = vel[ia], vb = vel[ib], wa = omega[ia], wb = omega[ib];
         q->vx[j] = va.x - vb.x, q->vy[j] = va.y - vb.y, q->vz[j] = va.z - vb.z;
         q->wax[j] = wa.x, q->way[j] = wa.y, q->waz[j] = wa.z;
@@ -818,11 +831,11 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
                                                                int *ngp)
 {
     sd_hist *hist = w->bb.hist;
-    const double *pos = &w->b.pos[0].x, *rad = w->b.radius;
+    const double *pos = &w->b.pos[0].x;
     /* the view's arrays in locals: the packing's 16-byte stores may alias anything, and gcc
      * loaded each address from *v again after them */
     const int32_t *const va = v->a, *const vb = v->b, *const voff = v->off, *const vck = v->ck;
-    const double *const vsqm = v->sqm;
+    const double *const vsqm = v->sqm, *const vrs2 = v->rs2;
     uint8_t *const vact = v->act;
     int m = *mp;
     const __m128i kind = _mm_set1_epi32((int)0xFFFF0000u), lane = _mm_setr_epi32(0, 1, 2, 3);
@@ -831,17 +844,14 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
          * loop's path after the group (in pair order among the log pairs) */
         const int ss = _mm_movemask_ps(_mm_castsi128_ps(
             _mm_cmpeq_epi32(_mm_and_si128(_mm_loadu_si128((const __m128i *)(vck + i)), kind), _mm_setzero_si128())));
-        const int a0 = va[i], a1 = va[i + 1], a2 = va[i + 2], a3 = va[i + 3];
-        const int b0 = vb[i], b1 = vb[i + 1], b2 = vb[i + 2], b3 = vb[i + 3];
         __m256d dx, dy, dz;
         diff_lanes(pos, va + i, vb + i, &dx, &dy, &dz);
-        const __m256d ra = _mm256_setr_pd(rad[a0], rad[a1], rad[a2], rad[a3]);
-        const __m256d rb = _mm256_setr_pd(rad[b0], rad[b1], rad[b2], rad[b3]);
-        const __m256d rs = _mm256_add_pd(ra, rb);
         const __m256d d2 =
             _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
-        /* t = !(d2 >= rs^2), as the scalar loop (true for an unordered pair too) */
-        const int t = _mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_mul_pd(rs, rs), _CMP_NGE_UQ)) & ss;
+        /* t = !(d2 >= rs^2), as the scalar loop (true for an unordered pair too); rs^2 from the
+         * entry (made with the list), the radii themselves read by the gather for the
+         * touching lanes only (ss_gather256) */
+        const int t = _mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_loadu_pd(vrs2 + i), _CMP_NGE_UQ)) & ss;
         /* the slots' features from the entries' flags (0 with a spring, else -1), not from the
          * slots: a line of its own for each near pair, most of them apart in a flow (the
          * slots' load was a tenth of this loop's samples in the paper's capture) */
@@ -864,8 +874,6 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
         PACK_PD(q->dx, dx);
         PACK_PD(q->dy, dy);
         PACK_PD(q->dz, dz);
-        PACK_PD(q->ra, ra);
-        PACK_PD(q->rb, rb);
         PACK_PD(q->sqm, _mm256_loadu_pd(vsqm + i));
         PACK_I32(q->ia, _mm_loadu_si128((const __m128i *)(va + i)));
         PACK_I32(q->ib, _mm_loadu_si128((const __m128i *)(vb + i)));
@@ -900,7 +908,7 @@ _Static_assert(sizeof(sd_hist) == 32 && offsetof(sd_hist, shear) == 8, "ss_gathe
 
 __attribute__((target("avx2"))) static int ss_gather256(const sd_world *w, ss_batch *q, int m)
 {
-    const double *vel = &w->b.vel[0].x, *om = &w->b.omega[0].x;
+    const double *vel = &w->b.vel[0].x, *om = &w->b.omega[0].x, *rad = w->b.radius;
     const sd_hist *hist = w->bb.hist;
     int j = 0;
     for (; j + 4 <= m; j += 4) {
@@ -908,6 +916,9 @@ __attribute__((target("avx2"))) static int ss_gather256(const sd_world *w, ss_ba
         const int b0 = q->ib[j], b1 = q->ib[j + 1], b2 = q->ib[j + 2], b3 = q->ib[j + 3];
         __m256d r[4];
         __m256d x, y, z;
+        /* the radii (the AVX2 filter tests the entries' (r_a + r_b)^2 and leaves them) */
+        _mm256_storeu_pd(q->ra + j, _mm256_setr_pd(rad[a0], rad[a1], rad[a2], rad[a3]));
+        _mm256_storeu_pd(q->rb + j, _mm256_setr_pd(rad[b0], rad[b1], rad[b2], rad[b3]));
         diff_lanes(vel, q->ia + j, q->ib + j, &x, &y, &z);
         _mm256_storeu_pd(q->vx + j, x);
         _mm256_storeu_pd(q->vy + j, y);
@@ -1528,7 +1539,7 @@ typedef struct {
     int used[SS_CHUNK];
     int32_t ks[SS_CHUNK];
     int32_t ka[SS_CHUNK], kb[SS_CHUNK], koff[SS_CHUNK], kck[SS_CHUNK]; /* ks's records (soa_view) */
-    double ksqm[SS_CHUNK];
+    double ksqm[SS_CHUNK], krs2[SS_CHUNK];
     uint8_t kact[SS_CHUNK]; /* ks's spring flags (soa_view.act) */
     int act[SS_CHUNK];
     bt_batch wq;
@@ -1919,7 +1930,7 @@ static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pai
         const int nn = near_block(w, skin, kb, ke, fresh, nf, near);
         for (int q = 0; q < nn; q++) {
             out[m] = near[q];
-            pair_soa_set(soa, m++, &pairs[near[q]], w->bb.hist); /* (its records too, while the record is at hand) */
+            pair_soa_set(soa, m++, &pairs[near[q]], w->bb.hist, w->b.radius); /* (its records too, while the record is at hand) */
         }
     }
     return m;
@@ -2318,7 +2329,8 @@ static sd_status owned_update(sd_world *w, int T)
              * load the next array's address again (about half of this loop's samples) */
             int32_t *restrict sa = o->soa.a, *restrict sb = o->soa.b, *restrict so = o->soa.off,
                               *restrict sc = o->soa.ck, *restrict list = o->list;
-            double *restrict sq = o->soa.sqm;
+            double *restrict sq = o->soa.sqm, *restrict sr = o->soa.rs2;
+            const double *restrict rad = w->b.radius;
             uint8_t *restrict sf = o->soa.act;
             const sd_pair *restrict pairs = w->bb.p;
             const sd_hist *restrict hist = w->bb.hist;
@@ -2340,12 +2352,13 @@ static sd_status owned_update(sd_world *w, int T)
                     so[m] = p->off;
                     sc[m] = ck_pack(p->kind, p->cap);
                     sq[m] = p->sqrt_m_eff;
+                    sr[m] = pair_rs2(rad, p);
                     sf[m] = (uint8_t)(hist[p->off].feature >= 0);
                     list[m] = k;
                     if (cross) { /* few */
                         o->cross[xc] = k;
                         o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
-                        pair_soa_set(&o->xsoa, xc, p, hist);
+                        pair_soa_set(&o->xsoa, xc, p, hist, rad);
                         list[m] = ~xc++;
                         q++;
                     }
@@ -2455,10 +2468,11 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     if (o->list[j] >= 0) {
                         x->ks[n] = o->list[j];
                         x->ka[n] = o->soa.a[j], x->kb[n] = o->soa.b[j], x->koff[n] = o->soa.off[j];
-                        x->kck[n] = o->soa.ck[j], x->ksqm[n] = o->soa.sqm[j], x->kact[n] = o->soa.act[j];
+                        x->kck[n] = o->soa.ck[j], x->ksqm[n] = o->soa.sqm[j], x->krs2[n] = o->soa.rs2[j];
+                        x->kact[n] = o->soa.act[j];
                         n++;
                     }
-                const soa_view v = {x->ka, x->kb, x->koff, x->kck, x->ksqm, x->kact};
+                const soa_view v = {x->ka, x->kb, x->koff, x->kck, x->ksqm, x->krs2, x->kact};
                 bb_chunk(w, law, x->ks, &v, n, x->out, x->used, &x->q, NULL);
                 /* the flags the filter left, back to the entries */
                 for (int j = j0, i = 0; j < j1; j++)

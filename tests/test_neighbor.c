@@ -180,6 +180,13 @@ static long near_logs_out;  /* log pairs left out of the near list, summed over 
 static long near_by_owners; /* checks of the owners' segments (two threads) */
 
 static long flags_wrong, flags_checked; /* near_check: spring flags against their slots */
+static long rs2_wrong; /* near_check: the entries' (r_a + r_b)^2 against the radii */
+
+static double rs2_of(const sd_world *w, const sd_pair *p)
+{
+    const double rs = w->b.radius[p->a] + w->b.radius[p->b];
+    return rs * rs;
+}
 
 static void near_check(const sd_world *w, long *checked, long *shorter, long *missing)
 {
@@ -201,7 +208,10 @@ static void near_check(const sd_world *w, long *checked, long *shorter, long *mi
         for (int j = 0; j < w->near_n; j++) {
             near[nn++] = w->near[j];
             const sd_pair *p = &w->bb.p[w->near[j]];
-            if (p->kind == SD_PAIR_SS) flags_wrong += w->near_soa.act[j] != (hist[p->off].feature >= 0);
+            if (p->kind == SD_PAIR_SS) {
+                flags_wrong += w->near_soa.act[j] != (hist[p->off].feature >= 0);
+                rs2_wrong += w->near_soa.rs2[j] != rs2_of(w, p);
+            }
             flags_checked += p->kind == SD_PAIR_SS;
         }
     } else if (w->owned && w->owned->stamp == w->near_version) {
@@ -213,7 +223,11 @@ static void near_check(const sd_world *w, long *checked, long *shorter, long *mi
                 near[nn++] = own ? o->list[j] : o->cross[~o->list[j]];
                 const sd_pair *p = &w->bb.p[near[nn - 1]];
                 const uint8_t act = own ? o->soa.act[j] : o->xsoa.act[~o->list[j]];
-                if (p->kind == SD_PAIR_SS) flags_wrong += act != (hist[p->off].feature >= 0);
+                const double rs2 = own ? o->soa.rs2[j] : o->xsoa.rs2[~o->list[j]];
+                if (p->kind == SD_PAIR_SS) {
+                    flags_wrong += act != (hist[p->off].feature >= 0);
+                    rs2_wrong += rs2 != rs2_of(w, p);
+                }
                 flags_checked += p->kind == SD_PAIR_SS;
             }
     } else {
@@ -927,9 +941,11 @@ int main(void)
     test_rebuild_threads();
     test_moving_index();
     printf("near-list checks of the owners' segments (two or more threads): %ld\n", near_by_owners);
-    printf("near sphere pairs whose spring flag was checked against the slot: %ld, wrong %ld\n", flags_checked,
-           flags_wrong);
+    printf("near sphere pairs whose spring flag was checked against the slot: %ld, wrong %ld; (r_a + r_b)^2 wrong "
+           "%ld\n",
+           flags_checked, flags_wrong, rs2_wrong);
     CHECK(flags_checked > 100000 && flags_wrong == 0);
+    CHECK(rs2_wrong == 0);
 #ifdef _OPENMP
     if (omp_get_max_threads() > 1) CHECK(near_by_owners > 1000);
 #endif
