@@ -1930,7 +1930,8 @@ static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pai
         const int nn = near_block(w, skin, kb, ke, fresh, nf, near);
         for (int q = 0; q < nn; q++) {
             out[m] = near[q];
-            pair_soa_set(soa, m++, &pairs[near[q]], w->bb.hist, w->b.radius); /* (its records too, while the record is at hand) */
+            /* (its records too, while the record is at hand) */
+            pair_soa_set(soa, m++, &pairs[near[q]], w->bb.hist, w->b.radius);
         }
     }
     return m;

@@ -287,9 +287,16 @@ __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict
     int ones = 0; /* the bodies moved one by one (the rest in groups: no count in the lanes' path) */
     for (int k = kb; k < ke; k++) {
         const int i = mov[k];
-        uint32_t sh = 0;
-        if (k + 4 <= ke) memcpy(&sh, shape + i, sizeof sh);
-        if (k + 4 > ke || mov[k + 3] != i + 3 || sh != four) {
+        /* four bodies side by side in the store (mov ascends, so mov[k + 3] == i + 3 says it),
+         * then four spheres (their shape bytes as one word: SD_SHAPE_SPHERE is 0, so the word
+         * is read only once the four are known to be there) */
+        int group = k + 4 <= ke && mov[k + 3] == i + 3;
+        if (group) {
+            uint32_t sh;
+            memcpy(&sh, shape + i, sizeof sh);
+            group = sh == four;
+        }
+        if (!group) {
             move_one(i, ext[ext_blk ? k - kb : i], dt, g, force, inv_mass, vel, pos, omega, torque, inv_i_ax, radius,
                      shape, NULL, &vm, &vs, &xf, lg, &nlg);
             ones++;
@@ -314,7 +321,8 @@ __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict
             p[r] = _mm256_add_pd(_mm256_loadu_pd(pp + 4 * r), _mm256_mul_pd(vdt, v[r]));
             _mm256_storeu_pd(vp + 4 * r, v[r]);
             _mm256_storeu_pd(pp + 4 * r, p[r]);
-            const __m256d om = _mm256_add_pd(_mm256_loadu_pd(op + 4 * r), _mm256_mul_pd(s[r], _mm256_loadu_pd(tp + 4 * r)));
+            const __m256d om =
+                _mm256_add_pd(_mm256_loadu_pd(op + 4 * r), _mm256_mul_pd(s[r], _mm256_loadu_pd(tp + 4 * r)));
             _mm256_storeu_pd(op + 4 * r, om);
         }
         __m256d vx, vy, vz, px, py, pz;

@@ -276,8 +276,10 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
                 r = _mm256_loadu_pd(rad + i0);
             } else {
                 __m256d P[4], V[4];
-                sd_transpose4(SD_XYZ_LOAD(pos, i0), SD_XYZ_LOAD(pos, i1), SD_XYZ_LOAD(pos, i2), SD_XYZ_LOAD(pos, i3), P);
-                sd_transpose4(SD_XYZ_LOAD(vel, i0), SD_XYZ_LOAD(vel, i1), SD_XYZ_LOAD(vel, i2), SD_XYZ_LOAD(vel, i3), V);
+                sd_transpose4(SD_XYZ_LOAD(pos, i0), SD_XYZ_LOAD(pos, i1), SD_XYZ_LOAD(pos, i2), SD_XYZ_LOAD(pos, i3),
+                              P);
+                sd_transpose4(SD_XYZ_LOAD(vel, i0), SD_XYZ_LOAD(vel, i1), SD_XYZ_LOAD(vel, i2), SD_XYZ_LOAD(vel, i3),
+                              V);
                 px = P[0], py = P[1], pz = P[2], vx = V[0], vy = V[1], vz = V[2];
                 r = _mm256_setr_pd(rad[i0], rad[i1], rad[i2], rad[i3]);
             }
