@@ -364,6 +364,9 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves 
     /* the logs, turned in batches once a batch has gathered (each body's move is its own) */
     int32_t lg[CYL_BATCH + SD_EXT_BLOCK];
     sd_vec3 ext[SD_EXT_BLOCK]; /* a block's external forces (ext_fn) */
+    /* the external forces: the block's buffer from ext_fn (ext[k - kb]), else the store's */
+    const int blk = w->ext_fn != NULL;
+    const sd_vec3 *const ex = blk ? ext : b->ext_force;
     int nlg = 0;
 #ifdef SD_MOVE256
     const int lanes = move_lanes_on && !nf && sd_simd_level() >= SD_SIMD_AVX2;
@@ -371,25 +374,15 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves 
     for (int kb = k0; kb < k1; kb += SD_EXT_BLOCK) {
         const int ke = k1 - kb < SD_EXT_BLOCK ? k1 : kb + SD_EXT_BLOCK;
         /* the external forces of a block just before it moves: its bodies are still in L1 */
-        if (w->ext_fn) w->ext_fn(w->ext_ctx, w, mov, kb, ke, ext);
+        if (blk) w->ext_fn(w->ext_ctx, w, mov, kb, ke, ext);
 #ifdef SD_MOVE256
-        if (lanes) {
-            if (w->ext_fn)
-                nlg = move_block256(mov, kb, ke, dt, g, b->force, ext, b->inv_mass, b->vel, b->pos, b->omega,
-                                    b->torque, b->inv_i_ax, b->radius, b->shape, &vm, &vs, &xf, lg, nlg, 1);
-            else
-                nlg = move_block256(mov, kb, ke, dt, g, b->force, b->ext_force, b->inv_mass, b->vel, b->pos,
-                                    b->omega, b->torque, b->inv_i_ax, b->radius, b->shape, &vm, &vs, &xf, lg, nlg,
-                                    0);
-        } else
+        if (lanes)
+            nlg = move_block256(mov, kb, ke, dt, g, b->force, ex, b->inv_mass, b->vel, b->pos, b->omega, b->torque,
+                                b->inv_i_ax, b->radius, b->shape, &vm, &vs, &xf, lg, nlg, blk);
+        else
 #endif
-        if (w->ext_fn) {
-            nlg = move_block(mov, kb, ke, dt, g, b->force, ext, b->inv_mass, b->vel, b->pos, b->omega, b->torque,
-                             b->inv_i_ax, b->radius, b->shape, nf, &vm, &vs, &xf, lg, nlg, 1);
-        } else {
-            nlg = move_block(mov, kb, ke, dt, g, b->force, b->ext_force, b->inv_mass, b->vel, b->pos, b->omega,
-                             b->torque, b->inv_i_ax, b->radius, b->shape, nf, &vm, &vs, &xf, lg, nlg, 0);
-        }
+            nlg = move_block(mov, kb, ke, dt, g, b->force, ex, b->inv_mass, b->vel, b->pos, b->omega, b->torque,
+                             b->inv_i_ax, b->radius, b->shape, nf, &vm, &vs, &xf, lg, nlg, blk);
         if (!cyl_batch_on) {
             for (int q = 0; q < nlg; q++) {
                 const double x = cyl_step(b, lg[q], dt, lim2, &moved, &dc, &dcs, nf && nf[lg[q]]);

@@ -520,6 +520,17 @@ static heap_end heap_run(int batch, long steps, int lanes, int logs_only)
     return e;
 }
 
+/* two runs of heap_run that must end alike: the same state, the same near drift and front to
+ * the bit, the same rebuilds (and more than one) */
+static void check_same_end(const heap_end *x, const heap_end *y)
+{
+    CHECK(x->hash == y->hash);
+    CHECK(memcmp(&x->near_drift, &y->near_drift, sizeof(double)) == 0);
+    CHECK(memcmp(&x->front, &y->front, sizeof(double)) == 0);
+    CHECK(x->rebuilds == y->rebuilds);
+    CHECK(x->rebuilds > 1);
+}
+
 static void test_batched_moves(void)
 {
     const heap_end one = heap_run(0, 4000, 1, 1), bat = heap_run(1, 4000, 1, 1);
@@ -527,11 +538,7 @@ static void test_batched_moves(void)
            "one %016llx, %.17g, %.17g, %ld\n",
            (unsigned long long)bat.hash, bat.near_drift, bat.front, bat.rebuilds, (unsigned long long)one.hash,
            one.near_drift, one.front, one.rebuilds);
-    CHECK(one.hash == bat.hash);
-    CHECK(memcmp(&one.near_drift, &bat.near_drift, sizeof(double)) == 0);
-    CHECK(memcmp(&one.front, &bat.front, sizeof(double)) == 0);
-    CHECK(one.rebuilds == bat.rebuilds);
-    CHECK(one.rebuilds > 1);
+    check_same_end(&one, &bat);
 }
 
 /* ---- 8. the spheres moved four at a time in lanes (integrate.c move_block256) -------------- */
@@ -549,11 +556,7 @@ static void test_sphere_lanes(void)
            "rebuilds; one by one %016llx, %.17g, %.17g, %ld\n",
            g1 - g0, (unsigned long long)on.hash, on.near_drift, on.front, on.rebuilds, (unsigned long long)off.hash,
            off.near_drift, off.front, off.rebuilds);
-    CHECK(on.hash == off.hash);
-    CHECK(memcmp(&on.near_drift, &off.near_drift, sizeof(double)) == 0);
-    CHECK(memcmp(&on.front, &off.front, sizeof(double)) == 0);
-    CHECK(on.rebuilds == off.rebuilds);
-    CHECK(on.rebuilds > 1);
+    check_same_end(&on, &off);
     CHECK(g2 == g1); /* none with the lanes off */
     if (sd_simd_level() >= SD_SIMD_AVX2) CHECK(g1 - g0 >= 4000L * 10); /* 80 spheres: at least 10 groups a step */
 }
