@@ -382,11 +382,18 @@ sd_status sd_neighbor_collect_history(sd_world *w)
     int32_t *cnt = calloc((size_t)T * (G + 1) + 1, sizeof(int32_t));
     if (!cnt) return SD_ERR_NOMEM;
     const int32_t *gid = w->b.gid;
+    /* only a body-body pair near when the near pairs were last made, since the last rebuild,
+     * can hold a spring (contact.c near_keep_range): the others' records and slots are not
+     * read, when those marks are there */
+    const int nbb = w->bb.n;
+    const uint8_t *mark =
+        w->near_mark_rb == w->timers.rebuilds && w->near_mark_cap >= 2 * (nbb + 1) ? w->near_mark : NULL;
 #pragma omp parallel for schedule(static, 1) num_threads(T) if (T > 1)
     for (int t = 0; t < T; t++) {
         int32_t *c = cnt + (size_t)t * (G + 1);
         const int k0 = (int)((long)np * t / T), k1 = (int)((long)np * (t + 1) / T);
         for (int k = k0; k < k1; k++) {
+            if (mark && k < nbb && !mark[k]) continue;
             const sd_pair *p = any_pair(lists, k);
             const sd_hist *h = any_hist(lists, k, p);
             int m = 0;
@@ -414,6 +421,7 @@ sd_status sd_neighbor_collect_history(sd_world *w)
         int32_t *c = cnt + (size_t)t * (G + 1);
         const int k0 = (int)((long)np * t / T), k1 = (int)((long)np * (t + 1) / T);
         for (int k = k0; k < k1; k++) {
+            if (mark && k < nbb && !mark[k]) continue;
             const sd_pair *p = any_pair(lists, k);
             const sd_hist *h = any_hist(lists, k, p);
             int m0 = -1, m = 0;
@@ -1298,8 +1306,10 @@ sd_status sd_neighbor_rebuild(sd_world *w)
 
     if (sd_grow((void **)&w->bt_man, &w->bt_man_cap, w->bt.n + 1, sizeof(sd_manifold))) return SD_ERR_NOMEM;
 
-#pragma omp parallel for schedule(static) if (b->n > w->def.parallel_min)
-    for (int i = 0; i < b->n; i++) {
+    /* the references of the moves (a bed taken from its cache was not reordered and has not
+     * moved: its references still hold) */
+#pragma omp parallel for schedule(static) if (nr > w->def.parallel_min)
+    for (int i = 0; i < nr; i++) {
         b->pos_ref[i] = b->pos[i];
         b->axis_ref[i] = b->axis[i];
     }

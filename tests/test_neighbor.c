@@ -180,7 +180,10 @@ static long near_logs_out;  /* log pairs left out of the near list, summed over 
 static long near_by_owners; /* checks of the owners' segments (two threads) */
 
 static long flags_wrong, flags_checked; /* near_check: spring flags against their slots */
-static long rs2_wrong; /* near_check: the entries' (r_a + r_b)^2 against the radii */
+static long rs2_wrong;                  /* near_check: the entries' (r_a + r_b)^2 against the radii */
+/* near_check: the pairs holding a spring, each marked near (near_mark) as the spring
+ * collection at the next rebuild takes for granted (it reads no other pair's slots) */
+static long marks_checked, marks_wrong;
 
 static double rs2_of(const sd_world *w, const sd_pair *p)
 {
@@ -234,6 +237,15 @@ static void near_check(const sd_world *w, long *checked, long *shorter, long *mi
         CHECK(!"no current near list");
         return;
     }
+    if (w->near_mark_rb == w->timers.rebuilds)
+        for (int k = 0; k < w->bb.n; k++) {
+            const sd_pair *p = &w->bb.p[k];
+            int held = 0;
+            for (int s = 0; s < p->cap; s++)
+                held |= hist[p->off + s].feature >= 0;
+            marks_checked += held;
+            marks_wrong += held && !w->near_mark[k];
+        }
     int unordered = 0;
     for (int j = 1; j < nn; j++)
         unordered += near[j] <= near[j - 1];
@@ -946,6 +958,8 @@ int main(void)
            flags_checked, flags_wrong, rs2_wrong);
     CHECK(flags_checked > 100000 && flags_wrong == 0);
     CHECK(rs2_wrong == 0);
+    printf("pairs holding a spring checked for their near mark: %ld, unmarked %ld\n", marks_checked, marks_wrong);
+    CHECK(marks_checked > 100000 && marks_wrong == 0);
 #ifdef _OPENMP
     if (omp_get_max_threads() > 1) CHECK(near_by_owners > 1000);
 #endif
