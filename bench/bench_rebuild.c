@@ -6,7 +6,8 @@
  * rebuild can be judged by A/B runs of this, which move far less than a whole run's timers on
  * a shared machine.
  * With --steps K, K steps (not timed) come before each rebuild: the store then leaves cell
- * order a little, and the springs change, as between the rebuilds of a run.
+ * order a little, and the springs change, as between the rebuilds of a run. The mean time of
+ * each of the rebuild's stages (sd_neighbor_stages_take) is printed too.
  *   usage: bench_rebuild CHECKPOINT [R] [--threads N] [--steps K] */
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,17 +27,23 @@ static int cmp_double(const void *a, const void *b)
 }
 
 /* op(w) R times, each timed into t[r], with K untimed steps before each (a step rebuilds when
- * its lists say so) */
-static sd_status timed(sd_world *w, sd_status (*op)(sd_world *), int reps, int steps, double *t)
+ * its lists say so); the rebuild's stages of the timed calls summed into stage (when not NULL) */
+static sd_status timed(sd_world *w, sd_status (*op)(sd_world *), int reps, int steps, double *t, double *stage)
 {
     sd_status st = SD_OK;
+    double s0[SD_RB_STAGES];
     for (int r = 0; r < reps && !st; r++) {
         for (int s = 0; s < steps && !st; s++)
             st = sd_world_step(w);
         if (st) break;
+        sd_neighbor_stages_take(s0); /* (the steps' own rebuilds left out) */
         const double t0 = sd_now();
         st = op(w);
         t[r] = sd_now() - t0;
+        sd_neighbor_stages_take(s0);
+        if (stage)
+            for (int k = 0; k < SD_RB_STAGES; k++)
+                stage[k] += s0[k];
     }
     return st;
 }
@@ -88,10 +95,11 @@ int main(int argc, char **argv)
         sd_world_destroy(w);
         return 1;
     }
-    st = timed(w, sd_neighbor_rebuild, reps, steps, t);
+    double stage[SD_RB_STAGES] = {0};
+    st = timed(w, sd_neighbor_rebuild, reps, steps, t, stage);
     /* the near pairs remade alone, R times (after a step: the lists as a run has them) */
     if (!st) st = sd_world_step(w);
-    if (!st) st = timed(w, sd_contact_near_remake, reps, 0, tn);
+    if (!st) st = timed(w, sd_contact_near_remake, reps, 0, tn, NULL);
     if (st) {
         fprintf(stderr, "%s: %s\n", path, sd_status_message(st));
         free(t);
@@ -105,6 +113,10 @@ int main(int argc, char **argv)
            "quartiles %.3f-%.3f ms, fastest %.3f ms | bed cache used %ld\n",
            w->b.n, w->mov_n, w->bb.n, w->bt.n, threads, reps, 1e3 * t[reps / 2], 1e3 * t[reps / 4],
            1e3 * t[3 * reps / 4], 1e3 * t[0], w->bed.used);
+    printf("per rebuild, by stage (means):");
+    for (int k = 0; k < SD_RB_STAGES; k++)
+        printf(" %s %.3f", sd_neighbor_stage_name(k), 1e3 * stage[k] / reps);
+    printf(" ms\n");
     printf("near pairs remade: median %.3f ms, quartiles %.3f-%.3f ms, fastest %.3f ms (%d near pairs of %d)\n",
            1e3 * tn[reps / 2], 1e3 * tn[reps / 4], 1e3 * tn[3 * reps / 4], 1e3 * tn[0], sd_contact_near_count(w), w->bb.n);
     free(tn);

@@ -1141,11 +1141,42 @@ static sd_status join_chunks(sd_world *w, const cand_buf *buf, int K, int T)
     return SD_OK;
 }
 
+static _Thread_local double rb_stage[SD_RB_STAGES];
+static _Thread_local long rb_count;
+
+long sd_neighbor_stages_take(double *t)
+{
+    for (int k = 0; k < SD_RB_STAGES; k++) {
+        t[k] = rb_stage[k];
+        rb_stage[k] = 0.0;
+    }
+    const long n = rb_count;
+    rb_count = 0;
+    return n;
+}
+
+const char *sd_neighbor_stage_name(int k)
+{
+    static const char *const names[SD_RB_STAGES] = {"collect", "layout", "sort",   "ranges",  "fill",
+                                                    "scan",    "join",   "masses", "restore", "refs"};
+    return k >= 0 && k < SD_RB_STAGES ? names[k] : "?";
+}
+
+/* stage k ends now: its time since the last mark into rb_stage[k] */
+#define RB_STAGE(k)                                                                                                    \
+    do {                                                                                                               \
+        const double t_ = sd_now();                                                                                    \
+        rb_stage[k] += t_ - rb_t;                                                                                      \
+        rb_t = t_;                                                                                                     \
+    } while (0)
+
 sd_status sd_neighbor_rebuild(sd_world *w)
 {
     sd_bodies *b = &w->b;
+    double rb_t = sd_now();
     sd_status st = sd_neighbor_collect_history(w);
     if (st) return st;
+    RB_STAGE(SD_RB_COLLECT);
     w->keys_collected = 0;
     double hm = 0.5 * w->def.margin;
 
@@ -1198,12 +1229,14 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     long max_cells = 8L * b->n + 4096;
     st = grid_layout(&w->grid, lo, hi, cell, max_cells, nbed ? &anchor : NULL);
     if (st) return st;
+    RB_STAGE(SD_RB_LAYOUT);
     const sd_grid *g = &w->grid;
     const int bed = bed0 && bed_cache_fits(bc, g);
     const int nr = bed ? bc->nb0 : b->n; /* the bodies whose cells and ranges are made here */
     if ((st = sort_bodies_by_cell(w, nr))) return st;
     w->mov_stamp = -1; /* the store was reordered */
     if ((st = sd_world_moving_update(w))) return st;
+    RB_STAGE(SD_RB_SORT);
     if (sd_grow((void **)&w->range, &w->range_cap, b->n + 1, sizeof(*w->range)) ||
         sd_grow((void **)&w->box, &w->box_cap, 2 * b->n + 2, sizeof(sd_vec3)))
         return SD_ERR_NOMEM;
@@ -1216,6 +1249,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         cell_range(&w->grid, l, h, w->range[i]);
     }
     w->box_n = nr;
+    RB_STAGE(SD_RB_RANGES);
     if (bed) memcpy(w->range + nr, bc->range, (size_t)(b->n - nr) * sizeof(*w->range));
     if (sd_grow((void **)&w->reg0, &w->reg0_cap, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     {
@@ -1234,6 +1268,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         w->bed.used++;
     else if ((st = bed_cache_make(w, hm)))
         return st;
+    RB_STAGE(SD_RB_FILL);
 
     /* candidates, generated in body order: the bodies cut into K chunks of about the same
      * number of moving bodies, scanned by T threads as they come free, each chunk into its
@@ -1275,6 +1310,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
                 nomem |= bt_scan(w, i, hm, &buf[K + c]);
             }
         }
+        RB_STAGE(SD_RB_SCAN);
         free(mi.start);
         free(mi.items);
         free(mi.flags);
@@ -1294,8 +1330,10 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         if (nomem) return SD_ERR_NOMEM;
         if (st) return st;
     }
+    RB_STAGE(SD_RB_JOIN);
 
     set_effective_masses(w);
+    RB_STAGE(SD_RB_MASSES);
     int32_t *first = old_first_index(w);
     if (!first) return SD_ERR_NOMEM;
     st = restore_history(w, &w->bb, first);
@@ -1303,6 +1341,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     free(first);
     if (st) return st;
     w->n_old = 0;
+    RB_STAGE(SD_RB_RESTORE);
 
     if (sd_grow((void **)&w->bt_man, &w->bt_man_cap, w->bt.n + 1, sizeof(sd_manifold))) return SD_ERR_NOMEM;
 
@@ -1318,5 +1357,8 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     w->ref_drift = 0.0;
     w->timers.rebuilds++;
     w->mov_stamp = w->timers.rebuilds; /* made after the sort above */
+    RB_STAGE(SD_RB_REFS);
+    rb_count++;
     return SD_OK;
 }
+#undef RB_STAGE

@@ -322,6 +322,25 @@ sd_status sd_walls_weld(sd_walls *w);
 
 /* neighbor.c */
 sd_status sd_neighbor_rebuild(sd_world *w);
+/* The stages of sd_neighbor_rebuild, in order: their wall times, summed over the calling
+ * thread's rebuilds since sd_neighbor_stages_take last took them (for bench_rebuild). */
+enum {
+    SD_RB_COLLECT, /* the springs taken out (sd_neighbor_collect_history) */
+    SD_RB_LAYOUT,  /* the cell size, the bodies' box, the grid's layout */
+    SD_RB_SORT,    /* the bodies sorted by cell */
+    SD_RB_RANGES,  /* each body's box and cell range */
+    SD_RB_FILL,    /* the grid's entries (and the bed's cache) */
+    SD_RB_SCAN,    /* the candidates found */
+    SD_RB_JOIN,    /* the threads' candidates joined, the wall pairs grouped */
+    SD_RB_MASSES,  /* the pairs' effective masses */
+    SD_RB_RESTORE, /* the springs put back */
+    SD_RB_REFS,    /* the moves' references */
+    SD_RB_STAGES
+};
+/* t[k] (SD_RB_STAGES of them): stage k's time since the last take, in s; returns the rebuilds
+ * that came in. The sums restart. */
+long sd_neighbor_stages_take(double *t);
+const char *sd_neighbor_stage_name(int k);
 /* The triangle grid's flag bytes (tflag) made from its lists and ranges (a checkpoint keeps
  * the grid, not the flags). */
 sd_status sd_neighbor_tgrid_flags(sd_world *w);
