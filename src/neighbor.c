@@ -1142,17 +1142,13 @@ static sd_status join_chunks(sd_world *w, const cand_buf *buf, int K, int T)
 }
 
 static _Thread_local double rb_stage[SD_RB_STAGES];
-static _Thread_local long rb_count;
 
-long sd_neighbor_stages_take(double *t)
+void sd_neighbor_stages_take(double *t)
 {
     for (int k = 0; k < SD_RB_STAGES; k++) {
         t[k] = rb_stage[k];
         rb_stage[k] = 0.0;
     }
-    const long n = rb_count;
-    rb_count = 0;
-    return n;
 }
 
 const char *sd_neighbor_stage_name(int k)
@@ -1358,7 +1354,6 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     w->timers.rebuilds++;
     w->mov_stamp = w->timers.rebuilds; /* made after the sort above */
     RB_STAGE(SD_RB_REFS);
-    rb_count++;
     return SD_OK;
 }
 #undef RB_STAGE

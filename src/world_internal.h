@@ -337,9 +337,8 @@ enum {
     SD_RB_REFS,    /* the moves' references */
     SD_RB_STAGES
 };
-/* t[k] (SD_RB_STAGES of them): stage k's time since the last take, in s; returns the rebuilds
- * that came in. The sums restart. */
-long sd_neighbor_stages_take(double *t);
+/* t[k] (SD_RB_STAGES of them): stage k's time since the last take, in s. The sums restart. */
+void sd_neighbor_stages_take(double *t);
 const char *sd_neighbor_stage_name(int k);
 /* The triangle grid's flag bytes (tflag) made from its lists and ranges (a checkpoint keeps
  * the grid, not the flags). */
