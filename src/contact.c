@@ -1247,18 +1247,21 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
      * lane-by-lane path. */
     int sg2[SS_CHUNK], n2 = 0;
     {
-        int g = 0;
-        for (; g + 4 <= n; g += 4) {
+        for (int g = 0; g < n; g += 4) {
+            /* the last group padded with its last pair (its extra lanes dropped) */
+            const int nl = n - g < 4 ? n - g : 4;
             int sa[4], lc[4];
-            for (int l = 0; l < 4; l++) /* (from the chunk's view: the pair store's lines are not read) */
-                sa[l] = v->a[sg[g + l]], lc[l] = v->b[sg[g + l]];
+            for (int l = 0; l < 4; l++) { /* (from the chunk's view: the pair store's lines are not read) */
+                const int i = sg[g + (l < nl ? l : nl - 1)];
+                sa[l] = v->a[i], lc[l] = v->b[i];
+            }
             sc_quad u;
             sc_quad_load(b, sa, lc, &u);
             const __m256d rr = _mm256_add_pd(u.rc, u.rs);
             const int apart = _mm256_movemask_pd(
                 _mm256_or_pd(_mm256_cmp_pd(_mm256_sub_pd(_mm256_andnot_pd(sign, u.t), u.hl), u.rs, _CMP_GE_OQ),
                              _mm256_cmp_pd(u.rho2, _mm256_mul_pd(rr, rr), _CMP_GE_OQ)));
-            for (int l = 0; l < 4; l++) {
+            for (int l = 0; l < nl; l++) {
                 const int i = sg[g + l];
                 if (apart >> l & 1) {
                     used[i] = 0;
@@ -1267,24 +1270,17 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
                     sg2[n2++] = i;
             }
         }
-        for (; g < n; g++) {
-            const int i = sg[g];
-            const sd_pair *p = &pairs[ks[i]];
-            if (log_pair_apart(b, p)) {
-                used[i] = 0;
-                w->bb.hist[p->off].feature = -1;
-            } else
-                sg2[n2++] = i;
-        }
     }
     sg = sg2;
     n = n2;
     /* 2. the contacts */
-    int g = 0;
-    for (; g + 4 <= n; g += 4) {
+    for (int g = 0; g < n; g += 4) {
+        const int nl = n - g < 4 ? n - g : 4; /* (the last group padded, as in 1) */
         int sa[4], lc[4];
-        for (int l = 0; l < 4; l++)
-            sa[l] = v->a[sg[g + l]], lc[l] = v->b[sg[g + l]];
+        for (int l = 0; l < 4; l++) {
+            const int i = sg[g + (l < nl ? l : nl - 1)];
+            sa[l] = v->a[i], lc[l] = v->b[i];
+        }
         sc_quad u;
         sc_quad_load(b, sa, lc, &u);
         const __m256d cx = u.cx, cy = u.cy, cz = u.cz, bx = u.bx, by = u.by, bz = u.bz, ax = u.ax, ay = u.ay,
@@ -1316,9 +1312,10 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
         nz = _mm256_blendv_pd(_mm256_blendv_pd(nz, eaz, end), radz, side);
         sd = _mm256_blendv_pd(_mm256_blendv_pd(sd, axd, end), rd, side);
         /* the lanes done here: a contact (sd < r) on the side, an end face or a rim, off the axis */
-        const int ok = _mm256_movemask_pd(_mm256_and_pd(
-            _mm256_and_pd(_mm256_or_pd(_mm256_or_pd(side, end), rim), _mm256_cmp_pd(rho2, tiny, _CMP_GT_OQ)),
-            _mm256_cmp_pd(sd, rs, _CMP_LT_OQ)));
+        const int ok = _mm256_movemask_pd(_mm256_and_pd(_mm256_and_pd(_mm256_or_pd(_mm256_or_pd(side, end), rim),
+                                                                      _mm256_cmp_pd(rho2, tiny, _CMP_GT_OQ)),
+                                                        _mm256_cmp_pd(sd, rs, _CMP_LT_OQ))) &
+                       ((1 << nl) - 1);
         /* sd_geom_sphere_cyl: overlap, the surface point c + (-sd) n, the point + (-0.5 ov) n */
         const __m256d ov = _mm256_sub_pd(rs, sd), msd = _mm256_xor_pd(sd, sign), mh = _mm256_mul_pd(mhalf, ov);
         const __m256d ptx = _mm256_add_pd(_mm256_add_pd(cx, _mm256_mul_pd(msd, nx)), _mm256_mul_pd(mh, nx)),
@@ -1361,7 +1358,7 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
         _mm256_storeu_pd(L[9], _mm256_sub_pd(ptz, cz));
         _mm256_storeu_pd(L[10], _mm256_sub_pd(ptx, bx)), _mm256_storeu_pd(L[11], _mm256_sub_pd(pty, by));
         _mm256_storeu_pd(L[12], _mm256_sub_pd(ptz, bz));
-        for (int l = 0; l < 4; l++) {
+        for (int l = 0; l < nl; l++) {
             const int i = sg[g + l];
             if (!(ok >> l & 1)) {
                 msc += pair_general(w, law, &pairs[ks[i]], i, q, msc, out, used);
@@ -1389,8 +1386,6 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
             q->i[j] = i;
         }
     }
-    for (; g < n; g++)
-        msc += pair_general(w, law, &pairs[ks[sg[g]]], sg[g], q, msc, out, used);
     return msc;
 }
 #endif
