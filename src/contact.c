@@ -139,7 +139,6 @@ typedef struct {
         double redo[SS_CHUNK];
         int32_t feature[SS_CHUNK], i[SS_CHUNK]; /* the contact's feature, the pair's place */
         long n_run, n_redo, n_geom; /* lanes run, sent back, and filled by sc_geom256 since the last fold (tests) */
-        long n_mixed;               /* groups of four sphere pairs summed with another shape's pair between (tests) */
     } sc;
 } ss_batch;
 
@@ -439,7 +438,6 @@ static inline int log_pair_apart(const sd_bodies *b, const sd_pair *p)
 
 static int sc_lanes_on = 1; /* sphere-log pairs through the law in lanes (sd_sc_lanes_set) */
 static int sc_geom_on = 1;  /* their geometry in AVX2 lanes, sc_geom256 (sd_sc_geom_set) */
-static int sums_mixed_on = 1; /* the sums' lanes with other shapes' pairs between (sd_sums_mixed_set) */
 
 /* The touch filter's step for a log's pair (entry i of the chunk): apart, it gets what the
  * manifold path gives for no contact (empty slots, no force); else it goes on to the manifold
@@ -659,20 +657,6 @@ int sd_simd_level_set(int level)
 }
 
 int sd_simd512_on(void) { return simd_level >= SD_SIMD_AVX512; }
-
-/* The other shapes' pairs gen[*g ..] (chunk entries, ascending) that come before chunk entry
- * lim, those in contact onto their two bodies (add_pair, A then B), *g moved past them. */
-static inline void gen_sums_before(sd_bodies *acc, const soa_view *v, const int *gen, int ng, int *g, int lim,
-                                   const int *used, const sd_pair_out *out)
-{
-    for (; *g < ng && gen[*g] < lim; (*g)++) {
-        const int i = gen[*g];
-        if (used[i] > 0) { /* add_both, its bodies from the view (not the store's line) */
-            add_pair(acc, v->a[i], 0, &out[i]);
-            add_pair(acc, v->b[i], 1, &out[i]);
-        }
-    }
-}
 
 #ifdef SD_FILTER512
 /* Step 1 of bb_chunk (the touch filter) for 8 pairs at a time, in AVX-512: the pair records
@@ -974,12 +958,8 @@ __attribute__((target("avx2"))) static inline void row_add(sd_vec3 *p, __m256d r
 /* Step 5 of bb_chunk (with acc) in AVX2 for the lanes j .. j+3, when none is to be redone
  * (returns 0 and does nothing otherwise): the torques of four lanes at once, the slots' springs
  * stored as 32-byte rows (the feature 0), and each pair onto its two bodies in lane order as
- * add_pair does (same bits). The other shapes' pairs that come between the lanes in the chunk
- * (gen[*g ..], those before lane j already added) are added between them, where they come
- * (gen_sums_before): every body gets its terms in chunk order, as the scalar loop adds them. */
-__attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const ss_batch *q, int j, sd_bodies *acc,
-                                                      const soa_view *v, const int *gen, int ng, int *g,
-                                                      const int *used, const sd_pair_out *out)
+ * add_pair does (same bits). */
+__attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const ss_batch *q, int j, sd_bodies *acc)
 {
     const __m256d zero = _mm256_setzero_pd();
     if (_mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(q->redo + j), zero, _CMP_NEQ_UQ))) return 0;
@@ -1000,7 +980,6 @@ __attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const s
     sd_vec3 *const force = acc->force, *const torque = acc->torque;
     const uint8_t *const fixed = acc->fixed, *const shape = acc->shape;
     for (int k = 0; k < 4; k++) {
-        if (k > 0) gen_sums_before(acc, v, gen, ng, g, q->sel[j + k], used, out);
         const int ia = q->ia[j + k], ib = q->ib[j + k];
         _mm256_storeu_pd((double *)&hist[q->off[j + k]], hr[k]);
         if (!sd_is_bed_at(fixed, shape, ia)) {
@@ -1041,16 +1020,7 @@ static void sc_lane_fill(const sd_world *w, const sd_pair *p, const sd_manifold 
     q->i[j] = i;
 }
 
-static long sc_geom_run, sums_mixed_run;
-
-long sd_sums_mixed_count(void) { return __atomic_load_n(&sums_mixed_run, __ATOMIC_RELAXED); }
-
-int sd_sums_mixed_set(int on)
-{
-    const int was = sums_mixed_on;
-    sums_mixed_on = on != 0;
-    return was;
-}
+static long sc_geom_run;
 
 long sd_sc_geom_count(void) { return __atomic_load_n(&sc_geom_run, __ATOMIC_RELAXED); }
 
@@ -1461,18 +1431,19 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
         int g = 0;
         for (int j = 0; j <= m; j++) {
             const int i = j < m ? q->sel[j] : n;
-            gen_sums_before(acc, v, gen, ng, &g, i, used, out);
+            for (; g < ng && gen[g] < i; g++)
+                if (used[gen[g]] > 0) { /* add_both, its bodies from the view (not the store's line) */
+                    add_pair(acc, v->a[gen[g]], 0, &out[gen[g]]);
+                    add_pair(acc, v->b[gen[g]], 1, &out[gen[g]]);
+                }
             if (j == m) break;
 #ifdef SD_FILTER512
-            /* four lanes at once where none is to be redone (nearly always), with any other
-             * shape's pairs that come between them added in their places */
-            if (simd_level >= SD_SIMD_AVX2 && j + 4 <= m && (sums_mixed_on || g == ng || gen[g] > q->sel[j + 3])) {
-                const int g0 = g;
-                if (ss_sums256(w, q, j, acc, v, gen, ng, &g, used, out)) {
-                    q->sc.n_mixed += g > g0;
-                    j += 3;
-                    continue;
-                }
+            /* four lanes at once where no other shape's pair comes between them and none is
+             * to be redone (nearly always) */
+            if (simd_level >= SD_SIMD_AVX2 && j + 4 <= m && (g == ng || gen[g] > q->sel[j + 3]) &&
+                ss_sums256(w, q, j, acc)) {
+                j += 3;
+                continue;
             }
 #endif
             const int ia = q->ia[j], ib = q->ib[j];
@@ -2559,8 +2530,7 @@ static void sc_lanes_fold(void *scratch, int T)
         if (q->n_run) __atomic_fetch_add(&sc_lanes_run, q->n_run, __ATOMIC_RELAXED);
         if (q->n_redo) __atomic_fetch_add(&sc_lanes_redo, q->n_redo, __ATOMIC_RELAXED);
         if (q->n_geom) __atomic_fetch_add(&sc_geom_run, q->n_geom, __ATOMIC_RELAXED);
-        if (q->n_mixed) __atomic_fetch_add(&sums_mixed_run, q->n_mixed, __ATOMIC_RELAXED);
-        q->n_run = q->n_redo = q->n_geom = q->n_mixed = 0;
+        q->n_run = q->n_redo = q->n_geom = 0;
     }
 }
 
@@ -2588,7 +2558,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         w->bb_scratch_n = T;
         for (int t = 0; t < T; t++)
             ((bb_scratch *)w->bb_scratch)[t].q.sc.n_run = ((bb_scratch *)w->bb_scratch)[t].q.sc.n_redo =
-                ((bb_scratch *)w->bb_scratch)[t].q.sc.n_geom = ((bb_scratch *)w->bb_scratch)[t].q.sc.n_mixed = 0;
+                ((bb_scratch *)w->bb_scratch)[t].q.sc.n_geom = 0;
     }
 #ifdef _OPENMP
     if (T > 1) {

@@ -424,12 +424,6 @@ int sd_sc_lanes_set(int on);
 /* The sphere-log contacts' geometry in AVX2 lanes where the CPU has it (1, the default) or
  * pair by pair (0); the same bits either way. Returns the previous setting. */
 int sd_sc_geom_set(int on);
-/* The sums of a chunk's sphere pairs four at a time (AVX2) also where another shape's pair
- * comes between the four (1, the default: it is added in its place among them) or only where
- * none does (0); the same bits either way. Returns the previous setting. sd_sums_mixed_count:
- * the groups of four summed with another shape's pair between, so far. */
-int sd_sums_mixed_set(int on);
-long sd_sums_mixed_count(void);
 /* The wall pass over the bodies with a wall pair near touching only (1, the default) or over
  * all with wall pairs (0); the same bits either way. Returns the previous setting. */
 int sd_wall_near_set(int on);

@@ -232,23 +232,6 @@ int main(void)
         CHECK(hb == hb0 && cb == cb0);
     }
     {
-        /* the sums four at a time with the log pairs that come between the four added in their
-         * places (the default), against the sums four at a time only where none comes between:
-         * the log flume above, the same bits */
-        const long n0 = sd_sums_mixed_count();
-        const int was = sd_sums_mixed_set(0);
-        long cm = 0;
-        const uint64_t hm = run(1, &cm);
-        const long n1 = sd_sums_mixed_count();
-        sd_sums_mixed_set(was);
-        printf("sums with log pairs between: %ld groups of four in the runs above; only where none comes between: "
-               "hash %016llx\n",
-               n0, (unsigned long long)hm);
-        CHECK(hm == h1 && cm == c1);
-        CHECK(n1 == n0);                                      /* none with it off */
-        if (sd_simd_level() >= SD_SIMD_AVX2) CHECK(n0 > 100); /* it ran on the log flume */
-    }
-    {
         /* the sphere-log pairs touching at one point through the law in lanes and through
          * apply_manifold: the log flume above, the same bits */
         long redo0 = 0, redo1 = 0;
