@@ -1192,13 +1192,13 @@ __attribute__((target("avx2"))) static inline void sc_quad_load(const sd_bodies 
 }
 
 /* Step 2 of bb_chunk for the sphere-log pairs sg[0 .. n) (chunk entries, one spring slot each,
- * whose apart test the touch filter may have left to this pass) in AVX2, 4 at a time: first
- * the apart test, then sd_geom_sphere_cyl's contact on the log's side, an end face or an end
- * rim, and sc_lane_fill, with their operations in their order (same bits), lane by lane into
- * q from msc on. A pair whose centre is on the axis or inside the log, or that does not touch
- * after all (near a rim), goes through pair_general as before. Returns the lanes filled. The
- * scalar path spent ~12 % of the settled packing's step here (docs/performance.md
- * §2-00000000000000). */
+ * whose apart test the touch filter may have left to this pass) in AVX2, 4 at a time (the last
+ * 1-3 in a group padded with the last of them): first the apart test, then
+ * sd_geom_sphere_cyl's contact on the log's side, an end face or an end rim, and sc_lane_fill,
+ * with their operations in their order (same bits), lane by lane into q from msc on. A pair
+ * whose centre is on the axis or inside the log, or that does not touch after all (near a
+ * rim), goes through pair_general as before. Returns the lanes filled. The scalar path spent
+ * ~12 % of the settled packing's step here (docs/performance.md §2-00000000000000). */
 __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const sd_law *law, const int32_t *ks,
                                                       const soa_view *v, const int *sg, int n, struct sc_lanes *q,
                                                       int msc, sd_pair_out *out, int *used)
