@@ -1191,6 +1191,17 @@ __attribute__((target("avx2"))) static inline void sc_quad_load(const sd_bodies 
                             _mm256_mul_pd(s->wz, s->wz));
 }
 
+/* The bodies of the sphere-log pairs sg[0 .. nl) (chunk entries, 1 <= nl <= 4) into four
+ * lanes, the last pair repeated past nl: from the chunk's view (the pair store's lines are not
+ * read). */
+static inline void sc_group(const soa_view *v, const int *sg, int nl, int sa[4], int lc[4])
+{
+    for (int l = 0; l < 4; l++) {
+        const int i = sg[l < nl ? l : nl - 1];
+        sa[l] = v->a[i], lc[l] = v->b[i];
+    }
+}
+
 /* Step 2 of bb_chunk for the sphere-log pairs sg[0 .. n) (chunk entries, one spring slot each,
  * whose apart test the touch filter may have left to this pass) in AVX2, 4 at a time (the last
  * 1-3 in a group padded with the last of them): first the apart test, then
@@ -1221,10 +1232,7 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
             /* the last group padded with its last pair (its extra lanes dropped) */
             const int nl = n - g < 4 ? n - g : 4;
             int sa[4], lc[4];
-            for (int l = 0; l < 4; l++) { /* (from the chunk's view: the pair store's lines are not read) */
-                const int i = sg[g + (l < nl ? l : nl - 1)];
-                sa[l] = v->a[i], lc[l] = v->b[i];
-            }
+            sc_group(v, sg + g, nl, sa, lc);
             sc_quad u;
             sc_quad_load(b, sa, lc, &u);
             const __m256d rr = _mm256_add_pd(u.rc, u.rs);
@@ -1247,10 +1255,7 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
     for (int g = 0; g < n; g += 4) {
         const int nl = n - g < 4 ? n - g : 4; /* (the last group padded, as in 1) */
         int sa[4], lc[4];
-        for (int l = 0; l < 4; l++) {
-            const int i = sg[g + (l < nl ? l : nl - 1)];
-            sa[l] = v->a[i], lc[l] = v->b[i];
-        }
+        sc_group(v, sg + g, nl, sa, lc);
         sc_quad u;
         sc_quad_load(b, sa, lc, &u);
         const __m256d cx = u.cx, cy = u.cy, cz = u.cz, bx = u.bx, by = u.by, bz = u.bz, ax = u.ax, ay = u.ay,
