@@ -109,6 +109,7 @@ static int apply_manifold(const sd_world *w, const sd_law *law, const sd_manifol
  * every branch are computed and one is kept), so it gives the same bits as the scalar law. */
 #define SS_CHUNK 128 /* at most 256: the owned pass packs an index in 8 bits */
 #define SS_PAD 8
+#define SC_CAP (SS_CHUNK + SS_PAD) /* (the sphere-log lanes: sc_geom256 stores four at a time) */
 
 typedef struct {
     /* (the filter's lanes padded by SS_PAD: its AVX-512 form stores 8 lanes at a time) */
@@ -126,18 +127,18 @@ typedef struct {
     int32_t was[SS_CHUNK + SS_PAD]; /* the slot's feature before this step */
     int32_t sel[SS_CHUNK + SS_PAD]; /* the pair's place in the chunk */
     struct sc_lanes {               /* sphere-log pairs touching at one point (bb_chunk step 2) */
-        double nx[SS_CHUNK], ny[SS_CHUNK], nz[SS_CHUNK], ov[SS_CHUNK]; /* normal (on the sphere), overlap */
-        double px[SS_CHUNK], py[SS_CHUNK], pz[SS_CHUNK];               /* contact point */
-        double rax[SS_CHUNK], ray[SS_CHUNK], raz[SS_CHUNK];            /* point - centre, sphere */
-        double rbx[SS_CHUNK], rby[SS_CHUNK], rbz[SS_CHUNK];            /* point - centre, log */
-        double vax[SS_CHUNK], vay[SS_CHUNK], vaz[SS_CHUNK], wax[SS_CHUNK], way[SS_CHUNK], waz[SS_CHUNK];
-        double vbx[SS_CHUNK], vby[SS_CHUNK], vbz[SS_CHUNK], wbx[SS_CHUNK], wby[SS_CHUNK], wbz[SS_CHUNK];
-        double sqm[SS_CHUNK];
-        double sx[SS_CHUNK], sy[SS_CHUNK], sz[SS_CHUNK]; /* spring in, then out */
-        double fx[SS_CHUNK], fy[SS_CHUNK], fz[SS_CHUNK], tax[SS_CHUNK], tay[SS_CHUNK], taz[SS_CHUNK];
-        double tbx[SS_CHUNK], tby[SS_CHUNK], tbz[SS_CHUNK];
-        double redo[SS_CHUNK];
-        int32_t feature[SS_CHUNK], i[SS_CHUNK]; /* the contact's feature, the pair's place */
+        double nx[SC_CAP], ny[SC_CAP], nz[SC_CAP], ov[SC_CAP]; /* normal (on the sphere), overlap */
+        double px[SC_CAP], py[SC_CAP], pz[SC_CAP];             /* contact point */
+        double rax[SC_CAP], ray[SC_CAP], raz[SC_CAP];          /* point - centre, sphere */
+        double rbx[SC_CAP], rby[SC_CAP], rbz[SC_CAP];          /* point - centre, log */
+        double vax[SC_CAP], vay[SC_CAP], vaz[SC_CAP], wax[SC_CAP], way[SC_CAP], waz[SC_CAP];
+        double vbx[SC_CAP], vby[SC_CAP], vbz[SC_CAP], wbx[SC_CAP], wby[SC_CAP], wbz[SC_CAP];
+        double sqm[SC_CAP];
+        double sx[SC_CAP], sy[SC_CAP], sz[SC_CAP]; /* spring in, then out */
+        double fx[SC_CAP], fy[SC_CAP], fz[SC_CAP], tax[SC_CAP], tay[SC_CAP], taz[SC_CAP];
+        double tbx[SC_CAP], tby[SC_CAP], tbz[SC_CAP];
+        double redo[SC_CAP];
+        int32_t feature[SC_CAP], i[SC_CAP]; /* the contact's feature, the pair's place */
         long n_run, n_redo, n_geom; /* lanes run, sent back, and filled by sc_geom256 since the last fold (tests) */
     } sc;
 } ss_batch;
@@ -1191,6 +1192,33 @@ __attribute__((target("avx2"))) static inline void sc_quad_load(const sd_bodies 
                             _mm256_mul_pd(s->wz, s->wz));
 }
 
+/* Where four sphere centres lie against their logs (sd_cyl_signed_dist's operations, in their
+ * order): axd = |t| - hl (> 0 beyond the end plane), rho = |w|, rd = rho - r (> 0 outside the
+ * side surface); the masks side, end face and rim (beyond both), known = any of the three (not
+ * known: a centre inside the log, left to the scalar path), and sd the distance to the nearest
+ * feature where known (0 elsewhere; the rim's sqrt only where a lane is there). */
+typedef struct {
+    __m256d axd, rho, rd, side, end, rim, known, sd;
+} sc_case;
+
+__attribute__((target("avx2"))) static inline void sc_case_of(const sc_quad *u, sc_case *k)
+{
+    const __m256d zero = _mm256_setzero_pd(), sign = _mm256_set1_pd(-0.0);
+    k->axd = _mm256_sub_pd(_mm256_andnot_pd(sign, u->t), u->hl);
+    k->rho = _mm256_sqrt_pd(u->rho2);
+    k->rd = _mm256_sub_pd(k->rho, u->rc);
+    const __m256d ax_in = _mm256_cmp_pd(k->axd, zero, _CMP_LE_OQ), ax_out = _mm256_cmp_pd(k->axd, zero, _CMP_GT_OQ);
+    const __m256d rd_in = _mm256_cmp_pd(k->rd, zero, _CMP_LE_OQ), rd_out = _mm256_cmp_pd(k->rd, zero, _CMP_GT_OQ);
+    k->side = _mm256_and_pd(ax_in, rd_out);
+    k->end = _mm256_and_pd(rd_in, ax_out);
+    k->rim = _mm256_and_pd(ax_out, rd_out);
+    k->known = _mm256_or_pd(_mm256_or_pd(k->side, k->end), k->rim);
+    __m256d sd = zero;
+    if (_mm256_movemask_pd(k->rim))
+        sd = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(k->rd, k->rd), _mm256_mul_pd(k->axd, k->axd)));
+    k->sd = _mm256_blendv_pd(_mm256_blendv_pd(sd, k->axd, k->end), k->rd, k->side);
+}
+
 /* The bodies of the sphere-log pairs sg[0 .. nl) (chunk entries, 1 <= nl <= 4) into four
  * lanes, the last pair repeated past nl: from the chunk's view (the pair store's lines are not
  * read). */
@@ -1221,11 +1249,12 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
     const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), mone = _mm256_set1_pd(-1.0),
                   sign = _mm256_set1_pd(-0.0), tiny = _mm256_set1_pd(1e-280), mhalf = _mm256_set1_pd(-0.5);
     /* 1. the touch filter's apart test (sd_sphere_cyl_apart, its operations), which
-     * ss_filter256 leaves to this pass: apart, a pair gets what filter_log_pair gives it (no
-     * contact, its slot emptied); the others, in order, into sg2. (A pair the scalar filter
-     * already found not apart is found so again.) A pass of its own, though 2 loads the same
-     * rows again (from L1): done inside 2, an apart lane would send half the groups down the
-     * lane-by-lane path. */
+     * ss_filter256 leaves to this pass, then sd_geom_sphere_cyl's own (sd >= r past the side,
+     * an end face or a rim, as 2 computes it): either way the pair gets what filter_log_pair
+     * gives it (no contact, its slot emptied); the others, in order, into sg2. (A pair the
+     * scalar filter already found not apart is found so again.) A pass of its own, though 2
+     * loads the same rows again (from L1): so that 2 meets touching pairs only and takes its
+     * groups four lanes at a time. */
     int sg2[SS_CHUNK], n2 = 0;
     {
         for (int g = 0; g < n; g += 4) {
@@ -1236,12 +1265,16 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
             sc_quad u;
             sc_quad_load(b, sa, lc, &u);
             const __m256d rr = _mm256_add_pd(u.rc, u.rs);
-            const int apart = _mm256_movemask_pd(
-                _mm256_or_pd(_mm256_cmp_pd(_mm256_sub_pd(_mm256_andnot_pd(sign, u.t), u.hl), u.rs, _CMP_GE_OQ),
-                             _mm256_cmp_pd(u.rho2, _mm256_mul_pd(rr, rr), _CMP_GE_OQ)));
+            sc_case k;
+            sc_case_of(&u, &k);
+            const __m256d apart = _mm256_or_pd(_mm256_cmp_pd(k.axd, u.rs, _CMP_GE_OQ),
+                                               _mm256_cmp_pd(u.rho2, _mm256_mul_pd(rr, rr), _CMP_GE_OQ));
+            const __m256d miss = _mm256_and_pd(_mm256_and_pd(k.known, _mm256_cmp_pd(k.sd, u.rs, _CMP_GE_OQ)),
+                                               _mm256_cmp_pd(u.rho2, tiny, _CMP_GT_OQ));
+            const int drop = _mm256_movemask_pd(_mm256_or_pd(apart, miss));
             for (int l = 0; l < nl; l++) {
                 const int i = sg[g + l];
-                if (apart >> l & 1) {
+                if (drop >> l & 1) {
                     used[i] = 0;
                     w->bb.hist[v->off[i]].feature = -1; /* (one slot) */
                 } else
@@ -1260,37 +1293,32 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
         sc_quad_load(b, sa, lc, &u);
         const __m256d cx = u.cx, cy = u.cy, cz = u.cz, bx = u.bx, by = u.by, bz = u.bz, ax = u.ax, ay = u.ay,
                       az = u.az, rs = u.rs, t = u.t, wx = u.wx, wy = u.wy, wz = u.wz, rho2 = u.rho2;
-        const __m256d rho = _mm256_sqrt_pd(rho2);
+        sc_case k;
+        sc_case_of(&u, &k);
         const __m256d e = _mm256_blendv_pd(mone, one, _mm256_cmp_pd(t, zero, _CMP_GE_OQ));
-        const __m256d axd = _mm256_sub_pd(_mm256_andnot_pd(sign, t), u.hl); /* fabs(t) - hl */
-        const __m256d rd = _mm256_sub_pd(rho, u.rc);
-        const __m256d inv = _mm256_div_pd(one, rho);
+        const __m256d axd = k.axd, rd = k.rd, side = k.side, end = k.end, rim = k.rim;
+        const __m256d inv = _mm256_div_pd(one, k.rho);
         const __m256d radx = _mm256_mul_pd(wx, inv), rady = _mm256_mul_pd(wy, inv), radz = _mm256_mul_pd(wz, inv);
-        const __m256d ax_in = _mm256_cmp_pd(axd, zero, _CMP_LE_OQ), ax_out = _mm256_cmp_pd(axd, zero, _CMP_GT_OQ);
-        const __m256d rd_in = _mm256_cmp_pd(rd, zero, _CMP_LE_OQ), rd_out = _mm256_cmp_pd(rd, zero, _CMP_GT_OQ);
-        const __m256d side = _mm256_and_pd(ax_in, rd_out), end = _mm256_and_pd(rd_in, ax_out),
-                      rim = _mm256_and_pd(ax_out, rd_out);
-        /* beyond the rim: radial (rd / dist) + a (e ax / dist), dist = sqrt(rd^2 + ax^2); only
-         * where a lane is there (a sphere on a log's side or end face: nearly all) */
-        __m256d nx = zero, ny = zero, nz = zero, sd = zero;
+        /* beyond the rim: radial (rd / dist) + a (e ax / dist); only where a lane is there (a
+         * sphere on a log's side or end face: nearly all) */
+        __m256d nx = zero, ny = zero, nz = zero;
         if (_mm256_movemask_pd(rim)) {
-            const __m256d dist = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(rd, rd), _mm256_mul_pd(axd, axd)));
+            const __m256d dist = k.sd; /* (the rim's distance in its lanes) */
             const __m256d k1 = _mm256_div_pd(rd, dist), k2 = _mm256_div_pd(_mm256_mul_pd(e, axd), dist);
             nx = _mm256_add_pd(_mm256_mul_pd(radx, k1), _mm256_mul_pd(ax, k2));
             ny = _mm256_add_pd(_mm256_mul_pd(rady, k1), _mm256_mul_pd(ay, k2));
             nz = _mm256_add_pd(_mm256_mul_pd(radz, k1), _mm256_mul_pd(az, k2));
-            sd = dist;
         }
         const __m256d eax = _mm256_mul_pd(ax, e), eay = _mm256_mul_pd(ay, e), eaz = _mm256_mul_pd(az, e);
         nx = _mm256_blendv_pd(_mm256_blendv_pd(nx, eax, end), radx, side);
         ny = _mm256_blendv_pd(_mm256_blendv_pd(ny, eay, end), rady, side);
         nz = _mm256_blendv_pd(_mm256_blendv_pd(nz, eaz, end), radz, side);
-        sd = _mm256_blendv_pd(_mm256_blendv_pd(sd, axd, end), rd, side);
-        /* the lanes done here: a contact (sd < r) on the side, an end face or a rim, off the axis */
-        const int ok = _mm256_movemask_pd(_mm256_and_pd(_mm256_and_pd(_mm256_or_pd(_mm256_or_pd(side, end), rim),
-                                                                      _mm256_cmp_pd(rho2, tiny, _CMP_GT_OQ)),
-                                                        _mm256_cmp_pd(sd, rs, _CMP_LT_OQ))) &
-                       ((1 << nl) - 1);
+        const __m256d sd = k.sd;
+        /* the lanes done here: a contact (sd < r) on the side, an end face or a rim, off the
+         * axis; the padded lanes of the last group repeat its last pair, so a group of whole
+         * lanes is ok == 15 */
+        const int ok = _mm256_movemask_pd(_mm256_and_pd(_mm256_and_pd(k.known, _mm256_cmp_pd(rho2, tiny, _CMP_GT_OQ)),
+                                                        _mm256_cmp_pd(sd, rs, _CMP_LT_OQ)));
         /* sd_geom_sphere_cyl: overlap, the surface point c + (-sd) n, the point + (-0.5 ov) n */
         const __m256d ov = _mm256_sub_pd(rs, sd), msd = _mm256_xor_pd(sd, sign), mh = _mm256_mul_pd(mhalf, ov);
         const __m256d ptx = _mm256_add_pd(_mm256_add_pd(cx, _mm256_mul_pd(msd, nx)), _mm256_mul_pd(mh, nx)),
@@ -1298,7 +1326,7 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
                       ptz = _mm256_add_pd(_mm256_add_pd(cz, _mm256_mul_pd(msd, nz)), _mm256_mul_pd(mh, nz));
         const int sidem = _mm256_movemask_pd(side), endm = _mm256_movemask_pd(end),
                   negm = _mm256_movemask_pd(_mm256_cmp_pd(e, zero, _CMP_LT_OQ));
-        if (ok == 15) { /* (nearly always) four lanes at once */
+        if (ok == 15) { /* (nearly always) four lanes at once, nl of them kept */
             const int j = msc;
             _mm256_storeu_pd(q->nx + j, nx), _mm256_storeu_pd(q->ny + j, ny), _mm256_storeu_pd(q->nz + j, nz);
             _mm256_storeu_pd(q->ov + j, ov);
@@ -1311,7 +1339,7 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
             rows4_store(om, sa, q->wax, q->way, q->waz, j);
             rows4_store(vel, lc, q->vbx, q->vby, q->vbz, j);
             rows4_store(om, lc, q->wbx, q->wby, q->wbz, j);
-            for (int l = 0; l < 4; l++) {
+            for (int l = 0; l < nl; l++) {
                 const int f = sidem >> l & 1 ? 0 : (negm >> l & 1 ? 1 : 2) + (endm >> l & 1 ? 0 : 2);
                 const sd_hist *h = &hist[v->off[sg[g + l]]];
                 const int same = h->feature == f;
@@ -1321,8 +1349,8 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
                 q->feature[j + l] = f;
                 q->i[j + l] = sg[g + l];
             }
-            msc += 4;
-            q->n_geom += 4;
+            msc += nl;
+            q->n_geom += nl;
             continue;
         }
         double L[13][4];
