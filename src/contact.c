@@ -126,6 +126,7 @@ typedef struct {
     int32_t ia[SS_CHUNK + SS_PAD], ib[SS_CHUNK + SS_PAD], off[SS_CHUNK + SS_PAD]; /* bodies, history slot */
     int32_t was[SS_CHUNK + SS_PAD]; /* the slot's feature before this step */
     int32_t sel[SS_CHUNK + SS_PAD]; /* the pair's place in the chunk */
+    int bed_lim;                    /* the sums' bed test (bed_at): set by each pass before its chunks */
     struct sc_lanes {               /* sphere-log pairs touching at one point (bb_chunk step 2) */
         double nx[SC_CAP], ny[SC_CAP], nz[SC_CAP], ov[SC_CAP]; /* normal (on the sphere), overlap */
         double px[SC_CAP], py[SC_CAP], pz[SC_CAP];             /* contact point */
@@ -453,9 +454,15 @@ static inline void filter_log_pair(const sd_world *w, const sd_pair *p, int i, i
         gen[(*ng)++] = i;
 }
 
-static inline __attribute__((always_inline)) void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
+/* Whether body i is of the bed: from lim where the caller knows that the bed is the bodies
+ * from lim on and no others (the owners' pass, after a sort: ss_batch's bed_lim), else (lim
+ * < 0) from the store's flags. */
+static inline int bed_at(const sd_bodies *b, int lim, int i) { return lim >= 0 ? i >= lim : sd_body_is_bed(b, i); }
+
+static inline __attribute__((always_inline)) void add_pair_lim(sd_bodies *b, int lim, int i, int as_b,
+                                                               const sd_pair_out *o)
 {
-    if (sd_body_is_bed(b, i)) return; /* its load is never read: stays zero (bt_range adds nothing to a fixed body) */
+    if (bed_at(b, lim, i)) return; /* its load is never read: stays zero (bt_range adds nothing to a fixed body) */
     if (as_b) {
         b->force[i] = v3_sub(b->force[i], o->f_a);
         b->torque[i] = v3_add(b->torque[i], o->t_b);
@@ -463,6 +470,11 @@ static inline __attribute__((always_inline)) void add_pair(sd_bodies *b, int i, 
         b->force[i] = v3_add(b->force[i], o->f_a);
         b->torque[i] = v3_add(b->torque[i], o->t_a);
     }
+}
+
+static inline __attribute__((always_inline)) void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
+{
+    add_pair_lim(b, -1, i, as_b, o);
 }
 
 /* A pair's result onto both its bodies, A then B (the order every sum of this file keeps). */
@@ -980,14 +992,15 @@ __attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const s
      * makes it) */
     sd_vec3 *const force = acc->force, *const torque = acc->torque;
     const uint8_t *const fixed = acc->fixed, *const shape = acc->shape;
+    const int lim = q->bed_lim;
     for (int k = 0; k < 4; k++) {
         const int ia = q->ia[j + k], ib = q->ib[j + k];
         _mm256_storeu_pd((double *)&hist[q->off[j + k]], hr[k]);
-        if (!sd_is_bed_at(fixed, shape, ia)) {
+        if (lim >= 0 ? ia < lim : !sd_is_bed_at(fixed, shape, ia)) {
             row_add(&force[ia], fr[k], 0);
             row_add(&torque[ia], ta[k], 0);
         }
-        if (!sd_is_bed_at(fixed, shape, ib)) {
+        if (lim >= 0 ? ib < lim : !sd_is_bed_at(fixed, shape, ib)) {
             row_add(&force[ib], fr[k], 1);
             row_add(&torque[ib], tb[k], 0);
         }
@@ -1466,8 +1479,8 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             const int i = j < m ? q->sel[j] : n;
             for (; g < ng && gen[g] < i; g++)
                 if (used[gen[g]] > 0) { /* add_both, its bodies from the view (not the store's line) */
-                    add_pair(acc, v->a[gen[g]], 0, &out[gen[g]]);
-                    add_pair(acc, v->b[gen[g]], 1, &out[gen[g]]);
+                    add_pair_lim(acc, q->bed_lim, v->a[gen[g]], 0, &out[gen[g]]);
+                    add_pair_lim(acc, q->bed_lim, v->b[gen[g]], 1, &out[gen[g]]);
                 }
             if (j == m) break;
 #ifdef SD_FILTER512
@@ -1483,8 +1496,8 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             sd_hist *h = &hist[q->off[j]];
             if (q->redo[j] != 0.0) {
                 ss_scalar(w, law, &pairs[ks[i]], h, &out[i]);
-                add_pair(acc, ia, 0, &out[i]);
-                add_pair(acc, ib, 1, &out[i]);
+                add_pair_lim(acc, q->bed_lim, ia, 0, &out[i]);
+                add_pair_lim(acc, q->bed_lim, ib, 1, &out[i]);
                 continue;
             }
             h->feature = 0;
@@ -1494,8 +1507,8 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             o.f_a = v3(q->fx[j], q->fy[j], q->fz[j]);
             o.t_a = v3(q->nfx[j] * mla, q->nfy[j] * mla, q->nfz[j] * mla);
             o.t_b = v3(q->nfx[j] * mlb, q->nfy[j] * mlb, q->nfz[j] * mlb);
-            add_pair(acc, ia, 0, &o);
-            add_pair(acc, ib, 1, &o);
+            add_pair_lim(acc, q->bed_lim, ia, 0, &o);
+            add_pair_lim(acc, q->bed_lim, ib, 1, &o);
         }
         return;
     }
@@ -2154,6 +2167,7 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
     const int nn = w->near_n; /* (near_update made the list and its records) */
     const int pf = sd_front_prefetch_on(w);
     int front = -1;
+    x->q.bed_lim = -1; /* (the store's flags) */
     for (int i = 0; i < b->n; i++)
         if (!sd_body_is_bed(b, i)) { /* (two stores: the chained assignment read torque back) */
             b->force[i] = v3(0, 0, 0);
@@ -2325,6 +2339,13 @@ static sd_status owned_update(sd_world *w, int T)
     if (o->n != n || o->nf_stamp != w->timers.rebuilds) {
         o->nf = sd_bed_start(&w->b);
         o->nf_stamp = w->timers.rebuilds;
+        /* the bed is the bodies from nf on and no others (what the rebuild's sort leaves) */
+        o->bed_lim = o->nf;
+        for (int i = 0; i < o->nf; i++)
+            if (sd_body_is_bed(&w->b, i)) {
+                o->bed_lim = -1;
+                break;
+            }
     }
     /* owner t's segment, its cross pairs (cross[K[t] ..]) and its counts of cross entries
      * (xpre + K[t] + 2t) all sit at its candidates' place: no owner waits for another's */
@@ -2429,6 +2450,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
         bb_scratch *x = &scratch[tid];
+        x->q.bed_lim = o->bed_lim;
         /* pass 1: the cross pairs, into their own slots */
         /* (chunks taken as threads come free: they come before a barrier, so an uneven split
          * is waited for. Given all to the owner of their lower body, a tenth of the paper's

@@ -126,6 +126,7 @@ typedef struct {
     long stamp; /* w->near_version it was made as (the near lists of both paths count) */
     int T, n, nbb;
     int nf; /* bodies before the trailing bed (sd_body_is_bed): the passes stop there */
+    int bed_lim; /* nf where no body before it is of the bed, else -1 (the sums' bed test) */
     long nf_stamp;
     const void *pairs;
     int B[SD_MAX_OWNERS + 1]; /* thread t owns bodies B[t] .. B[t+1]-1 */
