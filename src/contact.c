@@ -477,6 +477,15 @@ static inline __attribute__((always_inline)) void add_pair(sd_bodies *b, int i, 
     add_pair_lim(b, -1, i, as_b, o);
 }
 
+/* nf (sd_bed_start) where the bed is the bodies from nf on and no others (what the rebuild's
+ * sort leaves), else -1: the sums' bed test (bed_at) */
+static int bed_lim_of(const sd_bodies *b, int nf)
+{
+    for (int i = 0; i < nf; i++)
+        if (sd_body_is_bed(b, i)) return -1;
+    return nf;
+}
+
 /* A pair's result onto both its bodies, A then B (the order every sum of this file keeps). */
 static inline void add_both(sd_bodies *b, const sd_pair *p, const sd_pair_out *o)
 {
@@ -1584,6 +1593,10 @@ typedef struct {
     uint8_t kact[SS_CHUNK]; /* ks's spring flags (soa_view.act) */
     int act[SS_CHUNK];
     bt_batch wq;
+    /* the serial pass's bodies before the trailing bed and its bed_lim (owned_update's nf and
+     * bed_lim), found again when the count of bodies or of rebuilds (nf_stamp) changes */
+    int nf, nf_n, bed_lim;
+    long nf_stamp;
 } bb_scratch;
 
 /* The batch's lanes through the law, then each into its pair's slot and onto its sphere (the
@@ -2167,12 +2180,23 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
     const int nn = w->near_n; /* (near_update made the list and its records) */
     const int pf = sd_front_prefetch_on(w);
     int front = -1;
-    x->q.bed_lim = -1; /* (the store's flags) */
-    for (int i = 0; i < b->n; i++)
-        if (!sd_body_is_bed(b, i)) { /* (two stores: the chained assignment read torque back) */
-            b->force[i] = v3(0, 0, 0);
-            b->torque[i] = v3(0, 0, 0);
-        }
+    if (x->nf_n != b->n || x->nf_stamp != w->timers.rebuilds) {
+        x->nf = sd_bed_start(b);
+        x->nf_n = b->n;
+        x->nf_stamp = w->timers.rebuilds;
+        x->bed_lim = bed_lim_of(b, x->nf);
+    }
+    x->q.bed_lim = x->bed_lim;
+    if (x->bed_lim >= 0) {
+        /* the bodies before the bed as two runs (the bed's load stays zero) */
+        memset(b->force, 0, (size_t)x->nf * sizeof(sd_vec3));
+        memset(b->torque, 0, (size_t)x->nf * sizeof(sd_vec3));
+    } else
+        for (int i = 0; i < b->n; i++)
+            if (!sd_body_is_bed(b, i)) { /* (two stores: the chained assignment read torque back) */
+                b->force[i] = v3(0, 0, 0);
+                b->torque[i] = v3(0, 0, 0);
+            }
     for (int k0 = 0; k0 < nn; k0 += SS_CHUNK) {
         const int n = nn - k0 < SS_CHUNK ? nn - k0 : SS_CHUNK;
         /* the chunk adds its pairs onto the bodies itself, in pair order */
@@ -2339,13 +2363,7 @@ static sd_status owned_update(sd_world *w, int T)
     if (o->n != n || o->nf_stamp != w->timers.rebuilds) {
         o->nf = sd_bed_start(&w->b);
         o->nf_stamp = w->timers.rebuilds;
-        /* the bed is the bodies from nf on and no others (what the rebuild's sort leaves) */
-        o->bed_lim = o->nf;
-        for (int i = 0; i < o->nf; i++)
-            if (sd_body_is_bed(&w->b, i)) {
-                o->bed_lim = -1;
-                break;
-            }
+        o->bed_lim = bed_lim_of(&w->b, o->nf);
     }
     /* owner t's segment, its cross pairs (cross[K[t] ..]) and its counts of cross entries
      * (xpre + K[t] + 2t) all sit at its candidates' place: no owner waits for another's */
@@ -2611,9 +2629,11 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         w->bb_scratch = malloc((size_t)T * sizeof(bb_scratch));
         if (!w->bb_scratch) return SD_ERR_NOMEM;
         w->bb_scratch_n = T;
-        for (int t = 0; t < T; t++)
-            ((bb_scratch *)w->bb_scratch)[t].q.sc.n_run = ((bb_scratch *)w->bb_scratch)[t].q.sc.n_redo =
-                ((bb_scratch *)w->bb_scratch)[t].q.sc.n_geom = 0;
+        for (int t = 0; t < T; t++) {
+            bb_scratch *x = &((bb_scratch *)w->bb_scratch)[t];
+            x->q.sc.n_run = x->q.sc.n_redo = x->q.sc.n_geom = 0;
+            x->nf_n = -1;
+        }
     }
 #ifdef _OPENMP
     if (T > 1) {
