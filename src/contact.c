@@ -455,8 +455,8 @@ static inline void filter_log_pair(const sd_world *w, const sd_pair *p, int i, i
 }
 
 /* Whether body i is of the bed: from lim where the caller knows that the bed is the bodies
- * from lim on and no others (the owners' pass, after a sort: ss_batch's bed_lim), else (lim
- * < 0) from the store's flags. */
+ * from lim on and no others (the passes after a sort: ss_batch's bed_lim, from bed_split),
+ * else (lim < 0) from the store's flags. */
 static inline int bed_at(const sd_bodies *b, int lim, int i) { return lim >= 0 ? i >= lim : sd_body_is_bed(b, i); }
 
 static inline __attribute__((always_inline)) void add_pair_lim(sd_bodies *b, int lim, int i, int as_b,
@@ -477,13 +477,22 @@ static inline __attribute__((always_inline)) void add_pair(sd_bodies *b, int i, 
     add_pair_lim(b, -1, i, as_b, o);
 }
 
-/* nf (sd_bed_start) where the bed is the bodies from nf on and no others (what the rebuild's
- * sort leaves), else -1: the sums' bed test (bed_at) */
-static int bed_lim_of(const sd_bodies *b, int nf)
+/* The bodies before the trailing bed (*nf, sd_bed_start) and the sums' bed test (*bed_lim:
+ * nf where the bed is the bodies from nf on and no others, what the rebuild's sort leaves,
+ * else -1), found again when the count of bodies (n_seen) or of rebuilds (*stamp) changed:
+ * bodies move in the store only at a rebuild. */
+static void bed_split(const sd_world *w, int n_seen, long *stamp, int *nf, int *bed_lim)
 {
-    for (int i = 0; i < nf; i++)
-        if (sd_body_is_bed(b, i)) return -1;
-    return nf;
+    const sd_bodies *b = &w->b;
+    if (n_seen == b->n && *stamp == w->timers.rebuilds) return;
+    *stamp = w->timers.rebuilds;
+    *nf = sd_bed_start(b);
+    *bed_lim = *nf;
+    for (int i = 0; i < *nf; i++)
+        if (sd_body_is_bed(b, i)) {
+            *bed_lim = -1;
+            break;
+        }
 }
 
 /* A pair's result onto both its bodies, A then B (the order every sum of this file keeps). */
@@ -997,19 +1006,17 @@ __attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const s
     sd_transpose4(_mm256_mul_pd(nfx, mla), _mm256_mul_pd(nfy, mla), _mm256_mul_pd(nfz, mla), zero, ta);
     sd_transpose4(_mm256_mul_pd(nfx, mlb), _mm256_mul_pd(nfy, mlb), _mm256_mul_pd(nfz, mlb), zero, tb);
     /* the bodies' arrays in locals: each row's 32-byte store may alias anything, and gcc
-     * loaded the four addresses from *acc again after every one (sd_body_is_bed's test, as it
-     * makes it) */
+     * loaded the addresses from *acc again after every one */
     sd_vec3 *const force = acc->force, *const torque = acc->torque;
-    const uint8_t *const fixed = acc->fixed, *const shape = acc->shape;
     const int lim = q->bed_lim;
     for (int k = 0; k < 4; k++) {
         const int ia = q->ia[j + k], ib = q->ib[j + k];
         _mm256_storeu_pd((double *)&hist[q->off[j + k]], hr[k]);
-        if (lim >= 0 ? ia < lim : !sd_is_bed_at(fixed, shape, ia)) {
+        if (!bed_at(acc, lim, ia)) {
             row_add(&force[ia], fr[k], 0);
             row_add(&torque[ia], ta[k], 0);
         }
-        if (lim >= 0 ? ib < lim : !sd_is_bed_at(fixed, shape, ib)) {
+        if (!bed_at(acc, lim, ib)) {
             row_add(&force[ib], fr[k], 1);
             row_add(&torque[ib], tb[k], 0);
         }
@@ -2180,12 +2187,8 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
     const int nn = w->near_n; /* (near_update made the list and its records) */
     const int pf = sd_front_prefetch_on(w);
     int front = -1;
-    if (x->nf_n != b->n || x->nf_stamp != w->timers.rebuilds) {
-        x->nf = sd_bed_start(b);
-        x->nf_n = b->n;
-        x->nf_stamp = w->timers.rebuilds;
-        x->bed_lim = bed_lim_of(b, x->nf);
-    }
+    bed_split(w, x->nf_n, &x->nf_stamp, &x->nf, &x->bed_lim);
+    x->nf_n = b->n;
     x->q.bed_lim = x->bed_lim;
     if (x->bed_lim >= 0) {
         /* the bodies before the bed as two runs (the bed's load stays zero) */
@@ -2360,11 +2363,7 @@ static sd_status owned_update(sd_world *w, int T)
     o->K[T] = nbb;
     for (int t = 1; t < T; t++)
         o->K[t] = first_led_by(w, o->K[t - 1], o->B[t]);
-    if (o->n != n || o->nf_stamp != w->timers.rebuilds) {
-        o->nf = sd_bed_start(&w->b);
-        o->nf_stamp = w->timers.rebuilds;
-        o->bed_lim = bed_lim_of(&w->b, o->nf);
-    }
+    bed_split(w, o->n, &o->nf_stamp, &o->nf, &o->bed_lim); /* (o->n: the count when last made) */
     /* owner t's segment, its cross pairs (cross[K[t] ..]) and its counts of cross entries
      * (xpre + K[t] + 2t) all sit at its candidates' place: no owner waits for another's */
     if (sd_grow((void **)&o->list, &o->list_cap, nbb + 1, sizeof(int32_t)) ||

@@ -380,13 +380,8 @@ void sd_pair_soa_free(sd_pair_soa *s);
  * added to it and its force and torque stay at the zero they were created with (half the
  * elements of the paper's flume: memory traffic saved every step). Dam pipes (fixed
  * cylinders) are summed. */
-/* Whether body i is of the bed (a fixed sphere), from the store's flag arrays (for loops that
- * hold them in locals) or from the store. */
-static inline int sd_is_bed_at(const uint8_t *fixed, const uint8_t *shape, int i)
-{
-    return fixed[i] && shape[i] == SD_SHAPE_SPHERE;
-}
-static inline int sd_body_is_bed(const sd_bodies *b, int i) { return sd_is_bed_at(b->fixed, b->shape, i); }
+/* Whether body i is of the bed (a fixed sphere). */
+static inline int sd_body_is_bed(const sd_bodies *b, int i) { return b->fixed[i] && b->shape[i] == SD_SHAPE_SPHERE; }
 /* The first body of the trailing bed (n when none): bodies from there on are the bed, which the
  * rebuild sorts after every other body. */
 static inline int sd_bed_start(const sd_bodies *b)
