@@ -477,20 +477,19 @@ static inline __attribute__((always_inline)) void add_pair(sd_bodies *b, int i, 
     add_pair_lim(b, -1, i, as_b, o);
 }
 
-/* The bodies before the trailing bed (*nf, sd_bed_start) and the sums' bed test (*bed_lim:
- * nf where the bed is the bodies from nf on and no others, what the rebuild's sort leaves,
- * else -1), found again when the count of bodies (n_seen) or of rebuilds (*stamp) changed:
- * bodies move in the store only at a rebuild. */
-static void bed_split(const sd_world *w, int n_seen, long *stamp, int *nf, int *bed_lim)
+/* s found again when the count of bodies or of rebuilds changed since (bodies move in the
+ * store only at a rebuild). A zeroed s is found afresh. */
+static void bed_split(const sd_world *w, sd_bed_split *s)
 {
     const sd_bodies *b = &w->b;
-    if (n_seen == b->n && *stamp == w->timers.rebuilds) return;
-    *stamp = w->timers.rebuilds;
-    *nf = sd_bed_start(b);
-    *bed_lim = *nf;
-    for (int i = 0; i < *nf; i++)
+    if (s->n == b->n && s->stamp == w->timers.rebuilds && s->n > 0) return;
+    s->n = b->n;
+    s->stamp = w->timers.rebuilds;
+    s->nf = sd_bed_start(b);
+    s->bed_lim = s->nf;
+    for (int i = 0; i < s->nf; i++)
         if (sd_body_is_bed(b, i)) {
-            *bed_lim = -1;
+            s->bed_lim = -1;
             break;
         }
 }
@@ -1600,10 +1599,7 @@ typedef struct {
     uint8_t kact[SS_CHUNK]; /* ks's spring flags (soa_view.act) */
     int act[SS_CHUNK];
     bt_batch wq;
-    /* the serial pass's bodies before the trailing bed and its bed_lim (owned_update's nf and
-     * bed_lim), found again when the count of bodies or of rebuilds (nf_stamp) changes */
-    int nf, nf_n, bed_lim;
-    long nf_stamp;
+    sd_bed_split bed; /* the serial pass's (the owners keep theirs in sd_owned) */
 } bb_scratch;
 
 /* The batch's lanes through the law, then each into its pair's slot and onto its sphere (the
@@ -2187,13 +2183,12 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
     const int nn = w->near_n; /* (near_update made the list and its records) */
     const int pf = sd_front_prefetch_on(w);
     int front = -1;
-    bed_split(w, x->nf_n, &x->nf_stamp, &x->nf, &x->bed_lim);
-    x->nf_n = b->n;
-    x->q.bed_lim = x->bed_lim;
-    if (x->bed_lim >= 0) {
+    bed_split(w, &x->bed);
+    x->q.bed_lim = x->bed.bed_lim;
+    if (x->bed.bed_lim >= 0) {
         /* the bodies before the bed as two runs (the bed's load stays zero) */
-        memset(b->force, 0, (size_t)x->nf * sizeof(sd_vec3));
-        memset(b->torque, 0, (size_t)x->nf * sizeof(sd_vec3));
+        memset(b->force, 0, (size_t)x->bed.nf * sizeof(sd_vec3));
+        memset(b->torque, 0, (size_t)x->bed.nf * sizeof(sd_vec3));
     } else
         for (int i = 0; i < b->n; i++)
             if (!sd_body_is_bed(b, i)) { /* (two stores: the chained assignment read torque back) */
@@ -2363,7 +2358,7 @@ static sd_status owned_update(sd_world *w, int T)
     o->K[T] = nbb;
     for (int t = 1; t < T; t++)
         o->K[t] = first_led_by(w, o->K[t - 1], o->B[t]);
-    bed_split(w, o->n, &o->nf_stamp, &o->nf, &o->bed_lim); /* (o->n: the count when last made) */
+    bed_split(w, &o->bed);
     /* owner t's segment, its cross pairs (cross[K[t] ..]) and its counts of cross entries
      * (xpre + K[t] + 2t) all sit at its candidates' place: no owner waits for another's */
     if (sd_grow((void **)&o->list, &o->list_cap, nbb + 1, sizeof(int32_t)) ||
@@ -2388,7 +2383,7 @@ static sd_status owned_update(sd_world *w, int T)
             /* the near ones into its segment in pair order, each cross pair as ~c; xp[j - k0]
              * counts the cross entries before entry j */
             const unsigned i0 = (unsigned)o->B[t], len = (unsigned)(o->B[t + 1] - o->B[t]);
-            const int nf = o->nf;
+            const int nf = o->bed.nf;
             int32_t *xp = owned_xpre(o, t);
             int m = k0, xc = k0, q = 0;
             xp[0] = 0;
@@ -2409,7 +2404,7 @@ static sd_status owned_update(sd_world *w, int T)
                     const int k = near[qn];
                     const sd_pair *p = &pairs[k];
                     int cross = 0, ta = t, tb = t;
-                    /* both its own or the bed (after o->nf, its partner's owner's: most) */
+                    /* both its own or the bed (after o->bed.nf, its partner's owner's: most) */
                     if (!(((unsigned)p->a - i0 < len || p->a >= nf) && ((unsigned)p->b - i0 < len || p->b >= nf))) {
                         pair_owners(&w->b, p, o->B, T, &ta, &tb);
                         cross = ta != tb;
@@ -2467,7 +2462,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
         bb_scratch *x = &scratch[tid];
-        x->q.bed_lim = o->bed_lim;
+        x->q.bed_lim = o->bed.bed_lim;
         /* pass 1: the cross pairs, into their own slots */
         /* (chunks taken as threads come free: they come before a barrier, so an uneven split
          * is waited for. Given all to the owner of their lower body, a tenth of the paper's
@@ -2495,7 +2490,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
         const double t0 = omp_get_wtime();
         /* pass 2: each owner its span, in pair order */
         for (int t = tid; t < T; t += nthr) {
-            const int i0 = o->B[t], i1 = o->B[t + 1], i1f = i1 < o->nf ? i1 : o->nf;
+            const int i0 = o->B[t], i1 = o->B[t + 1], i1f = i1 < o->bed.nf ? i1 : o->bed.nf;
             /* its forces and torques zeroed, as two runs (the bed, from nf on, is left alone:
              * its load stays zero, add_pair adds nothing to it, so zeroing a bed body before nf,
              * should there be one, would change nothing either) */
@@ -2631,7 +2626,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         for (int t = 0; t < T; t++) {
             bb_scratch *x = &((bb_scratch *)w->bb_scratch)[t];
             x->q.sc.n_run = x->q.sc.n_redo = x->q.sc.n_geom = 0;
-            x->nf_n = -1;
+            x->bed.n = 0; /* (found afresh) */
         }
     }
 #ifdef _OPENMP

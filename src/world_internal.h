@@ -122,12 +122,18 @@ typedef struct {
 /* Body ranges, near lists and cross pairs of the parallel body-body pass (contact.c), derived
  * from the pair list: remade with the near pairs, never saved. */
 #define SD_MAX_OWNERS 64
+/* The bodies before the trailing bed (nf, sd_bed_start: the passes stop there) and the sums'
+ * bed test (bed_lim: nf where no body before it is of the bed, what the rebuild's sort
+ * leaves, else -1), as found (contact.c bed_split) for n bodies after `stamp` rebuilds. */
+typedef struct {
+    int nf, bed_lim, n;
+    long stamp;
+} sd_bed_split;
+
 typedef struct {
     long stamp; /* w->near_version it was made as (the near lists of both paths count) */
     int T, n, nbb;
-    int nf; /* bodies before the trailing bed (sd_body_is_bed): the passes stop there */
-    int bed_lim; /* nf where no body before it is of the bed, else -1 (the sums' bed test) */
-    long nf_stamp;
+    sd_bed_split bed;
     const void *pairs;
     int B[SD_MAX_OWNERS + 1]; /* thread t owns bodies B[t] .. B[t+1]-1 */
     /* the candidates (w->bb, ascending by their lower body) whose lower body owner t owns:
