@@ -107,7 +107,7 @@ static int apply_manifold(const sd_world *w, const sd_law *law, const sd_manifol
  * contact_law.h to all of them at once (the compiler vectorizes it), and the results go back in
  * pair order. The arithmetic is that of sd_contact_law, operation for operation (both sides of
  * every branch are computed and one is kept), so it gives the same bits as the scalar law. */
-#define SS_CHUNK 128 /* at most 256: the owned pass packs an index in 8 bits */
+#define SS_CHUNK 128
 #define SS_PAD 8
 #define SC_CAP (SS_CHUNK + SS_PAD) /* (the sphere-log lanes: sc_geom256 stores four at a time) */
 
@@ -127,6 +127,11 @@ typedef struct {
     int32_t was[SS_CHUNK + SS_PAD]; /* the slot's feature before this step */
     int32_t sel[SS_CHUNK + SS_PAD]; /* the pair's place in the chunk */
     int bed_lim;                    /* the sums' bed test (bed_at): set by each pass before its chunks */
+    /* an owner's cross entries in pass 2 (ks < 0: pair cross[~ks], computed in pass 1): their
+     * results and flags, and the owner's bodies [own_lo, own_hi), whose side alone it adds */
+    const sd_pair_out *xout;
+    const uint8_t *xact;
+    int own_lo, own_hi;
     struct sc_lanes {               /* sphere-log pairs touching at one point (bb_chunk step 2) */
         double nx[SC_CAP], ny[SC_CAP], nz[SC_CAP], ov[SC_CAP]; /* normal (on the sphere), overlap */
         double px[SC_CAP], py[SC_CAP], pz[SC_CAP];             /* contact point */
@@ -563,6 +568,24 @@ static inline int32_t ck_pack(int kind, int cap)
     return (int32_t)((uint32_t)(uint16_t)cap | (uint32_t)(uint16_t)kind << 16);
 }
 static inline int ck_kind(int32_t ck) { return (int)((uint32_t)ck >> 16); }
+/* the view's ck of an owner's cross entry (owned_update): a kind of no pair */
+#define SD_CK_CROSS ((int32_t)0x7FFF0000)
+
+/* The touch filter's step for a chunk entry that is not a sphere pair: an owner's cross entry
+ * (ks < 0: computed in pass 1, its side added by bb_chunk's step 5) and, with defer, a
+ * sphere-log pair (its apart test left to sc_geom256) go to gen as they are; a log's other pairs
+ * through filter_log_pair. */
+static inline void filter_other(const sd_world *w, const int32_t *ks, const soa_view *v, int j, int defer, int *used,
+                                int *gen, int *ng)
+{
+    if (ks[j] < 0) {
+        used[j] = 0;
+        gen[(*ng)++] = j;
+    } else if (defer && ck_kind(v->ck[j]) == SD_PAIR_SC)
+        gen[(*ng)++] = j;
+    else
+        filter_log_pair(w, &w->bb.p[ks[j]], j, used, gen, ng);
+}
 
 /* (r_a + r_b)^2 of a pair's bodies, as the touch filters square it */
 static inline double pair_rs2(const double *rad, const sd_pair *p)
@@ -596,7 +619,6 @@ static soa_view soa_at(const sd_pair_soa *s, int j0)
 static inline void ss_filter_range(const sd_world *w, const int32_t *ks, const soa_view *v, int i0, int i1, int *used,
                                    ss_batch *q, int *mp, int *gen, int *ngp)
 {
-    const sd_pair *restrict pairs = w->bb.p;
     sd_hist *restrict hist = w->bb.hist;
     const sd_vec3 *restrict pos = w->b.pos;
     const double *restrict rad = w->b.radius;
@@ -605,7 +627,7 @@ static inline void ss_filter_range(const sd_world *w, const int32_t *ks, const s
         /* the records from the chunk's view, in entry order (kind in ck's high half,
          * SD_PAIR_SS is 0) */
         if (ck_kind(v->ck[i])) {
-            filter_log_pair(w, &pairs[ks[i]], i, used, gen, ngp);
+            filter_other(w, ks, v, i, 0, used, gen, ngp);
             continue;
         }
         const int ia = v->a[i], ib = v->b[i], off = v->off[i];
@@ -700,7 +722,6 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
                                                                            const soa_view *v, int i, int n, int *used,
                                                                            ss_batch *q, int *mp, int *gen, int *ngp)
 {
-    const sd_pair *pairs = w->bb.p;
     sd_hist *hist = w->bb.hist;
     const double *pos = &w->b.pos[0].x, *rad = w->b.radius;
     int m = *mp, ng = *ngp;
@@ -756,17 +777,12 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
         _mm256_storeu_si256((__m256i *)(q->sel + m),
                             _mm256_maskz_compress_epi32(t, _mm256_add_epi32(_mm256_set1_epi32(i), lane)));
         m += __builtin_popcount(t);
-        /* the log pairs of the group, as the scalar loop takes them, but a sphere-log pair's
-         * apart test left to sc_geom256's lanes, as ss_filter256 leaves it (its kind from the
-         * view: the pair store's line is read only for the other log pairs) */
+        /* the log pairs and cross entries of the group, as the scalar loop takes them, but a
+         * sphere-log pair's apart test left to sc_geom256's lanes, as ss_filter256 leaves it
+         * (its kind from the view: the pair store's line is read only for the other log pairs) */
         const int defer = sc_lanes_on && sc_geom_on;
-        for (__mmask8 o = other; o; o &= (__mmask8)(o - 1)) {
-            const int j = i + __builtin_ctz(o);
-            if (defer && ck_kind(v->ck[j]) == SD_PAIR_SC)
-                gen[ng++] = j;
-            else
-                filter_log_pair(w, &pairs[ks[j]], j, used, gen, &ng);
-        }
+        for (__mmask8 o = other; o; o &= (__mmask8)(o - 1))
+            filter_other(w, ks, v, i + __builtin_ctz(o), defer, used, gen, &ng);
     }
     *mp = m;
     *ngp = ng;
@@ -913,19 +929,13 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
 #undef PACK_PD
 #undef PACK_I32
         m += __builtin_popcount((unsigned)t);
-        /* (a sphere-log pair's apart test is left to sc_geom256, which does it in lanes,
-         * where the geometry's lanes run) */
+        /* (a sphere-log pair's apart test is left to sc_geom256, which does it in lanes, where
+         * the geometry's lanes run; the kind from the view, ck's high half: the pair's record, a
+         * line of the store the filter reads nowhere else, is read only for a log–log or
+         * log–wall pair; its load was a ninth of the filter's samples in the packing) */
         const int defer = sc_lanes_on && sc_geom_on;
-        for (int o = ~ss & 15; o; o &= o - 1) {
-            const int j = i + __builtin_ctz((unsigned)o);
-            /* the kind from the view (ck's high half): the pair's record, a line of the store
-             * the filter reads nowhere else, is read only for a log–log or log–wall pair (its
-             * load was a ninth of the filter's samples in the packing) */
-            if (defer && ck_kind(vck[j]) == SD_PAIR_SC)
-                gen[(*ngp)++] = j;
-            else
-                filter_log_pair(w, &w->bb.p[ks[j]], j, used, gen, ngp);
-        }
+        for (int o = ~ss & 15; o; o &= o - 1)
+            filter_other(w, ks, v, i + __builtin_ctz((unsigned)o), defer, used, gen, ngp);
     }
     *mp = m;
     return i;
@@ -1425,7 +1435,9 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
  * pair's result depends on that pair alone, so any split into chunks gives the same bits.
  * With acc, the chunk also adds each pair in contact onto its two bodies, in chunk order (the
  * sphere pairs straight from the law's lanes, their out[] not written): the caller passes it
- * where nothing of its own comes between these pairs. */
+ * where nothing of its own comes between these pairs. An owner's cross entry (ks[i] < 0, acc
+ * given: pass 2 of bb_owned_pass) is not computed: its used[i] is 0, and step 5 adds the
+ * owner's side of pass 1's result (q->xout, q->xact) in its place. */
 static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, const soa_view *v, int n,
                      sd_pair_out *out, int *used, ss_batch *q, sd_bodies *acc)
 {
@@ -1456,6 +1468,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             int sg[SS_CHUNK], nsg = 0;
             for (int g = 0; g < ng; g++) {
                 const int i = gen[g];
+                if (ks[i] < 0) continue; /* (a cross entry: done in pass 1) */
                 /* kind and cap from the view (ck), the record read only for the others */
                 if (v->ck[i] == ck_pack(SD_PAIR_SC, 1))
                     sg[nsg++] = i;
@@ -1467,7 +1480,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
 #endif
             for (int g = 0; g < ng; g++) {
                 const int i = gen[g];
-                msc += pair_general(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
+                if (ks[i] >= 0) msc += pair_general(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
             }
         if (msc > 0) sc_flush(w, law, &q->sc, msc, ks, v, out, used);
     }
@@ -1492,11 +1505,16 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
         int g = 0;
         for (int j = 0; j <= m; j++) {
             const int i = j < m ? q->sel[j] : n;
-            for (; g < ng && gen[g] < i; g++)
-                if (used[gen[g]] > 0) { /* add_both, its bodies from the view (not the store's line) */
-                    add_pair_lim(acc, q->bed_lim, v->a[gen[g]], 0, &out[gen[g]]);
-                    add_pair_lim(acc, q->bed_lim, v->b[gen[g]], 1, &out[gen[g]]);
+            for (; g < ng && gen[g] < i; g++) {
+                const int e = gen[g];
+                if (used[e] > 0) { /* add_both, its bodies from the view (not the store's line) */
+                    add_pair_lim(acc, q->bed_lim, v->a[e], 0, &out[e]);
+                    add_pair_lim(acc, q->bed_lim, v->b[e], 1, &out[e]);
+                } else if (ks[e] < 0 && q->xact[~ks[e]]) { /* a cross entry in contact: the owner's side */
+                    const int ia = v->a[e], own_a = ia >= q->own_lo && ia < q->own_hi;
+                    add_pair_lim(acc, q->bed_lim, own_a ? ia : v->b[e], !own_a, &q->xout[~ks[e]]);
                 }
+            }
             if (j == m) break;
 #ifdef SD_FILTER512
             /* four lanes at once where no other shape's pair comes between them and none is
@@ -1593,11 +1611,6 @@ typedef struct {
     ss_batch q;
     sd_pair_out out[SS_CHUNK];
     int used[SS_CHUNK];
-    int32_t ks[SS_CHUNK];
-    int32_t ka[SS_CHUNK], kb[SS_CHUNK], koff[SS_CHUNK], kck[SS_CHUNK]; /* ks's records (soa_view) */
-    double ksqm[SS_CHUNK], krs2[SS_CHUNK];
-    uint8_t kact[SS_CHUNK]; /* ks's spring flags (soa_view.act) */
-    int act[SS_CHUNK];
     bt_batch wq;
     sd_bed_split bed; /* the serial pass's (the owners keep theirs in sd_owned) */
 } bb_scratch;
@@ -2297,9 +2310,6 @@ static int uneven(sd_owned *o)
     return 1;
 }
 
-/* Owner t's counts of cross entries (owned.xpre): xp[j - K[t]] before entry j of its segment,
- * each owner's run two past the last one's (its segment can fill its candidates). */
-static inline int32_t *owned_xpre(const sd_owned *o, int t) { return o->xpre + o->K[t] + 2 * t; }
 
 /* How many chunks of SS_CHUNK owner t's block of cross pairs makes. */
 static inline int owned_xchunks(const sd_owned *o, int t) { return (o->xb[t] - o->K[t] + SS_CHUNK - 1) / SS_CHUNK; }
@@ -2359,10 +2369,9 @@ static sd_status owned_update(sd_world *w, int T)
     for (int t = 1; t < T; t++)
         o->K[t] = first_led_by(w, o->K[t - 1], o->B[t]);
     bed_split(w, &o->bed);
-    /* owner t's segment, its cross pairs (cross[K[t] ..]) and its counts of cross entries
-     * (xpre + K[t] + 2t) all sit at its candidates' place: no owner waits for another's */
+    /* owner t's segment and its cross pairs (cross[K[t] ..]) sit at its candidates' place: no
+     * owner waits for another's */
     if (sd_grow((void **)&o->list, &o->list_cap, nbb + 1, sizeof(int32_t)) ||
-        sd_grow((void **)&o->xpre, &o->xpre_cap, nbb + 2 * T + 2, sizeof(int32_t)) ||
         sd_grow((void **)&o->cross, &o->cap, nbb + 1, sizeof(int32_t)) ||
         sd_grow((void **)&o->xo, &o->xo_cap, nbb + 1, sizeof(uint8_t)) ||
         sd_grow((void **)&o->xout, &o->xout_cap, nbb + 1, sizeof(sd_pair_out)) ||
@@ -2380,13 +2389,11 @@ static sd_status owned_update(sd_world *w, int T)
             const int k0 = o->K[t], k1 = o->K[t + 1];
             /* its bodies near a wall, at its bodies' place */
             o->wn[t] = wall_near_range(w, skin, o->B[t], o->B[t + 1], w->wall_list + o->B[t], &o->wskip[t]);
-            /* the near ones into its segment in pair order, each cross pair as ~c; xp[j - k0]
-             * counts the cross entries before entry j */
+            /* the near ones into its segment in pair order, each cross pair as ~c (its record's
+             * kind made SD_CK_CROSS, which no filter takes for a sphere pair) */
             const unsigned i0 = (unsigned)o->B[t], len = (unsigned)(o->B[t + 1] - o->B[t]);
             const int nf = o->bed.nf;
-            int32_t *xp = owned_xpre(o, t);
-            int m = k0, xc = k0, q = 0;
-            xp[0] = 0;
+            int m = k0, xc = k0;
             /* the records' arrays held in restrict locals: through o, every store made gcc
              * load the next array's address again (about half of this loop's samples) */
             int32_t *restrict sa = o->soa.a, *restrict sb = o->soa.b, *restrict so = o->soa.off,
@@ -2422,10 +2429,8 @@ static sd_status owned_update(sd_world *w, int T)
                         o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
                         pair_soa_set(&o->xsoa, xc, p, hist, rad);
                         list[m] = ~xc++;
-                        q++;
+                        sc[m] = SD_CK_CROSS;
                     }
-                    /* xp[j - k0 + 1]: the cross entries among entries k0 .. j */
-                    xp[m - k0 + 1] = q;
                     m++;
                 }
             }
@@ -2463,6 +2468,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
         bb_scratch *x = &scratch[tid];
         x->q.bed_lim = o->bed.bed_lim;
+        x->q.xout = o->xout, x->q.xact = o->xact;
         /* pass 1: the cross pairs, into their own slots */
         /* (chunks taken as threads come free: they come before a barrier, so an uneven split
          * is waited for. Given all to the owner of their lower body, a tenth of the paper's
@@ -2502,14 +2508,14 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
              * before every pair of its own (a lower lower body) */
             for (int s = 0; s < t; s++)
                 for (int c = o->K[s]; c < o->xb[s]; c++)
-                    if (o->xo[c] == t && o->xact[c]) {
-                        const sd_pair *p = &w->bb.p[o->cross[c]];
-                        const int own_a = p->a >= i0 && p->a < i1;
-                        add_pair(b, own_a ? p->a : p->b, !own_a, &o->xout[c]);
+                    if (o->xo[c] == t && o->xact[c]) { /* (its bodies from the record's view) */
+                        const int ia = o->xsoa.a[c], own_a = ia >= i0 && ia < i1;
+                        add_pair_lim(b, x->q.bed_lim, own_a ? ia : o->xsoa.b[c], !own_a, &o->xout[c]);
                     }
-            /* then its own segment, with its cross pairs in their places */
+            /* then its own segment, with its cross pairs in their places (bb_chunk adds this
+             * owner's side of each from pass 1's result, in pair order) */
             const int s0 = o->K[t], s1 = o->seg1[t];
-            const int32_t *xp = owned_xpre(o, t);
+            x->q.own_lo = i0, x->q.own_hi = i1;
             int front = i0 - 1; /* (its records hold every entry's pair, cross ones too) */
             for (int j0 = s0; j0 < s1; j0 += SS_CHUNK) {
                 const int j1 = s1 - j0 < SS_CHUNK ? s1 : j0 + SS_CHUNK;
@@ -2517,50 +2523,11 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     const int p0 = j0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < s1 ? p0 + SS_CHUNK : s1;
                     if (p1 > p0) pf_front(b, o->soa.a, o->soa.b, p0, p1, i1, &front);
                 }
-                /* a chunk without cross pairs adds its pairs onto the bodies itself */
-                if (xp[j1 - s0] == xp[j0 - s0]) {
-                    const int n = j1 - j0;
-                    const soa_view v = soa_at(&o->soa, j0);
-                    bb_chunk(w, law, &o->list[j0], &v, n, x->out, x->used, &x->q, b);
-                    for (int i = 0; i < n; i++)
-                        count += x->used[i];
-                    continue;
-                }
-                int n = 0;
-                for (int j = j0; j < j1; j++)
-                    if (o->list[j] >= 0) {
-                        x->ks[n] = o->list[j];
-                        x->ka[n] = o->soa.a[j], x->kb[n] = o->soa.b[j], x->koff[n] = o->soa.off[j];
-                        x->kck[n] = o->soa.ck[j], x->ksqm[n] = o->soa.sqm[j], x->krs2[n] = o->soa.rs2[j];
-                        x->kact[n] = o->soa.act[j];
-                        n++;
-                    }
-                const soa_view v = {x->ka, x->kb, x->koff, x->kck, x->ksqm, x->krs2, x->kact};
-                bb_chunk(w, law, x->ks, &v, n, x->out, x->used, &x->q, NULL);
-                /* the flags the filter left, back to the entries */
-                for (int j = j0, i = 0; j < j1; j++)
-                    if (o->list[j] >= 0) o->soa.act[j] = x->kact[i++];
-                /* the entries in contact, in list order: act = (entry j) << 8 | (own result i) */
-                int na = 0, i = 0;
-                for (int j = j0; j < j1; j++) {
-                    const int k = o->list[j];
-                    const int own = k >= 0;
-                    const int u = own ? x->used[i] : 0;
-                    count += u;
-                    x->act[na] = (j - j0) << 8 | i;
-                    na += own ? u > 0 : o->xact[~k];
-                    i += own;
-                }
-                for (int a = 0; a < na; a++) {
-                    const int k = o->list[j0 + (x->act[a] >> 8)];
-                    if (k >= 0) {
-                        add_both(b, &w->bb.p[k], &x->out[x->act[a] & 255]);
-                    } else {
-                        const sd_pair *p = &w->bb.p[o->cross[~k]];
-                        const int own_a = p->a >= i0 && p->a < i1;
-                        add_pair(b, own_a ? p->a : p->b, !own_a, &o->xout[~k]);
-                    }
-                }
+                const int n = j1 - j0;
+                const soa_view v = soa_at(&o->soa, j0);
+                bb_chunk(w, law, &o->list[j0], &v, n, x->out, x->used, &x->q, b);
+                for (int i = 0; i < n; i++)
+                    count += x->used[i]; /* (a cross entry's 0: counted in pass 1) */
             }
             /* its bodies' wall pairs, then its moving bodies */
             count += bt_range(w, law, w->wall_list + i0, o->wn[t], &x->wq);

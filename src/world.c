@@ -85,7 +85,6 @@ void sd_world_destroy(sd_world *w)
         free(w->owned->xout);
         free(w->owned->xact);
         free(w->owned->list);
-        free(w->owned->xpre);
         sd_pair_soa_free(&w->owned->soa);
         sd_pair_soa_free(&w->owned->xsoa);
     }

@@ -155,11 +155,8 @@ typedef struct {
     int32_t *list;
     int seg1[SD_MAX_OWNERS];
     int list_cap;
-    /* cross entries in owner t's segment before entry j: xpre[K[t] + 2t + (j - K[t])]; a
-     * chunk of the list without any is handed to the pass as it stands, not copied */
-    int32_t *xpre;
-    int xpre_cap;
-    /* the records of list's own pairs and of the cross pairs, field by field (sd_pair_soa) */
+    /* the records of list's entries (a cross entry's kind made one of no pair, so that the
+     * pass takes its result from pass 1) and of the cross pairs, field by field (sd_pair_soa) */
     sd_pair_soa soa, xsoa;
     /* balance by measured time (any split gives the same bits): the split as fractions of
      * the body-body pairs, and each owner's time since it was set */
