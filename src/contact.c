@@ -614,8 +614,8 @@ static soa_view soa_at(const sd_pair_soa *s, int j0)
 /* Step 1 of bb_chunk (the touch filter) for the chunk's entries i0 .. i1: which pairs touch,
  * with no branch on the answer (it is close to a coin toss in a dense bed). Each sphere pair's
  * geometry is written to the next free batch lane whether it touches or not; only a touching
- * pair moves the lane on (what the law needs is read once). A log's pair goes to
- * filter_log_pair. */
+ * pair moves the lane on (what the law needs is read once). A log's pair or a cross entry goes
+ * to filter_other. */
 static inline void ss_filter_range(const sd_world *w, const int32_t *ks, const soa_view *v, int i0, int i1, int *used,
                                    ss_batch *q, int *mp, int *gen, int *ngp)
 {
