@@ -477,11 +477,6 @@ static inline __attribute__((always_inline)) void add_pair_lim(sd_bodies *b, int
     }
 }
 
-static inline __attribute__((always_inline)) void add_pair(sd_bodies *b, int i, int as_b, const sd_pair_out *o)
-{
-    add_pair_lim(b, -1, i, as_b, o);
-}
-
 /* s found again when the count of bodies or of rebuilds changed since (bodies move in the
  * store only at a rebuild). A zeroed s is found afresh. */
 static void bed_split(const sd_world *w, sd_bed_split *s)
@@ -499,12 +494,6 @@ static void bed_split(const sd_world *w, sd_bed_split *s)
         }
 }
 
-/* A pair's result onto both its bodies, A then B (the order every sum of this file keeps). */
-static inline void add_both(sd_bodies *b, const sd_pair *p, const sd_pair_out *o)
-{
-    add_pair(b, p->a, 0, o);
-    add_pair(b, p->b, 1, o);
-}
 
 /* x, or +0.0 where mask is 0 (mask all ones or all zeros) */
 static inline double bits_and(double x, uint64_t mask)
@@ -985,7 +974,7 @@ __attribute__((target("avx2"))) static int ss_gather256(const sd_world *w, ss_ba
     return j;
 }
 
-/* *p + (x, y, z) of row r, or *p - it (sub): add_pair's v3_add / v3_sub, x and y in one
+/* *p + (x, y, z) of row r, or *p - it (sub): add_pair_lim's v3_add / v3_sub, x and y in one
  * 16-byte operation */
 __attribute__((target("avx2"))) static inline void row_add(sd_vec3 *p, __m256d r, int sub)
 {
@@ -998,7 +987,7 @@ __attribute__((target("avx2"))) static inline void row_add(sd_vec3 *p, __m256d r
 /* Step 5 of bb_chunk (with acc) in AVX2 for the lanes j .. j+3, when none is to be redone
  * (returns 0 and does nothing otherwise): the torques of four lanes at once, the slots' springs
  * stored as 32-byte rows (the feature 0), and each pair onto its two bodies in lane order as
- * add_pair does (same bits). */
+ * add_pair_lim does (same bits). */
 __attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const ss_batch *q, int j, sd_bodies *acc)
 {
     const __m256d zero = _mm256_setzero_pd();
@@ -1507,7 +1496,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             const int i = j < m ? q->sel[j] : n;
             for (; g < ng && gen[g] < i; g++) {
                 const int e = gen[g];
-                if (used[e] > 0) { /* add_both, its bodies from the view (not the store's line) */
+                if (used[e] > 0) { /* A then B, its bodies from the view (not the store's line) */
                     add_pair_lim(acc, q->bed_lim, v->a[e], 0, &out[e]);
                     add_pair_lim(acc, q->bed_lim, v->b[e], 1, &out[e]);
                 } else if (ks[e] < 0 && q->xact[~ks[e]]) { /* a cross entry in contact: the owner's side */
@@ -2498,7 +2487,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
         for (int t = tid; t < T; t += nthr) {
             const int i0 = o->B[t], i1 = o->B[t + 1], i1f = i1 < o->bed.nf ? i1 : o->bed.nf;
             /* its forces and torques zeroed, as two runs (the bed, from nf on, is left alone:
-             * its load stays zero, add_pair adds nothing to it, so zeroing a bed body before nf,
+             * its load stays zero, add_pair_lim adds nothing to it, so zeroing a bed body before nf,
              * should there be one, would change nothing either) */
             if (i1f > i0) {
                 memset(&b->force[i0], 0, (size_t)(i1f - i0) * sizeof(sd_vec3));
