@@ -213,14 +213,15 @@ static inline __attribute__((always_inline)) double law_lane(const lane_law *L, 
     return redo;
 }
 
+/* Step 4 of bb_chunk, the law in lanes, in two loops, each a shorter chain of dependent
+ * operations (the square root and division of the normal, then the law's): more lanes in
+ * flight at once. The first (ss_law_normal) leaves the unit normal in dx, dy, dz, the overlap
+ * in ra and the velocity at the contact point in vx, vy, vz; the second (ss_law_spring, from
+ * lane j0 on) runs law_lane. Where the CPU has AVX2 (not AVX-512), ss_law_spring256 takes the
+ * second loop's groups of four first. */
 SD_SIMD_CLONES
-static void ss_batch_law(const sd_law *law, double dt, ss_batch *restrict q, int m)
+static void ss_law_normal(ss_batch *restrict q, int m)
 {
-    const lane_law L = lane_law_make(law, dt);
-    /* two loops, each a shorter chain of dependent operations (the square root and division
-     * of the normal, then the law's): more lanes in flight at once. The first leaves the unit
-     * normal in dx, dy, dz, the overlap in ra and the velocity at the contact point in vx, vy,
-     * vz. */
     for (int j = 0; j < m; j++) {
         const double dx = q->dx[j], dy = q->dy[j], dz = q->dz[j];
         const double d2 = dx * dx + dy * dy + dz * dz;
@@ -242,7 +243,13 @@ static void ss_batch_law(const sd_law *law, double dt, ss_batch *restrict q, int
         q->la[j] = la;
         q->lb[j] = lb;
     }
-    for (int j = 0; j < m; j++) {
+}
+
+SD_SIMD_CLONES
+static void ss_law_spring(const sd_law *law, double dt, ss_batch *restrict q, int j0, int m)
+{
+    const lane_law L = lane_law_make(law, dt);
+    for (int j = j0; j < m; j++) {
         const double nx = q->dx[j], ny = q->dy[j], nz = q->dz[j];
         double sx = q->sx[j], sy = q->sy[j], sz = q->sz[j], fx, fy, fz;
         q->redo[j] =
@@ -1023,6 +1030,110 @@ __attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const s
 }
 #endif
 
+#ifdef SD_FILTER512
+static int ss_law256_on = 1; /* (sd_ss_law256_set) */
+/* the calling thread's groups run in lanes, and of them those that skipped the limit (tests) */
+static _Thread_local long ss_law256_groups, ss_law256_skips;
+
+long sd_ss_law256_count(long *skipped)
+{
+    if (skipped) *skipped = ss_law256_skips;
+    return ss_law256_groups;
+}
+
+int sd_ss_law256_set(int on)
+{
+    const int was = ss_law256_on;
+    ss_law256_on = on != 0;
+    return was;
+}
+
+/* ss_law_spring in AVX2 for the lanes 0 .. m & ~3, four at a time: law_lane's operations in
+ * its order, each select a blend (the same bits), and its limit's square root and division
+ * left out of a group where no lane slides and no lane's force passes the limit (three groups
+ * in four on a bed at rest: they were a fifth of this loop's samples there). Returns the lanes
+ * done. */
+__attribute__((target("avx2"))) static int ss_law_spring256(const sd_law *law, double dt, ss_batch *restrict q, int m)
+{
+    const lane_law L = lane_law_make(law, dt);
+    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5),
+                  c375 = _mm256_set1_pd(0.375), c1e4 = _mm256_set1_pd(1e-4), sign = _mm256_set1_pd(-0.0),
+                  kn = _mm256_set1_pd(L.k_n), cn = _mm256_set1_pd(L.c_n), mks = _mm256_set1_pd(L.mks_dt),
+                  coh = _mm256_set1_pd(L.coh), tphi = _mm256_set1_pd(L.tan_phi), mcsf = _mm256_set1_pd(-L.c_s);
+    int j = 0;
+    for (; j + 4 <= m; j += 4) {
+        const __m256d nx = _mm256_loadu_pd(q->dx + j), ny = _mm256_loadu_pd(q->dy + j), nz = _mm256_loadu_pd(q->dz + j);
+        const __m256d vx = _mm256_loadu_pd(q->vx + j), vy = _mm256_loadu_pd(q->vy + j), vz = _mm256_loadu_pd(q->vz + j);
+        const __m256d ov = _mm256_loadu_pd(q->ra + j), sqm = _mm256_loadu_pd(q->sqm + j);
+        const __m256d s0x = _mm256_loadu_pd(q->sx + j), s0y = _mm256_loadu_pd(q->sy + j),
+                      s0z = _mm256_loadu_pd(q->sz + j);
+        const __m256d vn =
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(vx, nx), _mm256_mul_pd(vy, ny)), _mm256_mul_pd(vz, nz));
+        __m256d pn = _mm256_sub_pd(_mm256_mul_pd(kn, ov), _mm256_mul_pd(_mm256_mul_pd(cn, sqm), vn));
+        pn = _mm256_blendv_pd(pn, zero, _mm256_cmp_pd(pn, zero, _CMP_LT_OQ));
+        const __m256d mvn = _mm256_xor_pd(vn, sign);
+        const __m256d tx = _mm256_add_pd(vx, _mm256_mul_pd(mvn, nx)), ty = _mm256_add_pd(vy, _mm256_mul_pd(mvn, ny)),
+                      tz = _mm256_add_pd(vz, _mm256_mul_pd(mvn, nz));
+        const __m256d s2 =
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(s0x, s0x), _mm256_mul_pd(s0y, s0y)), _mm256_mul_pd(s0z, s0z));
+        const __m256d sn =
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(s0x, nx), _mm256_mul_pd(s0y, ny)), _mm256_mul_pd(s0z, nz));
+        const __m256d msn = _mm256_xor_pd(sn, sign);
+        const __m256d px = _mm256_add_pd(s0x, _mm256_mul_pd(msn, nx)), py = _mm256_add_pd(s0y, _mm256_mul_pd(msn, ny)),
+                      pz = _mm256_add_pd(s0z, _mm256_mul_pd(msn, nz));
+        const __m256d sn2 = _mm256_mul_pd(sn, sn);
+        const __m256d r2 = _mm256_sub_pd(s2, sn2);
+        const __m256d x = _mm256_div_pd(sn2, r2);
+        const __m256d poly =
+            _mm256_sub_pd(_mm256_add_pd(one, _mm256_mul_pd(half, x)), _mm256_mul_pd(_mm256_mul_pd(c375, x), x));
+        const __m256d has = _mm256_cmp_pd(s2, zero, _CMP_GT_OQ);
+        /* redo = sn^2 < 1e-4 s2 ? 0 : (has ? 1 : 0) */
+        const __m256d redo =
+            _mm256_andnot_pd(_mm256_cmp_pd(sn2, _mm256_mul_pd(c1e4, s2), _CMP_LT_OQ), _mm256_and_pd(has, one));
+        __m256d ux = _mm256_blendv_pd(s0x, _mm256_mul_pd(px, poly), has),
+                uy = _mm256_blendv_pd(s0y, _mm256_mul_pd(py, poly), has),
+                uz = _mm256_blendv_pd(s0z, _mm256_mul_pd(pz, poly), has);
+        ux = _mm256_add_pd(ux, _mm256_mul_pd(mks, tx));
+        uy = _mm256_add_pd(uy, _mm256_mul_pd(mks, ty));
+        uz = _mm256_add_pd(uz, _mm256_mul_pd(mks, tz));
+        const __m256d limit = _mm256_add_pd(coh, _mm256_mul_pd(pn, tphi)), lim2 = _mm256_mul_pd(limit, limit);
+        const __m256d smag2 =
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(ux, ux), _mm256_mul_pd(uy, uy)), _mm256_mul_pd(uz, uz));
+        const __m256d slide = _mm256_cmp_pd(smag2, lim2, _CMP_GT_OQ);
+        const __m256d mcs = _mm256_mul_pd(mcsf, sqm);
+        __m256d gx = _mm256_add_pd(ux, _mm256_mul_pd(mcs, tx)), gy = _mm256_add_pd(uy, _mm256_mul_pd(mcs, ty)),
+                gz = _mm256_add_pd(uz, _mm256_mul_pd(mcs, tz));
+        const __m256d fmag2 =
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(gx, gx), _mm256_mul_pd(gy, gy)), _mm256_mul_pd(gz, gz));
+        const __m256d over = _mm256_cmp_pd(fmag2, lim2, _CMP_GT_OQ);
+        ss_law256_groups++;
+        if (!_mm256_movemask_pd(_mm256_or_pd(slide, over)))
+            ss_law256_skips++;
+        else {
+            const __m256d cut = _mm256_div_pd(limit, _mm256_sqrt_pd(_mm256_blendv_pd(fmag2, smag2, slide)));
+            gx = _mm256_blendv_pd(gx, _mm256_mul_pd(gx, cut), over);
+            gy = _mm256_blendv_pd(gy, _mm256_mul_pd(gy, cut), over);
+            gz = _mm256_blendv_pd(gz, _mm256_mul_pd(gz, cut), over);
+            ux = _mm256_blendv_pd(ux, _mm256_mul_pd(ux, cut), slide);
+            uy = _mm256_blendv_pd(uy, _mm256_mul_pd(uy, cut), slide);
+            uz = _mm256_blendv_pd(uz, _mm256_mul_pd(uz, cut), slide);
+            gx = _mm256_blendv_pd(gx, ux, slide);
+            gy = _mm256_blendv_pd(gy, uy, slide);
+            gz = _mm256_blendv_pd(gz, uz, slide);
+        }
+        const __m256d fx = _mm256_add_pd(gx, _mm256_mul_pd(pn, nx)), fy = _mm256_add_pd(gy, _mm256_mul_pd(pn, ny)),
+                      fz = _mm256_add_pd(gz, _mm256_mul_pd(pn, nz));
+        _mm256_storeu_pd(q->redo + j, redo);
+        _mm256_storeu_pd(q->sx + j, ux), _mm256_storeu_pd(q->sy + j, uy), _mm256_storeu_pd(q->sz + j, uz);
+        _mm256_storeu_pd(q->fx + j, fx), _mm256_storeu_pd(q->fy + j, fy), _mm256_storeu_pd(q->fz + j, fz);
+        _mm256_storeu_pd(q->nfx + j, _mm256_sub_pd(_mm256_mul_pd(ny, fz), _mm256_mul_pd(nz, fy)));
+        _mm256_storeu_pd(q->nfy + j, _mm256_sub_pd(_mm256_mul_pd(nz, fx), _mm256_mul_pd(nx, fz)));
+        _mm256_storeu_pd(q->nfz + j, _mm256_sub_pd(_mm256_mul_pd(nx, fy), _mm256_mul_pd(ny, fx)));
+    }
+    return j;
+}
+#endif
+
 /* A sphere-log pair whose manifold is one point (the sphere against the log's side or end:
  * most of them) through the law in lanes, like the walls' face contacts: apply_manifold's
  * arithmetic for a one-point manifold between two moving bodies, operation for operation
@@ -1486,7 +1597,14 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
         ss_gather_range(w, q, j, m);
     }
     /* 4. the law, vectorized */
-    ss_batch_law(law, w->def.dt, q, m);
+    {
+        ss_law_normal(q, m);
+        int j = 0;
+#ifdef SD_FILTER512
+        if (simd_level == SD_SIMD_AVX2 && ss_law256_on) j = ss_law_spring256(law, w->def.dt, q, m);
+#endif
+        ss_law_spring(law, w->def.dt, q, j, m);
+    }
     /* 5. results and springs back */
     if (acc) {
         /* every pair in contact onto its two bodies in chunk order: the sphere pairs from the

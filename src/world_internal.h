@@ -423,6 +423,13 @@ int sd_sc_lanes_set(int on);
 /* The sphere-log contacts' geometry in AVX2 lanes where the CPU has it (1, the default) or
  * pair by pair (0); the same bits either way. Returns the previous setting. */
 int sd_sc_geom_set(int on);
+/* The sphere law's spring loop in AVX2 lanes where the CPU has AVX2 but not AVX-512 (1, the
+ * default) or as the compiler vectorized it (0); the same bits either way. Returns the previous
+ * setting. */
+int sd_ss_law256_set(int on);
+/* The groups of four the calling thread ran through that loop so far, and of them those where
+ * no lane slid or passed the limit (*skipped). */
+long sd_ss_law256_count(long *skipped);
 /* The wall pass over the bodies with a wall pair near touching only (1, the default) or over
  * all with wall pairs (0); the same bits either way. Returns the previous setting. */
 int sd_wall_near_set(int on);

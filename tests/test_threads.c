@@ -275,6 +275,27 @@ int main(void)
         }
     }
     {
+        /* the sphere law's spring loop in AVX2 lanes (contact.c ss_law_spring256: a group where
+         * no lane slides or passes the limit without the limit's root and division) against the
+         * compiler's loop: the log flume above, the same bits */
+        long sk = 0;
+        const long g = sd_ss_law256_count(&sk);
+        const int was = sd_ss_law256_set(0);
+        long cg = 0;
+        const uint64_t hg = run(1, &cg);
+        const long g2 = sd_ss_law256_count(NULL);
+        sd_ss_law256_set(was);
+        printf("sphere law's spring loop in lanes: %ld groups on this thread above, %ld without the limit; "
+               "the compiler's loop: log flume %016llx\n",
+               g, sk, (unsigned long long)hg);
+        CHECK(hg == h1 && cg == c1);
+        CHECK(g2 == g); /* none with it off */
+        if (sd_simd_level() == SD_SIMD_AVX2) {
+            CHECK(g > 1000);         /* it ran */
+            CHECK(sk > 0 && sk < g); /* both kinds of group */
+        }
+    }
+    {
         sd_run_result a = run_driver(1), b = run_driver(2);
         printf("driver with water: 1 thread hash %016llx P_V %.6f, 2 threads hash %016llx P_V %.6f; flow ended at "
                "%.4f s, %ld steps\n",
