@@ -127,6 +127,7 @@ typedef struct {
     int32_t was[SS_CHUNK + SS_PAD]; /* the slot's feature before this step */
     int32_t sel[SS_CHUNK + SS_PAD]; /* the pair's place in the chunk */
     int bed_lim;                    /* the sums' bed test (bed_at): set by each pass before its chunks */
+    sd_vec3 sink[8];                /* ss_sums256's rows for a lane's bed body (whose load stays zero): never read */
     /* an owner's cross entries in pass 2 (ks < 0: pair cross[~ks], computed in pass 1): their
      * results and flags, and the owner's bodies [own_lo, own_hi), whose side alone it adds */
     const sd_pair_out *xout;
@@ -994,8 +995,9 @@ __attribute__((target("avx2"))) static inline void row_add(sd_vec3 *p, __m256d r
 /* Step 5 of bb_chunk (with acc) in AVX2 for the lanes j .. j+3, when none is to be redone
  * (returns 0 and does nothing otherwise): the torques of four lanes at once, the slots' springs
  * stored as 32-byte rows (the feature 0), and each pair onto its two bodies in lane order as
- * add_pair_lim does (same bits). */
-__attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const ss_batch *q, int j, sd_bodies *acc)
+ * add_pair_lim does (same bits; a bed body's rows into q->sink, where the bed is from
+ * q->bed_lim on). */
+__attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, ss_batch *q, int j, sd_bodies *acc)
 {
     const __m256d zero = _mm256_setzero_pd();
     if (_mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(q->redo + j), zero, _CMP_NEQ_UQ))) return 0;
@@ -1014,6 +1016,27 @@ __attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, const s
      * loaded the addresses from *acc again after every one */
     sd_vec3 *const force = acc->force, *const torque = acc->torque;
     const int lim = q->bed_lim;
+    if (lim >= 0) {
+        /* the bed from lim on: a lane's B body of the bed (a pair's A never is: its B would be
+         * too) adds into a sink row instead of a branch, taken at random where spheres rest on
+         * the bed */
+        sd_vec3 *const sink = q->sink;
+        for (int k = 0; k < 4; k++) {
+            const int ia = q->ia[j + k], ib = q->ib[j + k], bed = ib >= lim;
+            _mm256_storeu_pd((double *)&hist[q->off[j + k]], hr[k]);
+            if (ia < lim) {
+                row_add(&force[ia], fr[k], 0);
+                row_add(&torque[ia], ta[k], 0);
+            }
+            /* (the select in integer bits: as a ternary gcc made it a branch again) */
+            const uintptr_t m = (uintptr_t)0 - (uintptr_t)bed, pf = (uintptr_t)&force[ib], pt = (uintptr_t)&torque[ib];
+            sd_vec3 *const fb = (sd_vec3 *)(pf ^ ((pf ^ (uintptr_t)&sink[2 * k]) & m)),
+                           *const tq = (sd_vec3 *)(pt ^ ((pt ^ (uintptr_t)&sink[2 * k + 1]) & m));
+            row_add(fb, fr[k], 1);
+            row_add(tq, tb[k], 0);
+        }
+        return 1;
+    }
     for (int k = 0; k < 4; k++) {
         const int ia = q->ia[j + k], ib = q->ib[j + k];
         _mm256_storeu_pd((double *)&hist[q->off[j + k]], hr[k]);
@@ -2701,6 +2724,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
             bb_scratch *x = &((bb_scratch *)w->bb_scratch)[t];
             x->q.sc.n_run = x->q.sc.n_redo = x->q.sc.n_geom = 0;
             x->bed.n = 0; /* (found afresh) */
+            memset(x->q.sink, 0, sizeof x->q.sink); /* (never read, but not garbage either) */
         }
     }
 #ifdef _OPENMP
