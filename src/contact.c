@@ -866,12 +866,11 @@ __attribute__((constructor)) static void simd_tables_init(void)
 /* Step 1 of bb_chunk in AVX2, 4 pairs at a time: ss_filter_range's operations in its order
  * (same bits), the centres read as rows (SD_XYZ_LOAD) and turned into lanes,
  * the touching pairs packed into the batch by a permutation from a table and stored 4 lanes
- * wide (the arrays are padded by SS_PAD). The log pairs of a group take the scalar loop's path
- * after its sphere lanes, in pair order, as in ss_filter512. Runs while 4 pairs remain and
- * returns where it stopped. */
-__attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w, const int32_t *ks, const soa_view *v,
-                                                               int i, int n, int *used, ss_batch *q, int *mp, int *gen,
-                                                               int *ngp)
+ * wide (the arrays are padded by SS_PAD). The group's other entries go to gen as they are (not
+ * through filter_other: bb_chunk's step 2 takes them through other_pair). Runs while 4 pairs
+ * remain and returns where it stopped; gen has room for 4 past *ngp (*ngp <= i). */
+__attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w, const soa_view *v, int i, int n,
+                                                               int *used, ss_batch *q, int *mp, int *gen, int *ngp)
 {
     sd_hist *hist = w->bb.hist;
     const double *pos = &w->b.pos[0].x;
@@ -880,7 +879,7 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
     const int32_t *const va = v->a, *const vb = v->b, *const voff = v->off, *const vck = v->ck;
     const double *const vsqm = v->sqm, *const vrs2 = v->rs2;
     uint8_t *const vact = v->act;
-    int m = *mp;
+    int m = *mp, ng = *ngp;
     const __m128i kind = _mm_set1_epi32((int)0xFFFF0000u), lane = _mm_setr_epi32(0, 1, 2, 3);
     for (; i + 4 <= n; i += 4) {
         /* the lanes of sphere pairs (kind 0 in ck's high half); a log's pair takes the scalar
@@ -926,15 +925,19 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
 #undef PACK_PD
 #undef PACK_I32
         m += __builtin_popcount((unsigned)t);
-        /* (a sphere-log pair's apart test is left to sc_geom256, which does it in lanes, where
-         * the geometry's lanes run; the kind from the view, ck's high half: the pair's record, a
-         * line of the store the filter reads nowhere else, is read only for a log–log or
-         * log–wall pair; its load was a ninth of the filter's samples in the packing) */
-        const int defer = sc_lanes_on && sc_geom_on;
-        for (int o = ~ss & 15; o; o &= o - 1)
-            filter_other(w, ks, v, i + __builtin_ctz((unsigned)o), defer, used, gen, ngp);
+        /* the group's other entries (a log's pair, an owner's cross entry) listed in gen as they
+         * are, by the same table, and sorted out in step 2 (other_pair; a sphere-log pair's
+         * apart test left to sc_geom256's lanes, its kind read from the view there). A loop over
+         * them here, like the scalar filter's, ran a number of times that changes from group to
+         * group where logs are, and its exit was mispredicted: the packing ~2.5 % slower
+         * (docs/performance.md) */
+        const int om = ~ss & 15;
+        _mm_storeu_si128((__m128i *)(gen + ng), _mm_shuffle_epi8(_mm_add_epi32(_mm_set1_epi32(i), lane),
+                                                                 _mm_loadu_si128((const __m128i *)shuf_i32[om])));
+        ng += __builtin_popcount((unsigned)om);
     }
     *mp = m;
+    *ngp = ng;
     return i;
 }
 
@@ -1554,6 +1557,22 @@ __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const s
 }
 #endif
 
+/* Step 2 of bb_chunk for a log's pair (chunk entry i) not taken by the sphere-log lanes:
+ * filter_log_pair's apart test, where the touch filter left it (the AVX2 filter lists every
+ * entry that is not a sphere pair as it is; the other filters' entries have passed it, and
+ * pass it again), then pair_general. Returns the lanes it filled. */
+static int other_pair(const sd_world *w, const sd_law *law, const sd_pair *p, int i, struct sc_lanes *q, int j,
+                      sd_pair_out *out, int *used)
+{
+    if (log_pair_apart(&w->b, p)) {
+        used[i] = 0;
+        for (int s = 0; s < p->cap; s++)
+            w->bb.hist[p->off + s].feature = -1;
+        return 0;
+    }
+    return pair_general(w, law, p, i, q, j, out, used);
+}
+
 /* The pairs ks[0 .. n) (n <= SS_CHUNK): forces into out[i], contact points into used[i]. Each
  * pair's result depends on that pair alone, so any split into chunks gives the same bits.
  * With acc, the chunk also adds each pair in contact onto its two bodies, in chunk order (the
@@ -1577,7 +1596,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
         if (simd_level == SD_SIMD_AVX512)
             i = ss_filter512(w, ks, v, 0, n, used, q, &m, gen, &ng);
         else if (simd_level == SD_SIMD_AVX2)
-            i = ss_filter256(w, ks, v, 0, n, used, q, &m, gen, &ng);
+            i = ss_filter256(w, v, 0, n, used, q, &m, gen, &ng);
 #endif
         ss_filter_range(w, ks, v, i, n, used, q, &m, gen, &ng);
     }
@@ -1596,14 +1615,14 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
                 if (v->ck[i] == ck_pack(SD_PAIR_SC, 1))
                     sg[nsg++] = i;
                 else
-                    msc += pair_general(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
+                    msc += other_pair(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
             }
             msc = sc_geom256(w, law, ks, v, sg, nsg, &q->sc, msc, out, used);
         } else
 #endif
             for (int g = 0; g < ng; g++) {
                 const int i = gen[g];
-                if (ks[i] >= 0) msc += pair_general(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
+                if (ks[i] >= 0) msc += other_pair(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
             }
         if (msc > 0) sc_flush(w, law, &q->sc, msc, ks, v, out, used);
     }
