@@ -127,7 +127,7 @@ typedef struct {
     int32_t was[SS_CHUNK + SS_PAD]; /* the slot's feature before this step */
     int32_t sel[SS_CHUNK + SS_PAD]; /* the pair's place in the chunk */
     int bed_lim;                    /* the sums' bed test (bed_at): set by each pass before its chunks */
-    sd_vec3 sink[8];                /* ss_sums256's rows for a lane's bed body (whose load stays zero): never read */
+    sd_vec3 sink[8];                /* where a bed body's sums go (ss_sums256, add_pair_sink): never read */
     /* an owner's cross entries in pass 2 (ks < 0: pair cross[~ks], computed in pass 1): their
      * results and flags, and the owner's bodies [own_lo, own_hi), whose side alone it adds */
     const sd_pair_out *xout;
@@ -482,6 +482,31 @@ static inline __attribute__((always_inline)) void add_pair_lim(sd_bodies *b, int
     } else {
         b->force[i] = v3_add(b->force[i], o->f_a);
         b->torque[i] = v3_add(b->torque[i], o->t_a);
+    }
+}
+
+/* add_pair_lim where the bed is the bodies from lim on (lim >= 0): a bed body's rows are
+ * replaced by the two sink rows, chosen without a branch (a bed body comes at random among the
+ * pairs of spheres resting on the roughness); the same sums into every other body. */
+static inline __attribute__((always_inline)) void add_pair_sink(sd_bodies *b, int lim, int i, int as_b,
+                                                                const sd_pair_out *o, sd_vec3 *sink)
+{
+    if (lim < 0) { /* (no bed split: the same for the whole pass) */
+        add_pair_lim(b, lim, i, as_b, o);
+        return;
+    }
+    const uintptr_t m = (uintptr_t)0 - (uintptr_t)(i >= lim), pf = (uintptr_t)&b->force[i],
+                    pt = (uintptr_t)&b->torque[i];
+    sd_vec3 *const f = (sd_vec3 *)(pf ^ ((pf ^ (uintptr_t)&sink[0]) & m)), *const t =
+                                                                               (sd_vec3 *)(pt ^
+                                                                                           ((pt ^ (uintptr_t)&sink[1]) &
+                                                                                            m));
+    if (as_b) {
+        *f = v3_sub(*f, o->f_a);
+        *t = v3_add(*t, o->t_b);
+    } else {
+        *f = v3_add(*f, o->f_a);
+        *t = v3_add(*t, o->t_a);
     }
 }
 
@@ -1657,8 +1682,8 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             for (; g < ng && gen[g] < i; g++) {
                 const int e = gen[g];
                 if (used[e] > 0) { /* A then B, its bodies from the view (not the store's line) */
-                    add_pair_lim(acc, q->bed_lim, v->a[e], 0, &out[e]);
-                    add_pair_lim(acc, q->bed_lim, v->b[e], 1, &out[e]);
+                    add_pair_sink(acc, q->bed_lim, v->a[e], 0, &out[e], q->sink);
+                    add_pair_sink(acc, q->bed_lim, v->b[e], 1, &out[e], q->sink);
                 } else if (ks[e] < 0 && q->xact[~ks[e]]) { /* a cross entry in contact: the owner's side */
                     const int ia = v->a[e], own_a = ia >= q->own_lo && ia < q->own_hi;
                     add_pair_lim(acc, q->bed_lim, own_a ? ia : v->b[e], !own_a, &q->xout[~ks[e]]);
@@ -1689,8 +1714,8 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             o.f_a = v3(q->fx[j], q->fy[j], q->fz[j]);
             o.t_a = v3(q->nfx[j] * mla, q->nfy[j] * mla, q->nfz[j] * mla);
             o.t_b = v3(q->nfx[j] * mlb, q->nfy[j] * mlb, q->nfz[j] * mlb);
-            add_pair_lim(acc, q->bed_lim, ia, 0, &o);
-            add_pair_lim(acc, q->bed_lim, ib, 1, &o);
+            add_pair_lim(acc, q->bed_lim, ia, 0, &o); /* (a pair's A is never of the bed) */
+            add_pair_sink(acc, q->bed_lim, ib, 1, &o, q->sink);
         }
         return;
     }
