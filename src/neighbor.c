@@ -170,6 +170,10 @@ static sd_status grid_layout(sd_grid *g, sd_vec3 lo, sd_vec3 hi, double cell, lo
 /* Counting sort of items into cells given each item's range. With reg0 and slot: item i's
  * entries are reg0[i] .. reg0[i+1]-1 in the order z, y, x of its range, and slot[r] is where
  * entry r went in items (so the items after it in that cell are exactly those above i). */
+/* room past a grid's last entry in its items and flags (and the body grid's gq): the scan's
+ * prefilter reads 8 entries at a time, past a cell's end into the next cell or this pad */
+#define SD_GRID_PAD 8
+
 static inline uint8_t range_begins(const int32_t *r, int x, int y, int z)
 {
     return (uint8_t)((x == r[0]) | (y == r[1]) << 1 | (z == r[2]) << 2);
@@ -203,9 +207,9 @@ static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const u
     for (int c = 0; c < ncell; c++)
         g->cell_start[c + 1] += g->cell_start[c];
     const long all = total + (bed ? bed->nitems : 0);
-    if (sd_grow((void **)&g->items, &g->cap_items, (int)all + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    if (sd_grow((void **)&g->items, &g->cap_items, (int)all + SD_GRID_PAD, sizeof(int32_t))) return SD_ERR_NOMEM;
     if (slot && sd_grow((void **)slot, slot_cap, (int)total + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    if (flag && sd_grow((void **)flag, flag_cap, (int)all + 1, sizeof(uint8_t))) return SD_ERR_NOMEM;
+    if (flag && sd_grow((void **)flag, flag_cap, (int)all + SD_GRID_PAD, sizeof(uint8_t))) return SD_ERR_NOMEM;
     uint8_t *fl = flag ? *flag : NULL;
     /* fill using cell_start as a cursor, then shift back */
     int32_t *sl = slot ? *slot : NULL;
@@ -297,9 +301,9 @@ static sd_status grid_fill_par(sd_grid *g, int n, const int32_t (*range)[6], int
     }
     g->cell_start[ncell] = at;
     const long all = at;
-    if (sd_grow((void **)&g->items, &g->cap_items, (int)all + 1, sizeof(int32_t)) ||
+    if (sd_grow((void **)&g->items, &g->cap_items, (int)all + SD_GRID_PAD, sizeof(int32_t)) ||
         sd_grow((void **)slot, slot_cap, (int)total + 1, sizeof(int32_t)) ||
-        sd_grow((void **)flag, flag_cap, (int)all + 1, sizeof(uint8_t))) {
+        sd_grow((void **)flag, flag_cap, (int)all + SD_GRID_PAD, sizeof(uint8_t))) {
         free(cur);
         return SD_ERR_NOMEM;
     }
@@ -829,7 +833,110 @@ __attribute__((target("avx512f,avx512vl"))) static int scan_cell512(const sd_wor
 }
 #endif
 
+static int scan_pre_on = 1; /* the scan's float prefilter (sd_scan_pre_set) */
+
+int sd_scan_pre_set(int on)
+{
+    const int was = scan_pre_on;
+    scan_pre_on = on != 0;
+    return was;
+}
+
 #define SD_SCAN_JS 512 /* bb_scan's entries gathered before the reach test (at least 64 more than it flushes at) */
+
+/* The body grid's entries' centres and bounding radii as floats (w->gq), after the grid is
+ * filled: the scan's prefilter reads them in entry order, 8 at a time, where the exact test
+ * (within_reach) would gather each entry's row. Their rounding is bounded: a coordinate within
+ * M of the origin is off by at most M 2^-24 as a float, so a distance by about 3.5e-7 M, and a
+ * reach passed to the prefilter grows by gq_slack = 4e-6 M + 4e-6 of itself, ten times that:
+ * no pair the exact test takes is left out, and the exact test still decides (the same
+ * candidates in the same order). */
+static sd_status grid_coords(sd_world *w)
+{
+    const sd_grid *g = &w->grid;
+    const int all = g->cell_start[g->nx * g->ny * g->nz];
+    const int stride = (all + SD_GRID_PAD + 7) & ~7;
+    if (sd_grow((void **)&w->gq, &w->gq_cap, 4 * stride, sizeof(float))) return SD_ERR_NOMEM;
+    w->gq_stride = stride;
+    float *restrict x = w->gq, *restrict y = x + stride, *restrict z = y + stride, *restrict r = z + stride;
+    const int32_t *restrict it = g->items;
+    const sd_vec3 *restrict pos = w->b.pos;
+    const double *restrict br = w->b.bound_r;
+#pragma omp parallel for schedule(static) if (all > w->def.parallel_min)
+    for (int a = 0; a < all; a++) {
+        const int j = it[a];
+        x[a] = (float)pos[j].x, y[a] = (float)pos[j].y, z[a] = (float)pos[j].z, r[a] = (float)br[j];
+    }
+    for (int a = all; a < stride; a++)
+        x[a] = y[a] = z[a] = r[a] = 0.0f;
+    memset(g->items + all, 0, SD_GRID_PAD * sizeof(int32_t));
+    memset(w->gflag + all, 0, SD_GRID_PAD);
+    double m = 0.0;
+    const double lo[3] = {g->lo.x, g->lo.y, g->lo.z}, n[3] = {g->nx, g->ny, g->nz};
+    for (int d = 0; d < 3; d++) {
+        const double a = fabs(lo[d]), b = fabs(lo[d] + n[d] * g->cell);
+        m = a > m ? a : m;
+        m = b > m ? b : m;
+    }
+    w->gq_slack = (float)(4e-6 * m);
+    return SD_OK;
+}
+
+#ifdef SD_SCAN512
+/* compress_lut[m]: byte l is the lane of the l-th set bit of m (8 lanes) */
+static uint64_t compress_lut[256];
+
+static void compress_lut_make(void)
+{
+    static int made;
+    if (made) return;
+    for (int m = 0; m < 256; m++) {
+        uint64_t v = 0;
+        int n = 0;
+        for (int l = 0; l < 8; l++)
+            if (m >> l & 1) v |= (uint64_t)l << (8 * n++);
+        compress_lut[m] = v;
+    }
+    made = 1;
+}
+
+/* bb_scan's flag loop for entries k .. k1 - 1 of one cell (k1 - k <= 64) with the prefilter: the
+ * entries whose flags say the pair is taken in this cell and whose float centre lies within
+ * the float reach (pc: the body's centre, and its bounding radius plus the margin; gq_slack
+ * added) go into js in entry order; returns how many (js has room for 8 more). */
+__attribute__((target("avx2"))) static int scan_cell256(const sd_world *w, int k, int k1, unsigned need,
+                                                        const float pc[4], int32_t *restrict js)
+{
+    const int32_t *items = w->grid.items;
+    const uint8_t *fl = w->gflag;
+    const int st = w->gq_stride;
+    const float *gx = w->gq, *gy = gx + st, *gz = gy + st, *gr = gz + st;
+    const __m256 px = _mm256_set1_ps(pc[0]), py = _mm256_set1_ps(pc[1]), pz = _mm256_set1_ps(pc[2]),
+                 rb = _mm256_set1_ps(pc[3] + w->gq_slack), grow = _mm256_set1_ps(1.0f + 4e-6f);
+    const __m256i nd = _mm256_set1_epi32((int)need);
+    int n = 0;
+    for (; k < k1; k += 8) {
+        const int left = k1 - k;
+        const unsigned live = left >= 8 ? 0xFFu : (1u << left) - 1u;
+        uint64_t fw;
+        memcpy(&fw, fl + k, sizeof fw);
+        const __m256i f = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)fw));
+        const __m256i fm = _mm256_cmpeq_epi32(_mm256_and_si256(f, nd), nd);
+        const __m256 dx = _mm256_sub_ps(px, _mm256_loadu_ps(gx + k)), dy = _mm256_sub_ps(py, _mm256_loadu_ps(gy + k)),
+                     dz = _mm256_sub_ps(pz, _mm256_loadu_ps(gz + k));
+        const __m256 reach = _mm256_mul_ps(_mm256_add_ps(rb, _mm256_loadu_ps(gr + k)), grow);
+        const __m256 d2 =
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+        const __m256 in = _mm256_cmp_ps(d2, _mm256_mul_ps(reach, reach), _CMP_NGT_UQ);
+        const unsigned m = (unsigned)_mm256_movemask_ps(_mm256_and_ps(in, _mm256_castsi256_ps(fm))) & live;
+        const __m256i idx = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)compress_lut[m]));
+        const __m256i it = _mm256_loadu_si256((const __m256i *)(items + k));
+        _mm256_storeu_si256((__m256i *)(js + n), _mm256_permutevar8x32_epi32(it, idx));
+        n += __builtin_popcount(m);
+    }
+    return n;
+}
+#endif
 
 /* Body j within reach of a body at pi with bounding radius bri: |pi - pj| <= bri + r_j + margin. */
 static inline int within_reach(const sd_bodies *b, sd_vec3 pi, double bri, double margin, int j)
@@ -878,9 +985,12 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
     const int vec = !fixed_i && sd_simd512_on();
     const double bri = b->bound_r[i];
     const sd_vec3 pi = b->pos[i];
+    /* a moving body's entries through the float prefilter where the CPU has AVX2 */
+    const int pre = !fixed_i && !vec && scan_pre_on && w->gq_stride > 0 && sd_simd_level() >= SD_SIMD_AVX2;
+    const float pc[4] = {(float)pi.x, (float)pi.y, (float)pi.z, (float)(bri + w->def.margin)};
 #endif
     int e = w->reg0[i]; /* i's entries, in the order of the loops below (grid_fill) */
-    int32_t js[SD_SCAN_JS];
+    int32_t js[SD_SCAN_JS + 8];
     int nj = 0;
     for (int z = ri[2]; z <= ri[5]; z++)
         for (int y = ri[1]; y <= ri[4]; y++)
@@ -924,6 +1034,20 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
                  * not two fixed bodies; then the takers, in entry order: the same candidates
                  * in the same order */
                 const unsigned need = (unsigned)((x > ri[0]) | (y > ri[1]) << 1 | (z > ri[2]) << 2);
+#ifdef SD_SCAN512
+                if (pre) {
+                    while (k < kend) {
+                        if (nj > SD_SCAN_JS - 64) {
+                            if (scan_take(w, i, hm, js, nj, out)) return 1;
+                            nj = 0;
+                        }
+                        const int k1 = kend - k < 64 ? kend : k + 64;
+                        nj += scan_cell256(w, k, k1, need, pc, js + nj);
+                        k = k1;
+                    }
+                    continue;
+                }
+#endif
                 const uint8_t *fl = use_mi ? mi->flags : w->gflag;
                 while (k < kend) {
                     if (nj > SD_SCAN_JS - 64) {
@@ -1264,6 +1388,10 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         w->bed.used++;
     else if ((st = bed_cache_make(w, hm)))
         return st;
+    if ((st = grid_coords(w))) return st;
+#ifdef SD_SCAN512
+    compress_lut_make();
+#endif
     RB_STAGE(SD_RB_FILL);
 
     /* candidates, generated in body order: the bodies cut into K chunks of about the same

@@ -101,6 +101,7 @@ void sd_world_destroy(sd_world *w)
     free(w->reg0);
     free(w->slot);
     free(w->gflag);
+    free(w->gq);
     free(w->trange);
     free(w->tflag);
     free(w->mov);

@@ -242,6 +242,12 @@ struct sd_world {
      * the two ranges (the lowest cell they share) */
     uint8_t *gflag;
     int gflag_cap;
+    /* the body grid's entries' centres and bounding radii in single precision, field by field
+     * (x, y, z, r: gq_stride floats each, zero past the last entry), for the scan's prefilter
+     * (neighbor.c grid_coords; scratch, not saved) */
+    float *gq;
+    int gq_cap, gq_stride;
+    float gq_slack; /* what the prefilter adds to a reach: its rounding, bounded (grid_coords) */
     /* the candidate scan's chunk buffers, kept from one rebuild to the next with what they
      * grew to (neighbor.c; scratch, not saved): made afresh, they took ~300 reallocs a
      * rebuild (docs/performance.md §2-000000000000000000) */
@@ -439,6 +445,7 @@ int sd_near_fast_set(int on);
 /* The logs' moves in batches of SIMD lanes (1, the default) or one by one (0); returns the
  * setting before. Either gives the same bits (integrate.c). */
 int sd_cyl_batch_set(int on);
+int sd_scan_pre_set(int on);   /* neighbor.c: the rebuild scan's float prefilter (on by default; the same candidates) */
 int sd_move_lanes_set(int on); /* integrate.c: the spheres moved in AVX2 lanes (on by default) */
 long sd_move_lanes_count(void); /* the groups of four spheres the calling thread moved in lanes */
 /* Sphere-log lanes filled by the AVX2 geometry since the start (for the tests). */

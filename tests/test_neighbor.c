@@ -938,6 +938,103 @@ static void test_near_bed(void)
     sd_world_destroy(w);
 }
 
+/* The body-body candidates of a rebuild as words (a, b, kind each), into a new array. */
+static int32_t *bb_words(const sd_world *w, int *len)
+{
+    int32_t *q = malloc(((size_t)3 * w->bb.n + 1) * sizeof(int32_t));
+    CHECK(q != NULL);
+    if (!q) return NULL;
+    for (int k = 0; k < w->bb.n; k++)
+        q[3 * k] = w->bb.p[k].a, q[3 * k + 1] = w->bb.p[k].b, q[3 * k + 2] = w->bb.p[k].kind;
+    *len = 3 * w->bb.n;
+    return q;
+}
+
+/* The scan's float prefilter (sd_scan_pre_set) leaves the candidates as they were, pair for
+ * pair and in order: on a bed under falling spheres and logs at several moments, and on pairs
+ * of spheres set at their reach (r_a + r_b + margin) less and more 2e-9 of it, 1 m, 100 m and
+ * 10 km from the origin, where a float's rounding is far larger than that: each pair just
+ * within reach is a candidate, each just beyond is not. (Off a CPU with AVX2 both runs take
+ * the exact test alone.) */
+static void test_scan_prefilter(void)
+{
+    sd_world *w = bed_world();
+    for (int k = 0; k < 12; k++) {
+        sd_cylinder_def c = sd_cylinder_def_default();
+        c.radius = 0.0015;
+        c.length = 0.015 + 0.01 * urand();
+        c.pos = v3(0.01 + 0.06 * urand(), 0.01 + 0.06 * urand(), 0.04 + 0.01 * urand());
+        c.axis = v3_normalize(v3(urand() - 0.5, urand() - 0.5, urand() - 0.5));
+        c.vel = v3(0.0, 0.0, -0.5);
+        CHECK(sd_world_add_cylinder(w, &c) >= 0);
+    }
+    long compared = 0, pairs = 0, differ = 0;
+    for (int round = 0; round < 6; round++) {
+        for (int st = 0; st < 150; st++)
+            CHECK(sd_world_step(w) == SD_OK);
+        CHECK(sd_neighbor_rebuild(w) == SD_OK); /* (sorted once: the same store for both) */
+        int32_t *snap[2];
+        int len[2] = {0, 0};
+        for (int v = 0; v < 2; v++) {
+            const int was = sd_scan_pre_set(v);
+            CHECK(sd_neighbor_rebuild(w) == SD_OK);
+            sd_scan_pre_set(was);
+            snap[v] = bb_words(w, &len[v]);
+        }
+        compared++;
+        pairs += len[0] / 3;
+        differ += len[0] != len[1] || !snap[0] || !snap[1] || memcmp(snap[0], snap[1], (size_t)len[0] * 4) != 0;
+        free(snap[0]);
+        free(snap[1]);
+    }
+    printf("scan prefilter on the bed: %ld rebuilds compared (%ld pairs), %ld differ\n", compared, pairs, differ);
+    CHECK(differ == 0 && compared == 6 && pairs > 1000);
+    sd_world_destroy(w);
+
+    const double far[4] = {1.0, 100.0, 1e4, -1e4};
+    for (int f = 0; f < 4; f++) {
+        w = new_world();
+        const double m = w->def.margin;
+        int inside = 0;
+        for (int k = 0; k < 40; k++) {
+            const double ra = 0.001 + 0.009 * urand(), rb = 0.001 + 0.009 * urand();
+            const int in = k % 2 == 0;
+            const double d = (ra + rb + m) * (in ? 1.0 - 2e-9 : 1.0 + 2e-9);
+            const sd_vec3 u = v3_normalize(v3(urand() - 0.5, urand() - 0.5, urand() - 0.5));
+            const sd_vec3 c = v3(far[f] + 0.1 * k, far[f] + 0.01 * urand(), far[f] + 0.01 * urand());
+            sd_sphere_def a = sd_sphere_def_default(), b = sd_sphere_def_default();
+            a.radius = ra, b.radius = rb;
+            a.pos = c, b.pos = v3_madd(c, u, d);
+            CHECK(sd_world_add_sphere(w, &a) >= 0);
+            CHECK(sd_world_add_sphere(w, &b) >= 0);
+            inside += in;
+        }
+        int32_t *snap[2];
+        int len[2] = {0, 0};
+        for (int v = 0; v < 2; v++) {
+            const int was = sd_scan_pre_set(v);
+            CHECK(sd_neighbor_rebuild(w) == SD_OK);
+            sd_scan_pre_set(was);
+            snap[v] = bb_words(w, &len[v]);
+        }
+        /* each pair's own two bodies, whatever order the store put them in */
+        int found = 0;
+        for (int k = 0; k < w->bb.n; k++) {
+            const int ga = w->b.gid[w->bb.p[k].a], gb = w->b.gid[w->bb.p[k].b];
+            found += (ga < gb ? ga : gb) % 2 == 0 && (ga > gb ? ga : gb) == (ga < gb ? ga : gb) + 1 &&
+                     ((ga < gb ? ga : gb) / 2) % 2 == 0;
+        }
+        printf("spheres at their reach %g m out: %d candidates with the prefilter, %d without, %d of %d pairs "
+               "within reach found\n",
+               far[f], len[1] / 3, len[0] / 3, found, inside);
+        CHECK(len[0] == len[1] && snap[0] && snap[1] && memcmp(snap[0], snap[1], (size_t)len[0] * 4) == 0);
+        CHECK(found == inside && w->bb.n == inside);
+        free(snap[0]);
+        free(snap[1]);
+        sd_world_destroy(w);
+    }
+}
+
 int main(void)
 {
     test_static(1);
@@ -952,6 +1049,7 @@ int main(void)
     test_near_bed();
     test_rebuild_threads();
     test_moving_index();
+    test_scan_prefilter();
     printf("near-list checks of the owners' segments (two or more threads): %ld\n", near_by_owners);
     printf("near sphere pairs whose spring flag was checked against the slot: %ld, wrong %ld; (r_a + r_b)^2 wrong "
            "%ld\n",
