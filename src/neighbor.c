@@ -851,6 +851,7 @@ int sd_scan_pre_set(int on)
  * reach passed to the prefilter grows by gq_slack = 4e-6 M + 4e-6 of itself, ten times that:
  * no pair the exact test takes is left out, and the exact test still decides (the same
  * candidates in the same order). */
+#ifdef SD_SCAN512
 static sd_status grid_coords(sd_world *w)
 {
     const sd_grid *g = &w->grid;
@@ -882,7 +883,6 @@ static sd_status grid_coords(sd_world *w)
     return SD_OK;
 }
 
-#ifdef SD_SCAN512
 /* compress_lut[m]: byte l is the lane of the l-th set bit of m (8 lanes) */
 static uint64_t compress_lut[256];
 
@@ -1388,9 +1388,13 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         w->bed.used++;
     else if ((st = bed_cache_make(w, hm)))
         return st;
-    if ((st = grid_coords(w))) return st;
+    /* the prefilter's floats, where bb_scan will read them (AVX2, not AVX-512) */
+    w->gq_stride = 0;
 #ifdef SD_SCAN512
-    compress_lut_make();
+    if (scan_pre_on && !sd_simd512_on() && sd_simd_level() >= SD_SIMD_AVX2) {
+        if ((st = grid_coords(w))) return st;
+        compress_lut_make();
+    }
 #endif
     RB_STAGE(SD_RB_FILL);
 
