@@ -1021,8 +1021,8 @@ static void test_scan_prefilter(void)
         int found = 0;
         for (int k = 0; k < w->bb.n; k++) {
             const int ga = w->b.gid[w->bb.p[k].a], gb = w->b.gid[w->bb.p[k].b];
-            found += (ga < gb ? ga : gb) % 2 == 0 && (ga > gb ? ga : gb) == (ga < gb ? ga : gb) + 1 &&
-                     ((ga < gb ? ga : gb) / 2) % 2 == 0;
+            const int lo = ga < gb ? ga : gb, hi = ga < gb ? gb : ga; /* (pair q: gids 2q, 2q + 1) */
+            found += lo % 2 == 0 && hi == lo + 1 && (lo / 2) % 2 == 0;
         }
         printf("spheres at their reach %g m out: %d candidates with the prefilter, %d without, %d of %d pairs "
                "within reach found\n",
