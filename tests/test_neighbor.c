@@ -623,6 +623,22 @@ static sd_world *bed_world(void)
     return w;
 }
 
+/* bed_world with 12 logs falling among the spheres */
+static sd_world *bed_world_logs(void)
+{
+    sd_world *w = bed_world();
+    for (int k = 0; k < 12; k++) {
+        sd_cylinder_def c = sd_cylinder_def_default();
+        c.radius = 0.0015;
+        c.length = 0.015 + 0.01 * urand();
+        c.pos = v3(0.01 + 0.06 * urand(), 0.01 + 0.06 * urand(), 0.04 + 0.01 * urand());
+        c.axis = v3_normalize(v3(urand() - 0.5, urand() - 0.5, urand() - 0.5));
+        c.vel = v3(0.0, 0.0, -0.5);
+        CHECK(sd_world_add_cylinder(w, &c) >= 0);
+    }
+    return w;
+}
+
 static void test_bed_cache(void)
 {
     sd_world *w[2];
@@ -817,16 +833,7 @@ static void test_rebuild_threads(void)
 {
 #ifdef _OPENMP
     const int T0 = omp_get_max_threads();
-    sd_world *w = bed_world();
-    for (int k = 0; k < 12; k++) {
-        sd_cylinder_def c = sd_cylinder_def_default();
-        c.radius = 0.0015;
-        c.length = 0.015 + 0.01 * urand();
-        c.pos = v3(0.01 + 0.06 * urand(), 0.01 + 0.06 * urand(), 0.04 + 0.01 * urand());
-        c.axis = v3_normalize(v3(urand() - 0.5, urand() - 0.5, urand() - 0.5));
-        c.vel = v3(0.0, 0.0, -0.5);
-        CHECK(sd_world_add_cylinder(w, &c) >= 0);
-    }
+    sd_world *w = bed_world_logs();
     long compared = 0, entries = 0, differ = 0;
     for (int round = 0; round < 6; round++) {
         omp_set_num_threads(2);
@@ -958,16 +965,7 @@ static int32_t *bb_words(const sd_world *w, int *len)
  * the exact test alone.) */
 static void test_scan_prefilter(void)
 {
-    sd_world *w = bed_world();
-    for (int k = 0; k < 12; k++) {
-        sd_cylinder_def c = sd_cylinder_def_default();
-        c.radius = 0.0015;
-        c.length = 0.015 + 0.01 * urand();
-        c.pos = v3(0.01 + 0.06 * urand(), 0.01 + 0.06 * urand(), 0.04 + 0.01 * urand());
-        c.axis = v3_normalize(v3(urand() - 0.5, urand() - 0.5, urand() - 0.5));
-        c.vel = v3(0.0, 0.0, -0.5);
-        CHECK(sd_world_add_cylinder(w, &c) >= 0);
-    }
+    sd_world *w = bed_world_logs();
     long compared = 0, pairs = 0, differ = 0;
     for (int round = 0; round < 6; round++) {
         for (int st = 0; st < 150; st++)
