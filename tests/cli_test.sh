@@ -79,6 +79,22 @@ if [ "$code" -eq 130 ] && /usr/bin/python3 -c "import json,sys; d=json.load(open
    && /usr/bin/python3 "$src_dir/scripts/check_vtk.py" "$tmp/int/series.pvd" >/dev/null && [ -z "$(ls "$tmp/int" | grep -E '\.tmp|XXXX')" ]; then
   pass=$((pass + 1)); else echo "FAIL ctrl-c: exit $code"; cat "$tmp/int.log"; ls "$tmp/int"; fail=$((fail + 1)); fi
 
+# the side views of the arrival and the end, drawn together when the run ends: both PNGs there
+# (with Debian's python3-matplotlib, which scripts/setup.sh installs), or the note for each
+"$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/png" --set output.png=true --set phases.capture_limit=0.05 \
+  >"$tmp/png.log" 2>&1
+code=$?
+if /usr/bin/python3 -c "import matplotlib" 2>/dev/null; then
+  png_ok=1
+  for f in side_arrival.png side_final.png; do
+    [ "$(head -c 8 "$tmp/png/$f" 2>/dev/null | od -An -tx1 | tr -d ' \n')" = "89504e470d0a1a0a" ] || png_ok=0
+  done
+else
+  png_ok=$([ "$(grep -c 'not drawn' "$tmp/png.log")" -eq 2 ] && echo 1 || echo 0)
+fi
+if [ "$code" -eq 0 ] && [ "$png_ok" -eq 1 ]; then pass=$((pass + 1)); else
+  echo "FAIL side views: exit $code"; cat "$tmp/png.log"; ls "$tmp/png"; fail=$((fail + 1)); fi
+
 # docs/scenario.md carries the same table the loader checks
 "$bin" params --markdown > "$tmp/params.md"
 if awk '/^## Keys/{f=1;next} f && NF' "$src_dir/docs/scenario.md" | diff -q - "$tmp/params.md" >/dev/null; then
