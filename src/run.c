@@ -29,6 +29,8 @@
 enum { PH_PACK = 0, PH_FLOW = 1, PH_CAPTURE = 2, PH_DONE = 3, PH_RUN = 4 };
 static const char *phase_names[] = {"packing", "flow", "capture", "done", "run"};
 
+enum { RUN_PLOTS = 2 };
+
 typedef struct {
     const sd_scenario *s;
     const sd_run_opts *o;
@@ -68,10 +70,11 @@ typedef struct {
         double h_d, xd;
         int capture;
     } fluid; /* what the step's fluid forces need (set_fluid) */
-    /* the side views asked for so far, drawn together at the end (plots_draw) */
+    /* the side views asked for so far (the arrival's, the end's), drawn together at the end
+     * (plots_draw) */
     int n_plots;
-    char plot_cmd[2][4096];
-    const char *plot_png[2];
+    char plot_cmd[RUN_PLOTS][4096];
+    const char *plot_png[RUN_PLOTS];
 } run_ctx;
 
 static double body_volume(const sd_bodies *b, int i)
@@ -645,7 +648,7 @@ static int write_walls(run_ctx *c)
  * beside the final one, the two cost the run ~1.5 s instead of ~3. */
 static void plot(run_ctx *c, const char *name, const char *png, double xmin, double xmax)
 {
-    if (!c->s->png_on || !c->s->vtk_on || c->n_plots >= 2) return;
+    if (!c->s->png_on || !c->s->vtk_on || c->n_plots >= RUN_PLOTS) return;
     snprintf(c->plot_cmd[c->n_plots], sizeof c->plot_cmd[0],
              "exec /usr/bin/python3 \"%s/scripts/plot_side.py\" --spheres \"%s/spheres_%s.vtp\" --logs "
              "\"%s/cylinders_%s.vtp\" --xdam %g"
@@ -658,8 +661,8 @@ static void plot(run_ctx *c, const char *name, const char *png, double xmin, dou
 static void plots_draw(run_ctx *c)
 {
     extern char **environ;
-    pid_t pid[2];
-    int ok[2];
+    pid_t pid[RUN_PLOTS];
+    int ok[RUN_PLOTS];
     for (int k = 0; k < c->n_plots; k++) {
         char *argv[] = {"/bin/sh", "-c", c->plot_cmd[k], NULL};
         ok[k] = posix_spawn(&pid[k], "/bin/sh", NULL, NULL, argv, environ) == 0;

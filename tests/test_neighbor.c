@@ -957,6 +957,18 @@ static int32_t *bb_words(const sd_world *w, int *len)
     return q;
 }
 
+/* The candidates of a rebuild without (snap[0]) and with (snap[1]) the scan's prefilter, as
+ * bb_words gives them. */
+static void prefilter_snaps(sd_world *w, int32_t *snap[2], int len[2])
+{
+    for (int v = 0; v < 2; v++) {
+        const int was = sd_scan_pre_set(v);
+        CHECK(sd_neighbor_rebuild(w) == SD_OK);
+        sd_scan_pre_set(was);
+        snap[v] = bb_words(w, &len[v]);
+    }
+}
+
 /* The scan's float prefilter (sd_scan_pre_set) leaves the candidates as they were, pair for
  * pair and in order: on a bed under falling spheres and logs at several moments, and on pairs
  * of spheres set at their reach (r_a + r_b + margin) less and more 2e-9 of it, 1 m, 100 m and
@@ -973,12 +985,7 @@ static void test_scan_prefilter(void)
         CHECK(sd_neighbor_rebuild(w) == SD_OK); /* (sorted once: the same store for both) */
         int32_t *snap[2];
         int len[2] = {0, 0};
-        for (int v = 0; v < 2; v++) {
-            const int was = sd_scan_pre_set(v);
-            CHECK(sd_neighbor_rebuild(w) == SD_OK);
-            sd_scan_pre_set(was);
-            snap[v] = bb_words(w, &len[v]);
-        }
+        prefilter_snaps(w, snap, len);
         compared++;
         pairs += len[0] / 3;
         differ += len[0] != len[1] || !snap[0] || !snap[1] || memcmp(snap[0], snap[1], (size_t)len[0] * 4) != 0;
@@ -1009,12 +1016,7 @@ static void test_scan_prefilter(void)
         }
         int32_t *snap[2];
         int len[2] = {0, 0};
-        for (int v = 0; v < 2; v++) {
-            const int was = sd_scan_pre_set(v);
-            CHECK(sd_neighbor_rebuild(w) == SD_OK);
-            sd_scan_pre_set(was);
-            snap[v] = bb_words(w, &len[v]);
-        }
+        prefilter_snaps(w, snap, len);
         /* each pair's own two bodies, whatever order the store put them in */
         int found = 0;
         for (int k = 0; k < w->bb.n; k++) {
