@@ -12,9 +12,8 @@ setup:
 # again only when a source changed; the same bits, faster code); PGO=0 builds without it
 PGO ?= 1
 build: setup
-	@if [ "$(PGO)" = 1 ]; then p=$$(bash scripts/pgo.sh $(BUILD)) || exit 1; \
-	  set -x; cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DSD_PGO=use -DSD_PGO_DIR=$${p% *} -DSD_PGO_ID=$${p#* }; \
-	else set -x; cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DSD_PGO=; fi
+	@pgo=-DSD_PGO=; if [ "$(PGO)" = 1 ]; then pgo=$$(bash scripts/pgo.sh $(BUILD)) || exit 1; fi; \
+	  set -x; cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $$pgo
 	cmake --build $(BUILD) -j $(JOBS)
 
 # the paper's flume (examples/shibuya2009.yaml); its threads pinned one per core unless the

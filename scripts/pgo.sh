@@ -6,7 +6,7 @@
 # and is made again only when a source file changed (its id is a hash of the sources).
 # docs/performance.md (thirty-second pass) has what it gains; the simulation is the same to the
 # last bit (same state hash), only the compiled code's layout and inlining change.
-#   usage: bash scripts/pgo.sh BUILD_DIR   -> prints the profile's directory and id
+#   usage: bash scripts/pgo.sh BUILD_DIR   -> prints the CMake options that build with it
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}
@@ -28,4 +28,4 @@ if [ "$(cat "$prof/id" 2>/dev/null)" != "$id" ]; then
     --set phases.flow_limit=0.01 --set phases.capture_limit=0.01 >/dev/null
   echo "$id" > "$prof/id"
 fi
-echo "$prof $id"
+echo "-DSD_PGO=use -DSD_PGO_DIR=$prof -DSD_PGO_ID=$id"
