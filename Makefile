@@ -35,7 +35,7 @@ asan: setup
 	cd $(ASAN_BUILD) && SD_SANITIZED=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS)
 
 bench: build
-	bash bench/run.sh
+	PGO=$(PGO) bash bench/run.sh
 
 clean:
 	rm -rf $(BUILD) $(ASAN_BUILD)

@@ -4,7 +4,7 @@
 # in the same phases: dense settled bed at rest behind the gate, then flowing after the gate
 # is removed. Reports particle-steps per second (median of REPEAT runs) and the ratio, for
 # 1 and 2 threads / ranks; then the scaling benchmark. Results go to bench/results/.
-#   usage: bash bench/run.sh [REPEAT] [NDENSE] [NFLOW]
+#   usage: [PGO=0] bash bench/run.sh [REPEAT] [NDENSE] [NFLOW]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REPEAT=${1:-3}
@@ -14,7 +14,11 @@ NDENSE=${2:-10000}
 # issue (9.4e6 one rank) were taken; the first 10,000 steps alone are still a dense pile
 NFLOW=${3:-50000}
 bash scripts/setup.sh --bench
-cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release >/dev/null
+# the library as `make build` makes it: guided by the profile of scripts/pgo.sh (the main build's,
+# made first if need be); PGO=0 for the plain build
+pgo=-DSD_PGO=
+if [ "${PGO:-1}" = 1 ]; then pgo=$(bash scripts/pgo.sh build); fi
+cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release $pgo >/dev/null
 cmake --build build-bench -j "$(nproc)" --target bench_flume bench_scale >/dev/null
 out=bench/results
 mkdir -p "$out"
