@@ -15,17 +15,19 @@ prof="$(pwd)/$gen/profile"
 id=$(cat CMakeLists.txt scripts/pgo.sh app/*.c include/*.h src/*.c src/*.h src/core/* src/geom/* | sha256sum | cut -c1-16)
 if [ "$(cat "$prof/id" 2>/dev/null)" != "$id" ]; then
   echo "pgo: making the profile (instrumented build, ~1 minute of training runs)" >&2
-  rm -rf "$prof" "$gen/train"
+  rm -rf "$prof" "$gen/train" "$gen"/train-*.log
   cmake -S . -B "$gen" -DCMAKE_BUILD_TYPE=Release -DSD_PGO=gen -DSD_PGO_DIR="$prof" >/dev/null
   cmake --build "$gen" -j "$(nproc)" --target sabodem >/dev/null
   flume=(examples/shibuya2009.yaml --set output.vtk=false --set output.png=false --set output.log_interval=0.05)
   # two threads (the paper's run): a dense pile with its logs, the flow, the jam at the dam
   OMP_PROC_BIND=true OMP_PLACES=cores "$gen/sabodem" run "${flume[@]}" -o "$gen/train/two" --threads 2 \
     --set flume.x_dam=1.0 --set flume.x_end=1.35 --set phases.packing_time=0.5 \
-    --set phases.flow_limit=0.5 --set phases.capture_limit=0.25 >/dev/null
+    --set phases.flow_limit=0.5 --set phases.capture_limit=0.25 >"$gen/train-two.log" 2>&1 ||
+    { cat "$gen/train-two.log" >&2; exit 1; }
   # one thread (the serial paths: the matrix's runs, the one-core bench)
   "$gen/sabodem" run "${flume[@]}" -o "$gen/train/one" --threads 1 --set phases.packing_time=0.15 \
-    --set phases.flow_limit=0.01 --set phases.capture_limit=0.01 >/dev/null
+    --set phases.flow_limit=0.01 --set phases.capture_limit=0.01 >"$gen/train-one.log" 2>&1 ||
+    { cat "$gen/train-one.log" >&2; exit 1; }
   echo "$id" > "$prof/id"
 fi
 echo "-DSD_PGO=use -DSD_PGO_DIR=$prof -DSD_PGO_ID=$id"
