@@ -12,7 +12,7 @@ setup:
 # again only when a source changed; the same bits, faster code); PGO=0 builds without it
 PGO ?= 1
 build: setup
-	@pgo=-DSD_PGO=; if [ "$(PGO)" = 1 ]; then pgo=$$(bash scripts/pgo.sh $(BUILD)) || exit 1; fi; \
+	@pgo=$$(PGO=$(PGO) bash scripts/pgo.sh $(BUILD)) || exit 1; \
 	  set -x; cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $$pgo
 	cmake --build $(BUILD) -j $(JOBS)
 

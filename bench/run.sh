@@ -16,8 +16,7 @@ NFLOW=${3:-50000}
 bash scripts/setup.sh --bench
 # the library as `make build` makes it: guided by the profile of scripts/pgo.sh (the main build's,
 # made first if need be); PGO=0 for the plain build
-pgo=-DSD_PGO=
-if [ "${PGO:-1}" = 1 ]; then pgo=$(bash scripts/pgo.sh build); fi
+pgo=$(bash scripts/pgo.sh build)
 cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release $pgo >/dev/null
 cmake --build build-bench -j "$(nproc)" --target bench_flume bench_scale >/dev/null
 out=bench/results
