@@ -751,7 +751,7 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
                   lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     for (; i + 8 <= n; i += 8) {
         /* the records field by field, in entry order (loads, where gathering them from the
-         * store's scattered lines cost the one-thread step 12-14 %: docs/performance.md §2-000000); cap in the low half
+         * store's scattered lines cost the one-thread step 12-14 %: docs/performance-log.md §P10); cap in the low half
          * of ck and kind in the high half, kind SD_PAIR_SS is 0 */
         const __m256i ck = _mm256_loadu_si256((const __m256i *)(v->ck + i)),
                       a = _mm256_loadu_si256((const __m256i *)(v->a + i)),
@@ -955,7 +955,7 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
          * apart test left to sc_geom256's lanes, its kind read from the view there). A loop over
          * them here, like the scalar filter's, ran a number of times that changes from group to
          * group where logs are, and its exit was mispredicted: the packing ~2.5 % slower
-         * (docs/performance.md) */
+         * (docs/performance-log.md) */
         const int om = ~ss & 15;
         _mm_storeu_si128((__m128i *)(gen + ng), _mm_shuffle_epi8(_mm_add_epi32(_mm_set1_epi32(i), lane),
                                                                  _mm_loadu_si128((const __m128i *)shuf_i32[om])));
@@ -1426,7 +1426,7 @@ static inline void sc_group(const soa_view *v, const int *sg, int nl, int sa[4],
  * with their operations in their order (same bits), lane by lane into q from msc on. A pair
  * whose centre is on the axis or inside the log, or that does not touch after all (near a
  * rim), goes through pair_general as before. Returns the lanes filled. The scalar path spent
- * ~12 % of the settled packing's step here (docs/performance.md §2-00000000000000). */
+ * ~12 % of the settled packing's step here (docs/performance-log.md §P18). */
 __attribute__((target("avx2"))) static int sc_geom256(const sd_world *w, const sd_law *law, const int32_t *ks,
                                                       const soa_view *v, const int *sg, int n, struct sc_lanes *q,
                                                       int msc, sd_pair_out *out, int *used)
@@ -1881,7 +1881,7 @@ static int bt_sphere_face(sd_world *w, int i, int from, int to, bt_batch *q, int
 
 /* the rows of body j that the contact passes read and write, prefetched (six plain prefetches:
  * the same rows through pf_front's line loops lost the front prefetch's whole gain at 1e5,
- * docs/performance.md §2-00000000000) */
+ * docs/performance-log.md §P15) */
 static inline void pf_body(const sd_bodies *b, int j)
 {
     __builtin_prefetch(&b->pos[j], 0, 3);
@@ -2029,7 +2029,7 @@ __attribute__((target("avx2"))) static int near_test256(const sd_world *w, doubl
  * only: the other candidates' spring slots are not touched, which spares each remaking a
  * cache line per candidate. The answers first, alone, then their consequences with one
  * seldom-taken branch: the loop that did both as it went, branching on a coin toss, took 18 ns
- * a candidate (docs/performance.md §2-000000000). */
+ * a candidate (docs/performance-log.md §P13). */
 #define NEAR_BLOCK 512 /* candidates whose answers are made at a time, then kept (owned_update, near_filter) */
 static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, int fresh, int nf)
 {
@@ -2073,7 +2073,7 @@ static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, 
  * ~0.14 ms on two threads, and the marks' own costs (the speeds' histogram, ~35 us a remake,
  * and every candidate of a marked body tested at each step) came to more than the remakes they
  * save: with them off, an A/B in one process (blocks of 500 steps alternated) ran the capture
- * 3.4-5.7 % faster, the flow 1.6 % and the packing 1.2 % (docs/performance.md). */
+ * 3.4-5.7 % faster, the flow 1.6 % and the packing 1.2 % (docs/performance-log.md). */
 #define SD_NEAR_FAST_SHARE 32
 static int near_fast_on = 0;
 
@@ -2286,7 +2286,7 @@ static sd_status near_update(sd_world *w)
  * rows (centre, radius, velocity, spin, force, torque) are the lines the hardware prefetchers
  * miss, six arrays read at a ragged edge. When the step's data do not stay in the last-level
  * cache they come from DRAM, and the pass waits for them: 1e5 and 1e6 spheres cost 1.3-1.9x
- * what 1e4 cost (docs/performance.md §5). So the pass looks PF_CHUNKS chunks ahead, finds the
+ * what 1e4 cost (docs/performance-log.md §5). So the pass looks PF_CHUNKS chunks ahead, finds the
  * highest body those pairs touch and prefetches the rows from the last such body up to it. With
  * the data in cache it only costs instructions (2-4 % at 1e4 spheres), hence the size test: on
  * when the bodies times PF_BYTES_PER_BODY exceed a quarter of the last-level cache (which holds

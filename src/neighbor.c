@@ -981,7 +981,7 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
     const int fixed_i = b->fixed[i], use_mi = fixed_i && mi->start;
 #ifdef SD_SCAN512
     /* a moving body's entries 8 at a time where the CPU has AVX-512 (an AVX2 form, 4 at a
-     * time, was measured and dropped: docs/performance.md §2-0000000) */
+     * time, was measured and dropped: docs/performance-log.md §P11) */
     const int vec = !fixed_i && sd_simd512_on();
     const double bri = b->bound_r[i];
     const sd_vec3 pi = b->pos[i];

@@ -250,7 +250,7 @@ struct sd_world {
     float gq_slack; /* what the prefilter adds to a reach: its rounding, bounded (grid_coords) */
     /* the candidate scan's chunk buffers, kept from one rebuild to the next with what they
      * grew to (neighbor.c; scratch, not saved): made afresh, they took ~300 reallocs a
-     * rebuild (docs/performance.md §2-000000000000000000) */
+     * rebuild (docs/performance-log.md §P22) */
     void *scan_bufs;
     int scan_bufs_n;
     int32_t (*trange)[6]; /* per-triangle cell range in the triangle grid */
