@@ -7,9 +7,17 @@
  * cut, and the walls, whose contacts are not counted), and the count grows with N (2.85 at
  * 1e3, 3.7-3.8 at 1e4, 4.0 at 1e5, 4.4 at 1e6 on 2026-11-27), so the cost per contact-step is
  * printed beside the cost per particle-step. After a short warm-up, `steps` steps are timed.
- * usage: bench_scale SETTLED.data [steps] [--threads N] [--big] [--only N]
- *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/50); --only N runs
- *   that one size for `steps` steps (for profiling). */
+ *
+ * --same: every sphere in the same surroundings at every N. A unit of ~1000 spheres (a square
+ * corner of the bed) is settled once in its own box, then copied: N / unit copies side by
+ * side, each in its own walls (2 mm apart, so no two copies touch). Every copy is the same
+ * settled bed, so the work per sphere (contacts, walls, drift) is the same at 1e3 and at 1e6,
+ * and what changes with N is only where the data live. The timed steps are a multiple of 100
+ * at every N (steps, steps/2, steps/10, steps/20), so that each size takes its share of the
+ * candidate rebuilds (every t_reset = 1 ms).
+ * usage: bench_scale SETTLED.data [steps] [--threads N] [--big] [--only N] [--same]
+ *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/50; steps/20 with
+ *   --same); --only N runs that one size for `steps` steps (for profiling). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -130,16 +138,138 @@ static double run_case(int n, long steps)
     return ps;
 }
 
+/* --same: the settled unit (its spheres and its box) and how each size is timed */
+static grain *u_g;
+static int u_n;
+static double u_ax, u_ay;
+static const double u_gap = 0.002, u_h = 0.3;
+
+/* the unit: the bed's spheres with their centres in its corner [0, s)^2, s the smallest
+ * multiple of 5 mm that holds 1000 of them (or the whole bed), settled in a box that holds them
+ * (walls at 0 and at their furthest extent) for `settle` steps */
+static int make_unit(long settle)
+{
+    u_g = malloc((size_t)g_n * sizeof(grain));
+    if (!u_g) return -1;
+    for (double s = 0.1; u_n < 1000 && u_n < g_n; s += 0.005) {
+        u_n = 0;
+        u_ax = u_ay = 0.0;
+        for (int i = 0; i < g_n; i++) {
+            const grain q = g_src[i];
+            if (q.x >= s || q.y >= s) continue;
+            u_g[u_n++] = q;
+            if (q.x + 0.5 * q.d > u_ax) u_ax = q.x + 0.5 * q.d;
+            if (q.y + 0.5 * q.d > u_ay) u_ay = q.y + 0.5 * q.d;
+        }
+    }
+    sd_world_def d = sd_world_def_default();
+    d.gravity = v3(0, 0, -9.81);
+    sd_world *w;
+    int *gid = malloc((size_t)(u_n > 0 ? u_n : 1) * sizeof(int));
+    if (u_n == 0 || !gid || sd_world_create(&d, &w)) {
+        free(gid);
+        return -1;
+    }
+    for (int i = 0; i < u_n; i++) {
+        sd_sphere_def s = sd_sphere_def_default();
+        s.radius = 0.5 * u_g[i].d;
+        s.pos = v3(u_g[i].x, u_g[i].y, u_g[i].z);
+        s.tag = u_g[i].type - 1;
+        gid[i] = sd_world_add_sphere(w, &s);
+    }
+    quad(w, v3(0, 0, 0), v3(u_ax, 0, 0), v3(u_ax, u_ay, 0), v3(0, u_ay, 0));
+    quad(w, v3(0, 0, 0), v3(u_ax, 0, 0), v3(u_ax, 0, u_h), v3(0, 0, u_h));
+    quad(w, v3(0, u_ay, 0), v3(u_ax, u_ay, 0), v3(u_ax, u_ay, u_h), v3(0, u_ay, u_h));
+    quad(w, v3(0, 0, 0), v3(0, u_ay, 0), v3(0, u_ay, u_h), v3(0, 0, u_h));
+    quad(w, v3(u_ax, 0, 0), v3(u_ax, u_ay, 0), v3(u_ax, u_ay, u_h), v3(u_ax, 0, u_h));
+    sd_status st = sd_world_run(w, settle);
+    const double ke = sd_world_kinetic_energy(w);
+    /* the settled centres, found by their gids */
+    for (int i = 0; i < u_n && !st; i++) {
+        sd_body_state b;
+        st = sd_world_body(w, gid[i], &b);
+        u_g[i].x = b.pos.x, u_g[i].y = b.pos.y, u_g[i].z = b.pos.z;
+    }
+    free(gid);
+    sd_world_destroy(w);
+    if (st) {
+        fprintf(stderr, "unit: %s\n", sd_status_message(st));
+        return -1;
+    }
+    printf("unit: %d spheres in %.4f m x %.4f m, settled %ld steps (kinetic energy %.3e J at the end)\n", u_n, u_ax,
+           u_ay, settle, ke);
+    return 0;
+}
+
+/* about n spheres as whole copies of the unit, each in its own walls, timed over `steps` */
+static double run_same(int n, long steps)
+{
+    int nu = (n + u_n / 2) / u_n;
+    if (nu < 1) nu = 1;
+    int nx = 1;
+    while (nx * nx < nu)
+        nx++;
+    const int ny = (nu + nx - 1) / nx;
+    const double px = u_ax + u_gap, py = u_ay + u_gap, X = nx * px, Y = ny * py;
+    sd_world_def d = sd_world_def_default();
+    d.gravity = v3(0, 0, -9.81);
+    sd_world *w;
+    if (sd_world_create(&d, &w)) return 0;
+    for (int c = 0; c < nu; c++) {
+        const double ox = (c % nx) * px, oy = (c / nx) * py;
+        for (int i = 0; i < u_n; i++) {
+            sd_sphere_def s = sd_sphere_def_default();
+            s.radius = 0.5 * u_g[i].d;
+            s.pos = v3(u_g[i].x + ox, u_g[i].y + oy, u_g[i].z);
+            s.tag = u_g[i].type - 1;
+            sd_world_add_sphere(w, &s);
+        }
+    }
+    /* one floor; each column and row of copies between its own two walls */
+    quad(w, v3(0, 0, 0), v3(X, 0, 0), v3(X, Y, 0), v3(0, Y, 0));
+    for (int i = 0; i < nx; i++)
+        for (int e = 0; e < 2; e++) {
+            const double x = i * px + e * u_ax;
+            quad(w, v3(x, 0, 0), v3(x, Y, 0), v3(x, Y, u_h), v3(x, 0, u_h));
+        }
+    for (int j = 0; j < ny; j++)
+        for (int e = 0; e < 2; e++) {
+            const double y = j * py + e * u_ay;
+            quad(w, v3(0, y, 0), v3(X, y, 0), v3(X, y, u_h), v3(0, y, u_h));
+        }
+    const int ns = nu * u_n;
+    /* warm-up past the first 1 ms rebuild: the lists, the springs and the buffers that grow
+     * once (their pages first touched) are made before the timing */
+    sd_world_run(w, 110);
+    const sd_world_timers k0 = sd_world_get_timers(w);
+    double t0 = sd_now();
+    sd_status st = sd_world_run(w, steps);
+    double wall = sd_now() - t0;
+    const sd_world_timers k1 = sd_world_get_timers(w);
+    if (st) fprintf(stderr, "N %d: %s\n", ns, sd_status_message(st));
+    double ps = (double)ns * steps / wall;
+    const long nc = sd_world_contact_count(w);
+    printf("N %8d  copies %4d  steps %6ld  wall %8.3f s  particle-steps/s %.4e  ns/particle-step %6.1f  "
+           "contacts/sphere %.2f  rebuilds %ld neighbor %.3f s  front-prefetch %s\n",
+           ns, nu, steps, wall, ps, 1e9 / ps, 2.0 * nc / ns, k1.rebuilds - k0.rebuilds, k1.neighbor - k0.neighbor,
+           sd_front_prefetch_on(w) ? "on" : "off");
+    fflush(stdout);
+    sd_world_destroy(w);
+    return ps;
+}
+
 int main(int argc, char **argv)
 {
     long steps = 2000;
-    int threads = 1, big = 0, only = 0;
+    int threads = 1, big = 0, only = 0, same = 0;
     const char *path = NULL;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--threads") && i + 1 < argc)
             threads = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--big"))
             big = 1;
+        else if (!strcmp(argv[i], "--same"))
+            same = 1;
         else if (!strcmp(argv[i], "--only") && i + 1 < argc)
             only = atoi(argv[++i]);
         else if (!path)
@@ -148,12 +278,23 @@ int main(int argc, char **argv)
             steps = atol(argv[i]);
     }
     if (!path || read_data(path)) {
-        fprintf(stderr, "usage: %s SETTLED.data [steps] [--threads N] [--big] [--only N]\n", argv[0]);
+        fprintf(stderr, "usage: %s SETTLED.data [steps] [--threads N] [--big] [--only N] [--same]\n", argv[0]);
         return 2;
     }
 #ifdef _OPENMP
     omp_set_num_threads(threads);
 #endif
+    if (same) {
+        printf("threads %d, copies of one settled unit of the bed of %d spheres, each in its own walls\n", threads,
+               g_n);
+        if (make_unit(50000)) return 1;
+        if (only > 0) return run_same(only, steps) > 0 ? 0 : 1;
+        run_same(1000, steps);
+        run_same(10000, steps / 2);
+        run_same(100000, steps / 10);
+        if (big) run_same(1000000, steps / 20 > 10 ? steps / 20 : 10);
+        return 0;
+    }
     printf("threads %d, bed of %d spheres tiled\n", threads, g_n);
     if (only > 0) return run_case(only, steps) > 0 ? 0 : 1;
     run_case(1000, steps);

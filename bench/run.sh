@@ -86,3 +86,7 @@ done
 # cost per particle-step against N: the same settled bed tiled to 1e3 .. 1e6 spheres
 $pin ./build-bench/bench_scale "$work/settled.data" 2000 --big --threads 1 | tee "$out/scaling.txt"
 $bind ./build-bench/bench_scale "$work/settled.data" 2000 --big --threads 2 | tee -a "$out/scaling.txt"
+# the same with every sphere in the same surroundings at every N: copies of one settled unit of
+# ~1000 spheres, each in its own walls (the contacts per sphere do not change with N)
+$pin ./build-bench/bench_scale "$work/settled.data" 2000 --big --same --threads 1 | tee "$out/scaling_same.txt"
+$bind ./build-bench/bench_scale "$work/settled.data" 2000 --big --same --threads 2 | tee -a "$out/scaling_same.txt"
