@@ -81,6 +81,58 @@ static void quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d)
     sd_world_add_triangle(w, a, c, d, 0);
 }
 
+/* an open box of triangles over [0, X] x [0, Y], walls H high */
+static void open_box(sd_world *w, double X, double Y, double H)
+{
+    quad(w, v3(0, 0, 0), v3(X, 0, 0), v3(X, Y, 0), v3(0, Y, 0));
+    quad(w, v3(0, 0, 0), v3(X, 0, 0), v3(X, 0, H), v3(0, 0, H));
+    quad(w, v3(0, Y, 0), v3(X, Y, 0), v3(X, Y, H), v3(0, Y, H));
+    quad(w, v3(0, 0, 0), v3(0, Y, 0), v3(0, Y, H), v3(0, 0, H));
+    quad(w, v3(X, 0, 0), v3(X, Y, 0), v3(X, Y, H), v3(X, 0, H));
+}
+
+/* a world with vertical gravity, or NULL */
+static sd_world *new_world(void)
+{
+    sd_world_def d = sd_world_def_default();
+    d.gravity = v3(0, 0, -9.81);
+    sd_world *w;
+    return sd_world_create(&d, &w) ? NULL : w;
+}
+
+/* grain g as a sphere, moved by (ox, oy); its gid */
+static int add_grain(sd_world *w, const grain *g, double ox, double oy)
+{
+    sd_sphere_def s = sd_sphere_def_default();
+    s.radius = 0.5 * g->d;
+    s.pos = v3(g->x + ox, g->y + oy, g->z);
+    s.tag = g->type - 1;
+    return sd_world_add_sphere(w, &s);
+}
+
+/* `warm` steps, then `steps` timed; one line: the rate, the cost per particle-step and per
+ * contact-step, the rebuilds in the timed steps and their time (neighbor). `what` goes after
+ * the count. Destroys w; returns particle-steps per second. */
+static double time_world(sd_world *w, int n, const char *what, long warm, long steps)
+{
+    sd_world_run(w, warm);
+    const sd_world_timers k0 = sd_world_get_timers(w);
+    double t0 = sd_now();
+    sd_status st = sd_world_run(w, steps);
+    double wall = sd_now() - t0;
+    const sd_world_timers k1 = sd_world_get_timers(w);
+    if (st) fprintf(stderr, "N %d: %s\n", n, sd_status_message(st));
+    double ps = (double)n * steps / wall;
+    const long nc = sd_world_contact_count(w);
+    printf("N %8d  %ssteps %6ld  wall %8.3f s  particle-steps/s %.4e  ns/particle-step %6.1f  contacts/sphere %.2f  "
+           "ns/contact-step %5.1f  rebuilds %ld neighbor %.3f s  front-prefetch %s\n",
+           n, what, steps, wall, ps, 1e9 / ps, 2.0 * nc / n, 1e9 * wall / ((double)(nc > 0 ? nc : 1) * steps),
+           k1.rebuilds - k0.rebuilds, k1.neighbor - k0.neighbor, sd_front_prefetch_on(w) ? "on" : "off");
+    fflush(stdout);
+    sd_world_destroy(w);
+    return ps;
+}
+
 static double run_case(int n, long steps)
 {
     const double tile = 0.3; /* the reservoir: x in [0, 0.3], y in [0, 0.3] */
@@ -100,42 +152,19 @@ static double run_case(int n, long steps)
                 all[k++] = q;
             }
     qsort(all, (size_t)ntot, sizeof(grain), cmp_y);
-    sd_world_def d = sd_world_def_default();
-    d.gravity = v3(0, 0, -9.81);
-    sd_world *w;
-    if (sd_world_create(&d, &w)) return 0;
-    double ymax = 0, L = nt * tile, H = 0.5;
+    sd_world *w = new_world();
+    if (!w) {
+        free(all);
+        return 0;
+    }
+    double ymax = 0;
     for (int i = 0; i < n; i++) {
-        sd_sphere_def s = sd_sphere_def_default();
-        s.radius = 0.5 * all[i].d;
-        s.pos = v3(all[i].x, all[i].y, all[i].z);
-        s.tag = all[i].type - 1;
-        sd_world_add_sphere(w, &s);
-        if (all[i].y + s.radius > ymax) ymax = all[i].y + s.radius;
+        add_grain(w, &all[i], 0.0, 0.0);
+        if (all[i].y + 0.5 * all[i].d > ymax) ymax = all[i].y + 0.5 * all[i].d;
     }
     free(all);
-    quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, ymax, 0), v3(0, ymax, 0));
-    quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, 0, H), v3(0, 0, H));
-    quad(w, v3(0, ymax, 0), v3(L, ymax, 0), v3(L, ymax, H), v3(0, ymax, H));
-    quad(w, v3(0, 0, 0), v3(0, ymax, 0), v3(0, ymax, H), v3(0, 0, H));
-    quad(w, v3(L, 0, 0), v3(L, ymax, 0), v3(L, ymax, H), v3(L, 0, H));
-    sd_world_run(w, 50); /* warm-up: candidate lists, history, caches */
-    const sd_world_timers k0 = sd_world_get_timers(w);
-    double t0 = sd_now();
-    sd_status st = sd_world_run(w, steps);
-    double wall = sd_now() - t0;
-    const sd_world_timers k1 = sd_world_get_timers(w);
-    if (st) fprintf(stderr, "N %d: %s\n", n, sd_status_message(st));
-    double ps = (double)n * steps / wall;
-    const long nc = sd_world_contact_count(w);
-    /* the rebuilds in the timed steps and their time (neighbor), and the cost per contact */
-    printf("N %8d  steps %6ld  wall %8.3f s  particle-steps/s %.4e  ns/particle-step %6.1f  contacts/sphere %.2f  "
-           "ns/contact-step %5.1f  rebuilds %ld neighbor %.3f s  front-prefetch %s\n",
-           n, steps, wall, ps, 1e9 / ps, 2.0 * nc / n, 1e9 * wall / ((double)(nc > 0 ? nc : 1) * steps),
-           k1.rebuilds - k0.rebuilds, k1.neighbor - k0.neighbor, sd_front_prefetch_on(w) ? "on" : "off");
-    fflush(stdout);
-    sd_world_destroy(w);
-    return ps;
+    open_box(w, nt * tile, ymax, 0.5);
+    return time_world(w, n, "", 50, steps); /* (warm-up: candidate lists, history, caches) */
 }
 
 /* --same: the settled unit (its spheres and its box) and how each size is timed */
@@ -162,26 +191,15 @@ static int make_unit(long settle)
             if (q.y + 0.5 * q.d > u_ay) u_ay = q.y + 0.5 * q.d;
         }
     }
-    sd_world_def d = sd_world_def_default();
-    d.gravity = v3(0, 0, -9.81);
-    sd_world *w;
     int *gid = malloc((size_t)(u_n > 0 ? u_n : 1) * sizeof(int));
-    if (u_n == 0 || !gid || sd_world_create(&d, &w)) {
+    sd_world *w = u_n > 0 && gid ? new_world() : NULL;
+    if (!w) {
         free(gid);
         return -1;
     }
-    for (int i = 0; i < u_n; i++) {
-        sd_sphere_def s = sd_sphere_def_default();
-        s.radius = 0.5 * u_g[i].d;
-        s.pos = v3(u_g[i].x, u_g[i].y, u_g[i].z);
-        s.tag = u_g[i].type - 1;
-        gid[i] = sd_world_add_sphere(w, &s);
-    }
-    quad(w, v3(0, 0, 0), v3(u_ax, 0, 0), v3(u_ax, u_ay, 0), v3(0, u_ay, 0));
-    quad(w, v3(0, 0, 0), v3(u_ax, 0, 0), v3(u_ax, 0, u_h), v3(0, 0, u_h));
-    quad(w, v3(0, u_ay, 0), v3(u_ax, u_ay, 0), v3(u_ax, u_ay, u_h), v3(0, u_ay, u_h));
-    quad(w, v3(0, 0, 0), v3(0, u_ay, 0), v3(0, u_ay, u_h), v3(0, 0, u_h));
-    quad(w, v3(u_ax, 0, 0), v3(u_ax, u_ay, 0), v3(u_ax, u_ay, u_h), v3(u_ax, 0, u_h));
+    for (int i = 0; i < u_n; i++)
+        gid[i] = add_grain(w, &u_g[i], 0.0, 0.0);
+    open_box(w, u_ax, u_ay, u_h);
     sd_status st = sd_world_run(w, settle);
     const double ke = sd_world_kinetic_energy(w);
     /* the settled centres, found by their gids */
@@ -211,20 +229,11 @@ static double run_same(int n, long steps)
         nx++;
     const int ny = (nu + nx - 1) / nx;
     const double px = u_ax + u_gap, py = u_ay + u_gap, X = nx * px, Y = ny * py;
-    sd_world_def d = sd_world_def_default();
-    d.gravity = v3(0, 0, -9.81);
-    sd_world *w;
-    if (sd_world_create(&d, &w)) return 0;
-    for (int c = 0; c < nu; c++) {
-        const double ox = (c % nx) * px, oy = (c / nx) * py;
-        for (int i = 0; i < u_n; i++) {
-            sd_sphere_def s = sd_sphere_def_default();
-            s.radius = 0.5 * u_g[i].d;
-            s.pos = v3(u_g[i].x + ox, u_g[i].y + oy, u_g[i].z);
-            s.tag = u_g[i].type - 1;
-            sd_world_add_sphere(w, &s);
-        }
-    }
+    sd_world *w = new_world();
+    if (!w) return 0;
+    for (int c = 0; c < nu; c++)
+        for (int i = 0; i < u_n; i++)
+            add_grain(w, &u_g[i], (c % nx) * px, (c / nx) * py);
     /* one floor; each column and row of copies between its own two walls */
     quad(w, v3(0, 0, 0), v3(X, 0, 0), v3(X, Y, 0), v3(0, Y, 0));
     for (int i = 0; i < nx; i++)
@@ -237,25 +246,11 @@ static double run_same(int n, long steps)
             const double y = j * py + e * u_ay;
             quad(w, v3(0, y, 0), v3(X, y, 0), v3(X, y, u_h), v3(0, y, u_h));
         }
-    const int ns = nu * u_n;
     /* warm-up past the first 1 ms rebuild: the lists, the springs and the buffers that grow
      * once (their pages first touched) are made before the timing */
-    sd_world_run(w, 110);
-    const sd_world_timers k0 = sd_world_get_timers(w);
-    double t0 = sd_now();
-    sd_status st = sd_world_run(w, steps);
-    double wall = sd_now() - t0;
-    const sd_world_timers k1 = sd_world_get_timers(w);
-    if (st) fprintf(stderr, "N %d: %s\n", ns, sd_status_message(st));
-    double ps = (double)ns * steps / wall;
-    const long nc = sd_world_contact_count(w);
-    printf("N %8d  copies %4d  steps %6ld  wall %8.3f s  particle-steps/s %.4e  ns/particle-step %6.1f  "
-           "contacts/sphere %.2f  rebuilds %ld neighbor %.3f s  front-prefetch %s\n",
-           ns, nu, steps, wall, ps, 1e9 / ps, 2.0 * nc / ns, k1.rebuilds - k0.rebuilds, k1.neighbor - k0.neighbor,
-           sd_front_prefetch_on(w) ? "on" : "off");
-    fflush(stdout);
-    sd_world_destroy(w);
-    return ps;
+    char what[32];
+    snprintf(what, sizeof what, "copies %4d  ", nu);
+    return time_world(w, nu * u_n, what, 110, steps);
 }
 
 int main(int argc, char **argv)
