@@ -3,7 +3,8 @@
 # packing of the sphere-only flume (4619 spheres, SPEC §8 split, paper's springs, Δt = 1e-5 s),
 # in the same phases: dense settled bed at rest behind the gate, then flowing after the gate
 # is removed. Reports particle-steps per second (median of REPEAT runs) and the ratio, for
-# 1 and 2 threads / ranks; then the scaling benchmark. Results go to bench/results/.
+# 1 and 2 threads / ranks; then the scaling benchmark. Results go to bench/results/; the
+# machine's own share of a two-thread step (bench_machine) first, to machine.txt.
 #   usage: [PGO=0] bash bench/run.sh [REPEAT] [NDENSE] [NFLOW]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,7 +19,7 @@ bash scripts/setup.sh --bench
 # made first if need be); PGO=0 for the plain build
 pgo=$(bash scripts/pgo.sh build)
 cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release $pgo >/dev/null
-cmake --build build-bench -j "$(nproc)" --target bench_flume bench_scale >/dev/null
+cmake --build build-bench -j "$(nproc)" --target bench_flume bench_scale bench_machine >/dev/null
 out=bench/results
 mkdir -p "$out"
 work=$(mktemp -d)
@@ -38,6 +39,9 @@ lammps_rates() {
   awk '/^Loop time of/ {n++; t=$4; s=$9; a=$12; if (n==3) d=a*s/t; if (n==4) f=a*s/t} END {print d, f}' "$1"
 }
 echo "machine: $(lscpu | awk -F: '/Model name/ {gsub(/^ +/,"",$2); print $2}'), $(nproc) cores" | tee "$out/side_by_side.txt"
+# what the machine itself takes from two threads this hour (interruptions, both CPUs busy, a
+# barrier a step), before the codes run
+env OMP_PROC_BIND=true OMP_PLACES=cores ./build-bench/bench_machine 2 | tee "$out/machine.txt"
 for p in 1 2; do
   : > "$work/l$p"; : > "$work/s$p"
   for r in $(seq "$REPEAT"); do
