@@ -8,7 +8,13 @@
  *                    [--t-reset S]
  * --t-reset S: rebuild the candidates every S seconds as well as when anything moved more than
  * half the margin (SPEC §4; default 1e-3 s). A large S leaves only the displacement rule, the
- * policy of LAMMPS's `neigh_modify delay 0 every 1 check yes` in flume.in. */
+ * policy of LAMMPS's `neigh_modify delay 0 every 1 check yes` in flume.in.
+ * --ab SWITCH [--ab-groups G]: instead of timing the dense and flow phases, compare one of the
+ * engine's switches off (A) and on (B) inside this process: G groups (default 20) of four
+ * blocks of 250 steps in the order A B B A, on the settled bed, then again after the gate has
+ * been open for 3000 steps. Prints the median and quartiles of each group's B/A time: a slow
+ * spell of the machine falls on both forms alike (docs/performance.md §3). SWITCH is one of
+ * the names in ab_switches below. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -61,6 +67,67 @@ static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
+}
+
+/* The engine's runtime switches an A/B run can alternate (each returns its previous setting). */
+static const struct {
+    const char *name;
+    int (*set)(int);
+} ab_switches[] = {
+    {"law256", sd_ss_law256_set},      {"sc_geom", sd_sc_geom_set},     {"sc_lanes", sd_sc_lanes_set},
+    {"near_fast", sd_near_fast_set},   {"wall_near", sd_wall_near_set}, {"prefetch", sd_front_prefetch_set},
+    {"move_lanes", sd_move_lanes_set}, {"cyl_batch", sd_cyl_batch_set}, {"scan_pre", sd_scan_pre_set},
+    {"bed_cache", sd_bed_cache_set},
+};
+enum { AB_SWITCHES = sizeof ab_switches / sizeof ab_switches[0] };
+
+/* The switch named `name`; -2 (and a message listing them) when there is none. */
+static int ab_find(const char *prog, const char *name)
+{
+    for (int k = 0; k < AB_SWITCHES; k++)
+        if (!strcmp(name, ab_switches[k].name)) return k;
+    fprintf(stderr, "%s: --ab: no switch named '%s'; the switches:", prog, name);
+    for (int k = 0; k < AB_SWITCHES; k++)
+        fprintf(stderr, " %s", ab_switches[k].name);
+    fprintf(stderr, "\n");
+    return -2;
+}
+
+/* G groups of A B B A blocks of 250 steps with the switch off (A) and on (B); the switch is
+ * left as it was. Returns non-zero if a step fails. */
+static int ab_phase(sd_world *w, const char *name, int sw, int groups, int n)
+{
+    enum { AB_BLOCK = 250 };
+    const int was = ab_switches[sw].set(0);
+    double *r = malloc((size_t)groups * sizeof(double)), ta = 0.0, tb = 0.0;
+    if (!r) return 1;
+    sd_status st = SD_OK;
+    for (int g = 0; g < groups && !st; g++) {
+        static const int order[4] = {0, 1, 1, 0};
+        double t[4];
+        for (int k = 0; k < 4 && !st; k++) {
+            ab_switches[sw].set(order[k]);
+            const double t0 = sd_now();
+            st = sd_world_run(w, AB_BLOCK);
+            t[k] = sd_now() - t0;
+        }
+        r[g] = (t[1] + t[2]) / (t[0] + t[3]);
+        ta += t[0] + t[3], tb += t[1] + t[2];
+    }
+    ab_switches[sw].set(was);
+    if (st) {
+        fprintf(stderr, "%s: %s\n", name, sd_status_message(st));
+        free(r);
+        return 1;
+    }
+    qsort(r, (size_t)groups, sizeof(double), cmp_double);
+    const double steps = 2.0 * AB_BLOCK * groups;
+    printf("AB %-6s %s: B/A median %.4f quartiles %.4f-%.4f (%d groups) | off %.4e on %.4e particle-steps/s\n", name,
+           ab_switches[sw].name, r[groups / 2], r[groups / 4], r[(3 * groups) / 4], groups, n * steps / ta,
+           n * steps / tb);
+    fflush(stdout);
+    free(r);
+    return 0;
 }
 
 static double phase(sd_world *w, const char *name, long steps, int n)
@@ -129,18 +196,35 @@ static void bulk(sd_world *w, const char *name, int n)
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        fprintf(stderr, "usage: %s DATAFILE [ndrop nsettle ndense nflow] [--threads N] [--write-settled FILE] [--t-reset S]\n", argv[0]);
+        fprintf(stderr,
+                "usage: %s DATAFILE [ndrop nsettle ndense nflow] [--threads N] [--write-settled FILE] [--t-reset S] "
+                "[--ab SWITCH [--ab-groups G]]\n",
+                argv[0]);
         return 2;
     }
     long steps[4] = {20000, 40000, 20000, 20000};
     int threads = 1, ns = 0;
     double t_reset = 0.0; /* 0: the engine's default (SPEC §4) */
     const char *settled = NULL;
+    int ab = -1, ab_groups = 20;
     for (int i = 2; i < argc; i++) {
-        if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
-        else if (!strcmp(argv[i], "--write-settled") && i + 1 < argc) settled = argv[++i];
-        else if (!strcmp(argv[i], "--t-reset") && i + 1 < argc) t_reset = atof(argv[++i]);
-        else if (ns < 4) steps[ns++] = atol(argv[i]);
+        if (!strcmp(argv[i], "--ab") && i + 1 < argc)
+            ab = ab_find(argv[0], argv[++i]);
+        else if (!strcmp(argv[i], "--ab-groups") && i + 1 < argc)
+            ab_groups = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--threads") && i + 1 < argc)
+            threads = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--write-settled") && i + 1 < argc)
+            settled = argv[++i];
+        else if (!strcmp(argv[i], "--t-reset") && i + 1 < argc)
+            t_reset = atof(argv[++i]);
+        else if (ns < 4)
+            steps[ns++] = atol(argv[i]);
+    }
+    if (ab == -2) return 2;
+    if (ab_groups < 1) {
+        fprintf(stderr, "%s: --ab-groups must be at least 1\n", argv[0]);
+        return 2;
     }
 #ifdef _OPENMP
     omp_set_num_threads(threads);
@@ -174,6 +258,16 @@ int main(int argc, char **argv)
             }
             fclose(f);
         }
+    }
+    if (ab >= 0) {
+        /* the A/B comparison in place of the timed phases */
+        if (ab_phase(w, "dense", ab, ab_groups, n)) return 1;
+        sd_world_set_group_active(w, 3, 0);
+        if (sd_world_run(w, 3000)) return 1;
+        if (ab_phase(w, "flow", ab, ab_groups, n)) return 1;
+        printf("state hash %016llx\n", (unsigned long long)sd_world_state_hash(w));
+        sd_world_destroy(w);
+        return 0;
     }
     phase(w, "dense", steps[2], n);
     sd_world_set_group_active(w, 3, 0);
