@@ -13,22 +13,15 @@
  *      interruptions and uneven speeds cost a code that synchronises every W µs (sabodem's
  *      two-thread step is ~150-350 µs on the paper's run).
  *   usage: bench_machine [SECONDS per probe, default 2] [--step W_us, default 170] */
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
+
+#include "world_internal.h" /* (sd_now: the library's monotonic clock) */
 
 #ifdef _OPENMP
 #include <omp.h>
 #endif
-
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 static int nthreads_max(void)
 {
@@ -62,10 +55,10 @@ typedef struct {
 static void gap_probe(double secs, gaps *g)
 {
     memset(g, 0, sizeof *g);
-    const double t0 = now();
+    const double t0 = sd_now();
     double last = t0, t = t0;
     do {
-        t = now();
+        t = sd_now();
         const double d = t - last;
         last = t;
         if (d > 2e-6) {
@@ -95,11 +88,11 @@ static double fma_probe(long reps, double *sink)
     for (int k = 0; k < 8; k++)
         a[k] = 1.0 + 1e-9 * k;
     const double m = 0.9999999, c = 1e-9;
-    const double t0 = now();
+    const double t0 = sd_now();
     for (long r = 0; r < reps; r++)
         for (int k = 0; k < 8; k++)
             a[k] = a[k] * m + c;
-    const double t = now() - t0;
+    const double t = sd_now() - t0;
     double s = 0.0;
     for (int k = 0; k < 8; k++)
         s += a[k];
@@ -111,14 +104,14 @@ static double fma_probe(long reps, double *sink)
 static double stream_probe(const double *x, long n, long reps, double *sink)
 {
     double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-    const double t0 = now();
+    const double t0 = sd_now();
     for (long r = 0; r < reps; r++) {
         for (long i = 0; i < n; i += 4) {
             s0 += x[i], s1 += x[i + 1], s2 += x[i + 2], s3 += x[i + 3];
         }
         s0 *= 0.5; /* (keeps the sums finite and the loop from being folded) */
     }
-    const double t = now() - t0;
+    const double t = sd_now() - t0;
     *sink += s0 + s1 + s2 + s3;
     return t;
 }
@@ -241,24 +234,24 @@ int main(int argc, char **argv)
         double t_free = 0.0, t_sync = 0.0, s = 0.0;
         /* each thread its steps, no barrier: the wall time is the slower thread's sum */
         {
-            const double t0 = now();
+            const double t0 = sd_now();
 #pragma omp parallel num_threads(2) reduction(+ : s)
             for (long k = 0; k < steps; k++)
                 s += work(wr);
-            t_free = now() - t0;
+            t_free = sd_now() - t0;
         }
         /* the same steps with a barrier after each (one parallel region, as a pass's barrier) */
         {
-            const double t0 = now();
+            const double t0 = sd_now();
 #pragma omp parallel num_threads(2) reduction(+ : s)
             for (long k = 0; k < steps; k++) {
                 s += work(wr);
 #pragma omp barrier
             }
-            t_sync = now() - t0;
+            t_sync = sd_now() - t0;
         }
         keep += s;
-        printf("4. %ld steps of %.0f us on both threads: %.3f s free, %.3f s with a barrier a step: +%.1f %% "
+        printf("4. %ld steps of %.0f us on both threads: %.3f s free, %.3f s with a barrier a step: %+.1f %% "
                "(%.1f us a step)\n",
                steps, step_us, t_free, t_sync, 100.0 * (t_sync / t_free - 1.0), 1e6 * (t_sync - t_free) / steps);
     }
