@@ -279,22 +279,23 @@ int main(int argc, char **argv)
 #ifdef _OPENMP
     omp_set_num_threads(threads);
 #endif
+    /* the mode's sizes: 1e3, 1e4, 1e5 (steps, steps/2, steps/10), and with --big 1e6 (steps/20
+     * with --same, steps/50 without) */
+    double (*run)(int, long) = run_case;
+    long big_div = 50;
     if (same) {
         printf("threads %d, copies of one settled unit of the bed of %d spheres, each in its own walls\n", threads,
                g_n);
         if (make_unit(50000)) return 1;
-        if (only > 0) return run_same(only, steps) > 0 ? 0 : 1;
-        run_same(1000, steps);
-        run_same(10000, steps / 2);
-        run_same(100000, steps / 10);
-        if (big) run_same(1000000, steps / 20 > 10 ? steps / 20 : 10);
-        return 0;
+        run = run_same;
+        big_div = 20;
+    } else {
+        printf("threads %d, bed of %d spheres tiled\n", threads, g_n);
     }
-    printf("threads %d, bed of %d spheres tiled\n", threads, g_n);
-    if (only > 0) return run_case(only, steps) > 0 ? 0 : 1;
-    run_case(1000, steps);
-    run_case(10000, steps / 2);
-    run_case(100000, steps / 10);
-    if (big) run_case(1000000, steps / 50 > 10 ? steps / 50 : 10);
+    if (only > 0) return run(only, steps) > 0 ? 0 : 1;
+    run(1000, steps);
+    run(10000, steps / 2);
+    run(100000, steps / 10);
+    if (big) run(1000000, steps / big_div > 10 ? steps / big_div : 10);
     return 0;
 }
