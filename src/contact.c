@@ -696,26 +696,43 @@ static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m
 
 /* Which hand-written SIMD kernels run: SD_SIMD_SCALAR (none), SD_SIMD_AVX2 (contact.c's touch
  * filter, gather and sums and run.c's fluid forces in 4 lanes) or SD_SIMD_AVX512 (the filter,
- * gather and fluid forces in 8 lanes, the sums in 4, neighbor.c's cell scan), the best the CPU has unless the
- * environment caps it (SD_SIMD = scalar, avx2 or avx512; SD_NO_AVX512=1 keeps the scalar loops, as it always has).
- * Decided once at load, before any thread; every level gives the same bits (the tests run them all). */
+ * gather and fluid forces in 8 lanes, the sums in 4, neighbor.c's cell scan). By default the
+ * best the CPU has, except on AMD: there the AVX2 kernels, whose bodies' rows are loaded and
+ * transposed, beat the AVX-512 ones, which gather them lane by lane (the gathers are slow on
+ * Zen 4 and 5; the paper's run took 177-181 s with them on a Zen 5 VM and 140 s without,
+ * docs/performance-log.md §P36). The environment sets it: SD_SIMD = scalar, avx2 or avx512 (the
+ * last one the AVX-512 kernels on any CPU that has them); SD_NO_AVX512=1 keeps the scalar loops,
+ * as it always has. Decided once at load, before any thread; every level gives the same bits
+ * (the tests run them all). */
 static int simd_level;
 
 static int simd_cpu_level(void)
 {
 #ifdef SD_FILTER512
+    __builtin_cpu_init(); /* (called from a constructor) */
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")) return SD_SIMD_AVX512;
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt")) return SD_SIMD_AVX2;
 #endif
     return SD_SIMD_SCALAR;
 }
 
+/* the level the CPU has, less AVX-512 on AMD (see above) */
+static int simd_default_level(void)
+{
+    const int level = simd_cpu_level();
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (level == SD_SIMD_AVX512 && __builtin_cpu_is("amd")) return SD_SIMD_AVX2;
+#endif
+    return level;
+}
+
 __attribute__((constructor)) static void simd_level_init(void)
 {
-    int level = simd_cpu_level();
+    int level = simd_default_level();
+    const char *c = getenv("SD_SIMD");
+    if (c && strcmp(c, "avx512") == 0) level = simd_cpu_level();
     const char *e = getenv("SD_NO_AVX512");
     if (e && *e && strcmp(e, "0") != 0) level = SD_SIMD_SCALAR;
-    const char *c = getenv("SD_SIMD");
     if (c && (strcmp(c, "scalar") == 0 || strcmp(c, "0") == 0)) level = SD_SIMD_SCALAR;
     if (c && (strcmp(c, "avx2") == 0 || strcmp(c, "1") == 0) && level > SD_SIMD_AVX2) level = SD_SIMD_AVX2;
     simd_level = level;

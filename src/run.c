@@ -711,6 +711,9 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
     fprintf(f, "  \"simulated_time_s\": %.6f,\n  \"steps\": %ld,\n  \"wall_time_s\": %.3f,\n", c->w->time, c->w->step,
             sd_now() - c->wall0);
     fprintf(f, "  \"state_hash\": \"%016llx\",\n", (unsigned long long)sd_world_state_hash(c->w));
+    /* the hand-written kernels this run used (the same bits at every level: for the speed) */
+    static const char *const simd_names[] = {"scalar", "avx2", "avx512"};
+    fprintf(f, "  \"simd_kernels\": \"%s\",\n", simd_names[sd_simd_level()]);
     if (c->restarted_from) {
         fprintf(f, "  \"restarted_from\": \"");
         for (const char *q = c->restarted_from; *q; q++)
