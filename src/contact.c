@@ -698,44 +698,45 @@ static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m
  * filter, gather and sums and run.c's fluid forces in 4 lanes) or SD_SIMD_AVX512 (the filter,
  * gather and fluid forces in 8 lanes, the sums in 4, neighbor.c's cell scan). By default the
  * best the CPU has, except on AMD: there the AVX2 kernels, whose bodies' rows are loaded and
- * transposed, beat the AVX-512 ones, which gather them lane by lane (the gathers are slow on
- * Zen 4 and 5; the paper's run took 177-181 s with them on a Zen 5 VM and 140 s without,
- * docs/performance-log.md §P36). The environment sets it: SD_SIMD = scalar, avx2 or avx512 (the
- * last one the AVX-512 kernels on any CPU that has them); SD_NO_AVX512=1 keeps the scalar loops,
- * as it always has. Decided once at load, before any thread; every level gives the same bits
- * (the tests run them all). */
+ * transposed, beat the AVX-512 ones, which gather them lane by lane (on a Zen 5 VM the paper's
+ * run took 177-205 s with them and 140-158 s without, docs/performance-log.md §P36). The environment sets it: SD_SIMD =
+ * scalar, avx2 or avx512 (the last one the AVX-512 kernels on any CPU that has them); SD_NO_AVX512=1 keeps the scalar
+ * loops, as it always has. Decided once at load, before any thread; every level gives the same bits (the tests run them
+ * all). */
 static int simd_level;
 
 static int simd_cpu_level(void)
 {
 #ifdef SD_FILTER512
-    __builtin_cpu_init(); /* (called from a constructor) */
+    __builtin_cpu_init(); /* (called from constructors) */
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")) return SD_SIMD_AVX512;
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt")) return SD_SIMD_AVX2;
 #endif
     return SD_SIMD_SCALAR;
 }
 
-/* the level the CPU has, less AVX-512 on AMD (see above) */
-static int simd_default_level(void)
+int sd_simd_choose(int cpu, int amd, const char *sd_simd, const char *no_avx512)
 {
-    const int level = simd_cpu_level();
-#if defined(__x86_64__) && defined(__GNUC__)
-    if (level == SD_SIMD_AVX512 && __builtin_cpu_is("amd")) return SD_SIMD_AVX2;
-#endif
+    int level = cpu == SD_SIMD_AVX512 && amd ? SD_SIMD_AVX2 : cpu; /* (see above) */
+    if (sd_simd && strcmp(sd_simd, "avx512") == 0) level = cpu;
+    if (no_avx512 && *no_avx512 && strcmp(no_avx512, "0") != 0) level = SD_SIMD_SCALAR;
+    if (sd_simd && (strcmp(sd_simd, "scalar") == 0 || strcmp(sd_simd, "0") == 0)) level = SD_SIMD_SCALAR;
+    if (sd_simd && (strcmp(sd_simd, "avx2") == 0 || strcmp(sd_simd, "1") == 0) && level > SD_SIMD_AVX2)
+        level = SD_SIMD_AVX2;
     return level;
 }
 
 __attribute__((constructor)) static void simd_level_init(void)
 {
-    int level = simd_default_level();
-    const char *c = getenv("SD_SIMD");
-    if (c && strcmp(c, "avx512") == 0) level = simd_cpu_level();
-    const char *e = getenv("SD_NO_AVX512");
-    if (e && *e && strcmp(e, "0") != 0) level = SD_SIMD_SCALAR;
-    if (c && (strcmp(c, "scalar") == 0 || strcmp(c, "0") == 0)) level = SD_SIMD_SCALAR;
-    if (c && (strcmp(c, "avx2") == 0 || strcmp(c, "1") == 0) && level > SD_SIMD_AVX2) level = SD_SIMD_AVX2;
-    simd_level = level;
+    int amd = 0;
+#if defined(__x86_64__) && defined(__GNUC__)
+    __builtin_cpu_init(); /* (a constructor may run before libgcc's own) */
+    amd = __builtin_cpu_is("amd") != 0;
+#endif
+    const char *e = getenv("SD_SIMD");
+    if (e && strcmp(e, "scalar") && strcmp(e, "0") && strcmp(e, "avx2") && strcmp(e, "1") && strcmp(e, "avx512"))
+        fprintf(stderr, "warning: SD_SIMD=%s is not one of scalar, avx2, avx512: ignored\n", e);
+    simd_level = sd_simd_choose(simd_cpu_level(), amd, e, getenv("SD_NO_AVX512"));
 }
 
 int sd_simd_level(void) { return simd_level; }

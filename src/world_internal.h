@@ -412,10 +412,14 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
 /* The hand-written SIMD kernels: none (the scalar loops), AVX2 (contact.c's touch filter, gather
  * and sums, run.c's fluid forces, 4 lanes) or AVX-512 (the filter, gather and fluid forces in 8
  * lanes, the sums in 4, neighbor.c's cell scan).
- * The best the CPU has by default; the environment's SD_SIMD (scalar, avx2, avx512) caps it,
- * SD_NO_AVX512=1 keeps the scalar loops. The same bits at every level. */
+ * The best the CPU has by default, but AVX2 on AMD; the environment's SD_SIMD (scalar, avx2,
+ * avx512) sets it, SD_NO_AVX512=1 keeps the scalar loops. The same bits at every level. */
 enum { SD_SIMD_SCALAR = 0, SD_SIMD_AVX2 = 1, SD_SIMD_AVX512 = 2 };
 int sd_simd_level(void);
+/* The level picked at load from the CPU's (cpu), whether it is an AMD one (amd: AVX2 by default
+ * where it has AVX-512, which is slower there) and the environment's SD_SIMD and SD_NO_AVX512
+ * (NULL when unset). */
+int sd_simd_choose(int cpu, int amd, const char *sd_simd, const char *no_avx512);
 /* For tests; not to be called while a world steps: asks for a level (capped at what the CPU
  * has) and returns the previous one. */
 int sd_simd_level_set(int level);

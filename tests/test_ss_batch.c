@@ -155,8 +155,31 @@ static void run(int threads, cases *c, long *bad)
     sd_world_destroy(w);
 }
 
+/* The level picked at load (sd_simd_choose): the CPU's best, AVX2 on an AMD CPU with AVX-512
+ * (slower there, docs/performance-log.md §P36), and what SD_SIMD and SD_NO_AVX512 ask for. */
+static void simd_choice(void)
+{
+    enum { S = SD_SIMD_SCALAR, A2 = SD_SIMD_AVX2, A5 = SD_SIMD_AVX512 };
+    CHECK(sd_simd_choose(A5, 0, NULL, NULL) == A5); /* Intel with AVX-512 */
+    CHECK(sd_simd_choose(A5, 1, NULL, NULL) == A2); /* AMD with AVX-512 */
+    CHECK(sd_simd_choose(A2, 1, NULL, NULL) == A2); /* AMD without (the Zen 3 VM) */
+    CHECK(sd_simd_choose(S, 0, NULL, NULL) == S);
+    CHECK(sd_simd_choose(A5, 1, "avx512", NULL) == A5); /* asked for */
+    CHECK(sd_simd_choose(A2, 1, "avx512", NULL) == A2); /* not there: the CPU's */
+    CHECK(sd_simd_choose(A5, 0, "avx2", NULL) == A2);
+    CHECK(sd_simd_choose(A5, 0, "1", NULL) == A2);
+    CHECK(sd_simd_choose(A5, 0, "scalar", NULL) == S);
+    CHECK(sd_simd_choose(A5, 1, "0", NULL) == S);
+    CHECK(sd_simd_choose(A5, 0, NULL, "1") == S);
+    CHECK(sd_simd_choose(A5, 0, "avx512", "1") == S); /* SD_NO_AVX512 keeps the scalar loops */
+    CHECK(sd_simd_choose(A5, 0, NULL, "0") == A5);
+    CHECK(sd_simd_choose(A5, 0, NULL, "") == A5);
+    CHECK(sd_simd_choose(A5, 0, "bogus", NULL) == A5); /* an unknown value changes nothing */
+}
+
 int main(void)
 {
+    simd_choice();
     /* every level of the hand-written SIMD kernels the CPU has (the touch filter and gather in
      * the scalar loops, 4 AVX2 lanes, 8 AVX-512 lanes), each on 1 and 2 threads */
     int levels = 0;
