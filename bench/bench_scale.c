@@ -17,7 +17,11 @@
  * candidate rebuilds (every t_reset = 1 ms).
  * usage: bench_scale SETTLED.data [steps] [--threads N] [--big] [--only N] [--same]
  *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/50; steps/20 with
- *   --same); --only N runs that one size for `steps` steps (for profiling). */
+ *   --same); --only N runs that one size for `steps` steps (for profiling).
+ * --ab prefetch|avx512 [--ab-groups G]: at each size, after the warm-up, instead of the timed
+ *   steps, G groups (default 16) of four 100-step blocks with the switch off (A) and on (B) in
+ *   the order A B B A; prints the median and quartiles of B/A (prefetch: the pass's front
+ *   prefetch forced off and on; avx512: the AVX2 kernels against the AVX-512 ones). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -113,9 +117,59 @@ static int add_grain(sd_world *w, const grain *g, double ox, double oy)
 /* `warm` steps, then `steps` timed; one line: the rate, the cost per particle-step and per
  * contact-step, the rebuilds in the timed steps and their time (neighbor). `what` goes after
  * the count. Destroys w; returns particle-steps per second. */
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* --ab: the switch alternated, and how many groups */
+static const char *ab_name;
+static int ab_groups = 16;
+
+static int ab_set(const char *name, int on)
+{
+    if (!strcmp(name, "prefetch")) return sd_front_prefetch_set(on);
+    return sd_simd_level_set(on ? SD_SIMD_AVX512 : SD_SIMD_AVX2) == SD_SIMD_AVX512; /* avx512 */
+}
+
+/* ab_groups groups of four blocks of 100 steps, the switch off (A) and on (B) in the order
+ * A B B A; prints the median and quartiles of each group's B/A time. The switch goes back to
+ * its default (the prefetch to auto, the SIMD level to what it was). */
+static void ab_world(sd_world *w, int n)
+{
+    enum { BLOCK = 100 };
+    double *r = malloc((size_t)ab_groups * sizeof(double));
+    if (!r) return;
+    const int level = sd_simd_level();
+    for (int g = 0; g < ab_groups; g++) {
+        static const int order[4] = {0, 1, 1, 0};
+        double t[4];
+        for (int k = 0; k < 4; k++) {
+            ab_set(ab_name, order[k]);
+            const double t0 = sd_now();
+            sd_world_run(w, BLOCK);
+            t[k] = sd_now() - t0;
+        }
+        r[g] = (t[1] + t[2]) / (t[0] + t[3]);
+    }
+    sd_front_prefetch_set(-1);
+    sd_simd_level_set(level);
+    qsort(r, (size_t)ab_groups, sizeof(double), cmp_double);
+    printf("AB N %8d %s: B/A median %.4f quartiles %.4f-%.4f (%d groups of A B B A, %d steps a block)\n", n, ab_name,
+           r[ab_groups / 2], r[ab_groups / 4], r[(3 * ab_groups) / 4], ab_groups, BLOCK);
+    fflush(stdout);
+    free(r);
+}
+
 static double time_world(sd_world *w, int n, const char *what, long warm, long steps)
 {
     sd_world_run(w, warm);
+    if (ab_name) {
+        ab_world(w, n);
+        sd_world_destroy(w);
+        return 1.0;
+    }
     const sd_world_timers k0 = sd_world_get_timers(w);
     double t0 = sd_now();
     sd_status st = sd_world_run(w, steps);
@@ -267,14 +321,38 @@ int main(int argc, char **argv)
             same = 1;
         else if (!strcmp(argv[i], "--only") && i + 1 < argc)
             only = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--ab") && i + 1 < argc)
+            ab_name = argv[++i];
+        else if (!strcmp(argv[i], "--ab-groups") && i + 1 < argc)
+            ab_groups = atoi(argv[++i]);
         else if (!path)
             path = argv[i];
         else
             steps = atol(argv[i]);
     }
     if (!path || read_data(path)) {
-        fprintf(stderr, "usage: %s SETTLED.data [steps] [--threads N] [--big] [--only N] [--same]\n", argv[0]);
+        fprintf(stderr,
+                "usage: %s SETTLED.data [steps] [--threads N] [--big] [--only N] [--same] [--ab prefetch|avx512 "
+                "[--ab-groups G]]\n",
+                argv[0]);
         return 2;
+    }
+    if (ab_name) {
+        if (strcmp(ab_name, "prefetch") && strcmp(ab_name, "avx512")) {
+            fprintf(stderr, "%s: --ab: no switch named '%s'; the switches: prefetch avx512\n", argv[0], ab_name);
+            return 2;
+        }
+        if (ab_groups < 1 || ab_groups > 1000) {
+            fprintf(stderr, "%s: --ab-groups must be between 1 and 1000\n", argv[0]);
+            return 2;
+        }
+        const int was = sd_simd_level_set(SD_SIMD_AVX512);
+        const int has = sd_simd_level() == SD_SIMD_AVX512;
+        sd_simd_level_set(was);
+        if (!strcmp(ab_name, "avx512") && !has) {
+            fprintf(stderr, "%s: --ab avx512: this CPU has no AVX-512 (both forms would be AVX2)\n", argv[0]);
+            return 2;
+        }
     }
 #ifdef _OPENMP
     omp_set_num_threads(threads);
