@@ -2326,7 +2326,7 @@ int sd_front_prefetch_set(int mode)
  * L3 of our AMD VM), else sysconf, else 32 MiB. On AMD a core reaches the L3 of its own complex
  * only, 32 MiB on Zen 2 to 5, where sysconf may give the whole package's (508 MiB on the Zen 5
  * VM, which has no cache sizes in sysfs: the prefetch stayed off at 1e5 spheres, where it makes
- * one thread's step 20 % faster, docs/performance-log.md §P36): so there a figure from sysconf
+ * one thread's step 8-22 % faster and two threads' no slower, docs/performance-log.md §P36): so there a figure from sysconf
  * above 32 MiB counts as 32 MiB. Read once at load, before any thread. */
 static long llc_size;
 
