@@ -69,10 +69,6 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* The AVX-512 kernels (on) against the AVX2 ones (off): the default on AMD is off, elsewhere on
- * (contact.c, simd_level_init); on a CPU without AVX-512 both forms are AVX2 (main says so). */
-static int avx512_set(int on) { return sd_simd_level_set(on ? SD_SIMD_AVX512 : SD_SIMD_AVX2) == SD_SIMD_AVX512; }
-
 /* The engine's runtime switches an A/B run can alternate (each returns its previous setting). */
 static const struct {
     const char *name;
@@ -81,7 +77,7 @@ static const struct {
     {"law256", sd_ss_law256_set},      {"sc_geom", sd_sc_geom_set},     {"sc_lanes", sd_sc_lanes_set},
     {"near_fast", sd_near_fast_set},   {"wall_near", sd_wall_near_set}, {"prefetch", sd_front_prefetch_set},
     {"move_lanes", sd_move_lanes_set}, {"cyl_batch", sd_cyl_batch_set}, {"scan_pre", sd_scan_pre_set},
-    {"bed_cache", sd_bed_cache_set},   {"avx512", avx512_set},
+    {"bed_cache", sd_bed_cache_set},   {"avx512", sd_simd512_set},
 };
 enum { AB_SWITCHES = sizeof ab_switches / sizeof ab_switches[0] };
 
@@ -226,14 +222,9 @@ int main(int argc, char **argv)
             steps[ns++] = atol(argv[i]);
     }
     if (ab == -2) return 2;
-    if (ab >= 0 && ab_switches[ab].set == avx512_set) {
-        const int was = sd_simd_level_set(SD_SIMD_AVX512);
-        const int has = sd_simd_level() == SD_SIMD_AVX512;
-        sd_simd_level_set(was);
-        if (!has) {
-            fprintf(stderr, "%s: --ab avx512: this CPU has no AVX-512 (both forms would be AVX2)\n", argv[0]);
-            return 2;
-        }
+    if (ab >= 0 && ab_switches[ab].set == sd_simd512_set && sd_simd_cpu_level() < SD_SIMD_AVX512) {
+        fprintf(stderr, "%s: --ab avx512: this CPU has no AVX-512 (both forms would be AVX2)\n", argv[0]);
+        return 2;
     }
     if (ab_groups < 1) {
         fprintf(stderr, "%s: --ab-groups must be at least 1\n", argv[0]);

@@ -715,28 +715,44 @@ static int simd_cpu_level(void)
     return SD_SIMD_SCALAR;
 }
 
+/* An SD_SIMD value as a level; -1 when unset or not one of the names */
+static int simd_env_level(const char *s)
+{
+    if (!s) return -1;
+    if (!strcmp(s, "scalar") || !strcmp(s, "0")) return SD_SIMD_SCALAR;
+    if (!strcmp(s, "avx2") || !strcmp(s, "1")) return SD_SIMD_AVX2;
+    if (!strcmp(s, "avx512")) return SD_SIMD_AVX512;
+    return -1;
+}
+
 int sd_simd_choose(int cpu, int amd, const char *sd_simd, const char *no_avx512)
 {
+    const int ask = simd_env_level(sd_simd);
     int level = cpu == SD_SIMD_AVX512 && amd ? SD_SIMD_AVX2 : cpu; /* (see above) */
-    if (sd_simd && strcmp(sd_simd, "avx512") == 0) level = cpu;
+    if (ask == SD_SIMD_AVX512) level = cpu;
     if (no_avx512 && *no_avx512 && strcmp(no_avx512, "0") != 0) level = SD_SIMD_SCALAR;
-    if (sd_simd && (strcmp(sd_simd, "scalar") == 0 || strcmp(sd_simd, "0") == 0)) level = SD_SIMD_SCALAR;
-    if (sd_simd && (strcmp(sd_simd, "avx2") == 0 || strcmp(sd_simd, "1") == 0) && level > SD_SIMD_AVX2)
-        level = SD_SIMD_AVX2;
+    if (ask == SD_SIMD_SCALAR) level = SD_SIMD_SCALAR;
+    if (ask == SD_SIMD_AVX2 && level > SD_SIMD_AVX2) level = SD_SIMD_AVX2;
     return level;
+}
+
+/* Whether the CPU is an AMD one (for the SIMD level and the L3's size; from constructors) */
+static int cpu_is_amd(void)
+{
+#if defined(__x86_64__) && defined(__GNUC__)
+    __builtin_cpu_init(); /* (a constructor may run before libgcc's own) */
+    return __builtin_cpu_is("amd") != 0;
+#else
+    return 0;
+#endif
 }
 
 __attribute__((constructor)) static void simd_level_init(void)
 {
-    int amd = 0;
-#if defined(__x86_64__) && defined(__GNUC__)
-    __builtin_cpu_init(); /* (a constructor may run before libgcc's own) */
-    amd = __builtin_cpu_is("amd") != 0;
-#endif
     const char *e = getenv("SD_SIMD");
-    if (e && strcmp(e, "scalar") && strcmp(e, "0") && strcmp(e, "avx2") && strcmp(e, "1") && strcmp(e, "avx512"))
+    if (e && simd_env_level(e) < 0)
         fprintf(stderr, "warning: SD_SIMD=%s is not one of scalar, avx2, avx512: ignored\n", e);
-    simd_level = sd_simd_choose(simd_cpu_level(), amd, e, getenv("SD_NO_AVX512"));
+    simd_level = sd_simd_choose(simd_cpu_level(), cpu_is_amd(), e, getenv("SD_NO_AVX512"));
 }
 
 int sd_simd_level(void) { return simd_level; }
@@ -749,6 +765,10 @@ int sd_simd_level_set(int level)
 }
 
 int sd_simd512_on(void) { return simd_level >= SD_SIMD_AVX512; }
+
+int sd_simd_cpu_level(void) { return simd_cpu_level(); }
+
+int sd_simd512_set(int on) { return sd_simd_level_set(on ? SD_SIMD_AVX512 : SD_SIMD_AVX2) == SD_SIMD_AVX512; }
 
 #ifdef SD_FILTER512
 /* Step 1 of bb_chunk (the touch filter) for 8 pairs at a time, in AVX-512: the pair records
@@ -2343,10 +2363,7 @@ __attribute__((constructor)) static void llc_init(void)
 #ifdef _SC_LEVEL3_CACHE_SIZE
     if (v <= 0) {
         v = sysconf(_SC_LEVEL3_CACHE_SIZE);
-#if defined(__x86_64__) && defined(__GNUC__)
-        __builtin_cpu_init();
-        if (v > 32L << 20 && __builtin_cpu_is("amd")) v = 32L << 20;
-#endif
+        if (v > 32L << 20 && cpu_is_amd()) v = 32L << 20;
     }
 #endif
     llc_size = v > 0 ? v : 32L << 20;

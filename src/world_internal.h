@@ -425,6 +425,11 @@ int sd_simd_choose(int cpu, int amd, const char *sd_simd, const char *no_avx512)
 int sd_simd_level_set(int level);
 /* Whether the AVX-512 kernels run now (sd_simd_level() is SD_SIMD_AVX512). */
 int sd_simd512_on(void);
+/* The best level the CPU has (what sd_simd_level_set can reach). */
+int sd_simd_cpu_level(void);
+/* For A/B runs, like the other switches: the AVX-512 kernels (on) or the AVX2 ones (off); returns
+ * whether the AVX-512 ones ran before. Where the CPU has no AVX-512 both are AVX2. */
+int sd_simd512_set(int on);
 /* The sphere-log pairs touching at one point through the law in lanes (contact.c) or all of
  * them through apply_manifold: the same bits either way. For tests, like sd_simd_level_set;
  * returns the previous setting. sd_sc_lanes_count: the lanes run so far, and of them the ones
