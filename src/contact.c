@@ -2326,10 +2326,13 @@ static sd_status near_update(sd_world *w)
  * cache they come from DRAM, and the pass waits for them: 1e5 and 1e6 spheres cost 1.3-1.9x
  * what 1e4 cost (docs/performance-log.md §5). So the pass looks PF_CHUNKS chunks ahead, finds the
  * highest body those pairs touch and prefetches the rows from the last such body up to it. With
- * the data in cache it only costs instructions (2-4 % at 1e4 spheres), hence the size test: on
- * when the bodies times PF_BYTES_PER_BODY exceed a quarter of the last-level cache (which holds
- * more than this step's data; a VM shares it with others). On our AMD VM (32 MiB) the gain
- * starts between 15,000 and 20,000 spheres, where the test puts it (16,384). */
+ * the data in cache it only costs instructions (2-4 % at 1e4 spheres on the Zen 3 VM, 6-7 % on
+ * the Zen 5 VM), hence the size test: on when the bodies times PF_BYTES_PER_BODY exceed a quarter
+ * of the last-level cache (which holds more than this step's data; a VM shares it with others).
+ * On the Zen 3 VM (32 MiB) the gain starts between 15,000 and 20,000 spheres, where the test puts
+ * it (16,384); on the Zen 5 VM only near 60,000 (at 30,000 on is 6-13 % slower), so the size
+ * test is only the guess before the run has tried both (sd_pf_trial, world.c) and for scenes too
+ * small to try (below SD_PF_MIN_BODIES, where it says off). */
 #define PF_CHUNKS 2
 #define PF_BYTES_PER_BODY 512 /* about what one step reads and writes per sphere (bodies, pairs) */
 #define PF_LLC_SHARE 4        /* the data may take 1 / PF_LLC_SHARE of the last-level cache */
@@ -2373,10 +2376,21 @@ __attribute__((constructor)) static void llc_init(void)
     if (e && !strcmp(e, "off")) front_prefetch_mode = SD_PREFETCH_OFF;
 }
 
+int sd_front_prefetch_mode(void) { return front_prefetch_mode; }
+
 int sd_front_prefetch_on(const sd_world *w)
 {
+    static const int order[4] = {0, 1, 1, 0}; /* a trial's blocks: off on on off */
     if (front_prefetch_mode != SD_PREFETCH_AUTO) return front_prefetch_mode;
+    if (w->pf.blk >= 0) return order[w->pf.blk & 3];
+    if (w->pf.verdict >= 0) return w->pf.verdict;
     return (long)w->b.n * PF_BYTES_PER_BODY * PF_LLC_SHARE > llc_size;
+}
+
+int sd_front_prefetch_verdict(const sd_world *w, double *ratio)
+{
+    if (ratio) *ratio = w->pf.ratio;
+    return w->pf.verdict;
 }
 
 static inline void pf_rows(const void *p0, const void *p1, int write)

@@ -714,6 +714,16 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
     /* the hand-written kernels this run used (the same bits at every level: for the speed) */
     static const char *const simd_names[] = {"scalar", "avx2", "avx512"};
     fprintf(f, "  \"simd_kernels\": \"%s\",\n", simd_names[sd_simd_level()]);
+    /* the front prefetch (a hint: the same bits either way) and, in auto mode, the last trial's
+     * verdict and its time on over off */
+    double pf_ratio = 0.0;
+    const int pf_verdict = sd_front_prefetch_verdict(c->w, &pf_ratio), pf_mode = sd_front_prefetch_mode();
+    if (pf_mode != SD_PREFETCH_AUTO)
+        fprintf(f, "  \"front_prefetch\": \"%s (set)\",\n", pf_mode ? "on" : "off");
+    else if (pf_verdict < 0)
+        fprintf(f, "  \"front_prefetch\": \"%s (no trial)\",\n", sd_front_prefetch_on(c->w) ? "on" : "off");
+    else
+        fprintf(f, "  \"front_prefetch\": \"%s (trial: on/off %.3f)\",\n", pf_verdict ? "on" : "off", pf_ratio);
     if (c->restarted_from) {
         fprintf(f, "  \"restarted_from\": \"");
         for (const char *q = c->restarted_from; *q; q++)

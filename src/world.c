@@ -62,6 +62,8 @@ sd_status sd_world_create(const sd_world_def *def, sd_world **out)
     w->mov_stamp = -1;
     w->near_stamp = -1;
     w->near_mark_rb = -1;
+    w->pf.verdict = -1;
+    w->pf.blk = -1;
 #ifdef _OPENMP
     if (def->threads > 0) omp_set_num_threads(def->threads);
 #endif
@@ -326,6 +328,50 @@ double sd_world_front_x(const sd_world *w)
     return f;
 }
 
+/* The front prefetch's trial (sd_pf_trial): a block lasts about 2e6 particle-steps (2 to 50
+ * steps), so that a trial takes a few seconds at any size. */
+void sd_pf_trial_before(sd_world *w)
+{
+    sd_pf_trial *p = &w->pf;
+    const int n = w->b.n;
+    if (p->blk >= 0 || sd_front_prefetch_mode() != SD_PREFETCH_AUTO || n < SD_PF_MIN_BODIES) return;
+    if (w->step < p->next && 4 * labs((long)n - p->n) <= n) return;
+    const long s = 2000000L / n;
+    p->blk_steps = s < 2 ? 2 : s > 100 ? 100 : (int)s;
+    p->blk = p->in_blk = 0;
+    p->n = n;
+    p->acc = 0.0;
+}
+
+static int cmp_dbl(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+void sd_pf_trial_after(sd_world *w, double pass_s)
+{
+    sd_pf_trial *p = &w->pf;
+    if (p->blk < 0) return;
+    p->acc += pass_s;
+    if (++p->in_blk < p->blk_steps) return;
+    p->t[p->blk & 3] = p->acc;
+    p->acc = 0.0;
+    p->in_blk = 0;
+    if ((++p->blk & 3) == 0) {
+        const double off = p->t[0] + p->t[3];
+        p->r[p->blk / 4 - 1] = off > 0.0 ? (p->t[1] + p->t[2]) / off : 1.0;
+    }
+    if (p->blk < 4 * SD_PF_GROUPS) return;
+    double r[SD_PF_GROUPS];
+    memcpy(r, p->r, sizeof r);
+    qsort(r, SD_PF_GROUPS, sizeof r[0], cmp_dbl);
+    p->ratio = r[SD_PF_GROUPS / 2];
+    p->verdict = p->ratio < 1.0;
+    p->blk = -1;
+    p->next = w->step + SD_PF_RETRY;
+}
+
 sd_status sd_world_step(sd_world *w)
 {
     sd_status st;
@@ -339,9 +385,11 @@ sd_status sd_world_step(sd_world *w)
     }
     double t1 = sd_now();
     if ((st = sd_world_moving_update(w))) return st;
+    sd_pf_trial_before(w);
     int integrated;
     if ((st = sd_contact_compute(w, &integrated))) return st;
     double t2 = sd_now();
+    sd_pf_trial_after(w, t2 - t1);
     double t3 = sd_now(); /* the wall loads are summed when asked for (sd_contact_gather) */
     if (!integrated) sd_integrate(w);
     double t4 = sd_now();

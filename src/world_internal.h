@@ -196,6 +196,22 @@ typedef struct {
     long used; /* rebuilds that took the bed from here (for the tests) */
 } sd_bed_cache;
 
+/* The body pass's front prefetch (contact.c) in auto mode is tried, not guessed from the cache
+ * sizes: SD_PF_GROUPS groups of four blocks of steps, off on on off, each block's pass time
+ * summed; the verdict is the median over the groups of (on) / (off) below 1. Tried again every
+ * SD_PF_RETRY steps and when the body count moves by a quarter. A hint to the memory system
+ * only: the same bits whatever the verdict. */
+enum { SD_PF_GROUPS = 8, SD_PF_RETRY = 100000, SD_PF_MIN_BODIES = 2048 };
+typedef struct {
+    int verdict;           /* -1: no trial finished yet (the cache-size rule holds), 0 off, 1 on */
+    int blk;               /* the trial's block now (0 .. 4 * SD_PF_GROUPS - 1), -1 none running */
+    int in_blk, blk_steps; /* steps done in the block, steps a block */
+    int n;                 /* bodies when the last trial began */
+    long next;             /* the step from which the next trial may begin */
+    double acc, t[4], r[SD_PF_GROUPS];
+    double ratio; /* the last verdict's median of (on) / (off) */
+} sd_pf_trial;
+
 struct sd_world {
     sd_world_def def;
     sd_ext_force_fn ext_fn; /* NULL: ext_force applies (set by the driver, not saved) */
@@ -307,6 +323,8 @@ struct sd_world {
      * nor removed (body_version) and the body grid keeps its layout (neighbor.c) */
     long body_version;
     sd_bed_cache bed;
+    /* derived, never saved: the front prefetch's trial in auto mode (world.c, sd_pf_trial) */
+    sd_pf_trial pf;
 };
 
 /* The near skin as a fraction of the margin. Any skin gives the same bits; 0.05-0.1 ran
@@ -461,12 +479,20 @@ long sd_move_lanes_count(void); /* the groups of four spheres the calling thread
 long sd_sc_geom_count(void);
 long sd_sc_lanes_count(long *redo);
 /* The body-body pass's prefetch of the bodies it is about to reach for the first time (contact.c):
- * SD_PREFETCH_AUTO (the default: on when the step's data outgrow a quarter of the last-level cache), _OFF or
- * _ON. A hint to the memory system only: the same bits either way. For tests and benchmarks, like
- * sd_simd_level_set; returns the previous setting. sd_front_prefetch_on: whether it runs for w. */
+ * SD_PREFETCH_AUTO (the default: tried on and off during the run, sd_pf_trial; before the first
+ * verdict, and below SD_PF_MIN_BODIES, on when the step's data outgrow a quarter of the last-level
+ * cache), _OFF or _ON. A hint to the memory system only: the same bits either way. For tests and
+ * benchmarks, like sd_simd_level_set; returns the previous setting. sd_front_prefetch_on: whether
+ * it runs for w now. sd_front_prefetch_mode: the setting. sd_front_prefetch_verdict: the last
+ * trial's verdict for w (-1 none yet) and its ratio (on / off). */
 enum { SD_PREFETCH_AUTO = -1, SD_PREFETCH_OFF = 0, SD_PREFETCH_ON = 1 };
 int sd_front_prefetch_set(int mode);
+int sd_front_prefetch_mode(void);
 int sd_front_prefetch_on(const sd_world *w);
+int sd_front_prefetch_verdict(const sd_world *w, double *ratio);
+/* world.c: the trial's bookkeeping around one step's pass (pass_s: its time) */
+void sd_pf_trial_before(sd_world *w);
+void sd_pf_trial_after(sd_world *w, double pass_s);
 /* the first k with mov[k] >= i (mov ascends) */
 static inline int sd_mov_lower(const int32_t *mov, int n, int i)
 {

@@ -1,5 +1,6 @@
 /* OpenMP identity (issue: speed): the reduced flume with logs, every loop forced parallel,
  * gives the same bits on 1 and 2 threads, through packing, gate removal and flow. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -66,10 +67,13 @@ static sd_run_result run_driver(int threads)
     return r;
 }
 
-/* A bed of 3150 spheres (10 and 5 mm, jittered lattice) collapsing in a box: over ten
- * thousand candidate pairs, so the parallel body-body pass splits the bodies into owned
- * ranges with cross pairs between them. */
-static uint64_t run_bed(int threads, long *contacts, int *pairs, int *cross)
+static int bed_verdict;  /* the front prefetch's trial on the last bed run (-1 none) */
+static double bed_ratio; /* and its ratio, on / off */
+
+/* A bed of 3150 spheres (10 and 5 mm, jittered lattice) collapsing in a box for `steps` steps:
+ * over ten thousand candidate pairs, so the parallel body-body pass splits the bodies into
+ * owned ranges with cross pairs between them. */
+static uint64_t run_bed(int threads, long steps, long *contacts, int *pairs, int *cross)
 {
 #ifdef _OPENMP
     omp_set_num_threads(threads);
@@ -100,7 +104,8 @@ static uint64_t run_bed(int threads, long *contacts, int *pairs, int *cross)
         sd_world_add_triangle(w, c[q[f][0]], c[q[f][1]], c[q[f][2]], 0);
         sd_world_add_triangle(w, c[q[f][0]], c[q[f][2]], c[q[f][3]], 0);
     }
-    CHECK(sd_world_run(w, 1500) == SD_OK);
+    CHECK(sd_world_run(w, steps) == SD_OK);
+    bed_verdict = sd_front_prefetch_verdict(w, &bed_ratio);
     *contacts = sd_world_contact_count(w);
     *pairs = w->bb.n;
     *cross = 0;
@@ -166,14 +171,81 @@ static uint64_t run_sc_cases(int steps, int *seen)
     return h;
 }
 
+/* The front prefetch's trial (sd_pf_trial) driven by hand with made-up pass times: its blocks
+ * run off on on off, each the blocks' steps long; the verdict is on exactly when the on blocks
+ * took less, its ratio that of the times; no new trial before SD_PF_RETRY steps, one at once
+ * when the body count moves by more than a quarter. */
+static void check_pf_trial(double t_on, double t_off)
+{
+    static const int order[4] = {0, 1, 1, 0};
+    sd_world_def d = sd_world_def_default();
+    sd_world *w;
+    CHECK(sd_world_create(&d, &w) == SD_OK);
+    if (!w) return;
+    const int n = SD_PF_MIN_BODIES + 100;
+    for (int i = 0; i < n; i++) {
+        sd_sphere_def s = sd_sphere_def_default();
+        s.radius = 0.004;
+        s.pos = v3(0.01 * (i % 50), 0.01 * (i / 50), 0.0);
+        sd_world_add_sphere(w, &s);
+    }
+    const int was = sd_front_prefetch_set(SD_PREFETCH_AUTO);
+    CHECK(sd_front_prefetch_verdict(w, NULL) == -1);
+    int steps = 0, bad = 0;
+    while (sd_front_prefetch_verdict(w, NULL) < 0 && steps < 10000) {
+        sd_pf_trial_before(w);
+        CHECK(w->pf.blk >= 0);
+        const int on = sd_front_prefetch_on(w);
+        bad += on != order[w->pf.blk & 3];
+        sd_pf_trial_after(w, on ? t_on : t_off);
+        w->step++;
+        steps++;
+    }
+    double r = 0.0;
+    const int v = sd_front_prefetch_verdict(w, &r);
+    printf("prefetch trial, pass %.2f s on and %.2f s off: verdict %d, ratio %.4f after %d steps (%d a block)\n", t_on,
+           t_off, v, r, steps, w->pf.blk_steps);
+    CHECK(bad == 0);
+    CHECK(steps == 4 * SD_PF_GROUPS * w->pf.blk_steps);
+    CHECK(w->pf.blk_steps == 100); /* (2e6 particle-steps a block, at most 100 steps) */
+    CHECK(v == (t_on < t_off));
+    CHECK(fabs(r - t_on / t_off) < 1e-12);
+    CHECK(sd_front_prefetch_on(w) == v);
+    /* no new trial until SD_PF_RETRY steps on */
+    CHECK(w->pf.next == w->step - 1 + SD_PF_RETRY);
+    w->step = w->pf.next - 1;
+    sd_pf_trial_before(w);
+    CHECK(w->pf.blk == -1);
+    w->step++;
+    sd_pf_trial_before(w);
+    CHECK(w->pf.blk == 0);
+    w->pf.blk = -1;
+    /* ... or the body count moved by more than a quarter */
+    w->pf.next = w->step + 1000;
+    w->pf.n = n - n / 3;
+    sd_pf_trial_before(w);
+    CHECK(w->pf.blk == 0);
+    /* a setting other than auto runs no trial */
+    w->pf.blk = -1;
+    w->pf.n = 1;
+    sd_front_prefetch_set(SD_PREFETCH_OFF);
+    sd_pf_trial_before(w);
+    CHECK(w->pf.blk == -1);
+    CHECK(sd_front_prefetch_on(w) == 0);
+    sd_front_prefetch_set(was);
+    sd_world_destroy(w);
+}
+
 int main(void)
 {
+    check_pf_trial(0.9, 1.0);
+    check_pf_trial(1.1, 1.0);
     {
         long c[3] = {0, 0, 0};
         int np = 0, nc[3] = {0, 0, 0};
         uint64_t h[3];
         for (int t = 0; t < 3; t++)
-            h[t] = run_bed(t + 1, &c[t], &np, &nc[t]);
+            h[t] = run_bed(t + 1, 1500, &c[t], &np, &nc[t]);
         printf("dense bed of 3150 spheres, %d candidate pairs: hash %016llx (1 thread), %016llx (2), %016llx (3); "
                "%ld contacts; %d and %d cross pairs on 2 and 3 threads\n",
                np, (unsigned long long)h[0], (unsigned long long)h[1], (unsigned long long)h[2], c[0], nc[1], nc[2]);
@@ -215,17 +287,30 @@ int main(void)
         sd_simd_level_set(was);
     }
     {
-        /* the body-body pass's prefetch of the bodies' front (on by default only for scenes
-         * larger than a quarter of the last-level cache) forced on: a hint, the same bits on 1 and 2 threads,
-         * on the log flume and on the dense bed */
+        /* the body-body pass's prefetch of the bodies' front forced on, forced off, and auto
+         * (tried on and off in blocks during the run, sd_pf_trial): a hint, the same bits on 1 and
+         * 2 threads, on the log flume and on the dense bed */
         const int was = sd_front_prefetch_set(SD_PREFETCH_ON);
         long cp1 = 0, cp2 = 0, cb = 0;
         int npb = 0, ncb = 0;
-        const uint64_t hp1 = run(1, &cp1), hp2 = run(2, &cp2), hb = run_bed(2, &cb, &npb, &ncb);
-        sd_front_prefetch_set(was);
+        const uint64_t hp1 = run(1, &cp1), hp2 = run(2, &cp2), hb = run_bed(2, 3400, &cb, &npb, &ncb);
+        const int v_on = bed_verdict;
+        sd_front_prefetch_set(SD_PREFETCH_OFF);
+        long cbf = 0;
+        const uint64_t hbf = run_bed(2, 3400, &cbf, &npb, &ncb);
+        const int v_off = bed_verdict;
+        sd_front_prefetch_set(SD_PREFETCH_AUTO);
         long cb0 = 0;
         int npb0 = 0, ncb0 = 0;
-        const uint64_t hb0 = run_bed(2, &cb0, &npb0, &ncb0);
+        const uint64_t hb0 = run_bed(2, 3400, &cb0, &npb0, &ncb0);
+        sd_front_prefetch_set(was);
+        /* auto: the 3150 spheres are tried off and on in their first 3,200 steps (32 blocks of 100) */
+        printf("front prefetch forced off: bed hash %016llx; auto: trial verdict %d, on / off %.3f\n",
+               (unsigned long long)hbf, bed_verdict, bed_ratio);
+        CHECK(v_on == -1 && v_off == -1);
+        CHECK(bed_verdict == 0 || bed_verdict == 1);
+        CHECK(bed_ratio > 0.0 && bed_ratio < 100.0 && bed_verdict == (bed_ratio < 1.0));
+        CHECK(hbf == hb0 && cbf == cb0);
         printf("front prefetch on: log flume hash %016llx (1 thread), %016llx (2); bed hash %016llx (off: %016llx)\n",
                (unsigned long long)hp1, (unsigned long long)hp2, (unsigned long long)hb, (unsigned long long)hb0);
         CHECK(hp1 == h1 && hp2 == h1 && cp1 == c1 && cp2 == c1);
