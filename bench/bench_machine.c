@@ -11,8 +11,14 @@
  *   4. a synchronised step: both threads do the same fixed work of W µs and meet at a barrier,
  *      N times, against the same work without the barrier. The difference is what the machine's
  *      interruptions and uneven speeds cost a code that synchronises every W µs (sabodem's
- *      two-thread step is ~150-350 µs on the paper's run).
+ *      two-thread step is ~150-350 µs on the paper's run);
+ *   5. the caches as one thread sees them: over blocks of 256 KiB to 256 MiB, the time of a
+ *      dependent walk through the block's lines in a random order (each load waits for the one
+ *      before: the latency, TLB included) and the rate of a plain read of it. Where the walk's
+ *      time jumps is the cache a step's data must fit in (docs/performance.md §6: sysconf and
+ *      cpuid tell a VM's guest the host's sizes, not its share).
  *   usage: bench_machine [SECONDS per probe, default 2] [--step W_us, default 170] */
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -122,6 +128,18 @@ static double work(long reps)
     double sink = 0.0;
     fma_probe(reps, &sink);
     return sink;
+}
+
+/* 5. a walk of `steps` loads through a cycle of the lines of a (n lines), returns ns a load */
+static double walk_probe(const uint64_t *a, long steps, uint64_t *sink)
+{
+    uint64_t p = 0;
+    const double t0 = sd_now();
+    for (long k = 0; k < steps; k++)
+        p = a[p];
+    const double t = sd_now() - t0;
+    *sink += p;
+    return 1e9 * t / (double)steps;
 }
 
 static int cmp_double(const void *a, const void *b)
@@ -254,6 +272,48 @@ int main(int argc, char **argv)
         printf("4. %ld steps of %.0f us on both threads: %.3f s free, %.3f s with a barrier a step: %+.1f %% "
                "(%.1f us a step)\n",
                steps, step_us, t_free, t_sync, 100.0 * (t_sync / t_free - 1.0), 1e6 * (t_sync - t_free) / steps);
+    }
+    /* 5 */
+    {
+        printf("5. the caches (one thread): a dependent walk through random lines, and a plain read\n");
+        uint64_t wsink = 0;
+        for (size_t bytes = (size_t)256 << 10; bytes <= (size_t)256 << 20; bytes *= 2) {
+            const size_t n = bytes / 64; /* lines; the walk uses the first word of each */
+            uint64_t *a = aligned_alloc(64, bytes);
+            uint32_t *perm = malloc(n * sizeof(uint32_t));
+            if (!a || !perm) {
+                free(a);
+                free(perm);
+                break;
+            }
+            for (size_t i = 0; i < n; i++)
+                perm[i] = (uint32_t)i;
+            uint64_t st = 88172645463325252ULL;
+            for (size_t i = n - 1; i > 0; i--) { /* a random cycle through every line */
+                st ^= st << 13, st ^= st >> 7, st ^= st << 17;
+                const size_t j = st % (i + 1);
+                const uint32_t t = perm[i];
+                perm[i] = perm[j];
+                perm[j] = t;
+            }
+            for (size_t i = 0; i < bytes / 8; i++)
+                a[i] = 1;
+            for (size_t i = 0; i < n; i++)
+                a[(size_t)perm[i] * 8] = (uint64_t)perm[(i + 1) % n] * 8;
+            free(perm);
+            const long steps = (long)(5e6 * (secs / 2.0)) + (long)n;
+            walk_probe(a, (long)n, &wsink); /* (warm) */
+            const double ns = walk_probe(a, steps, &wsink);
+            double sink = 0.0, t;
+            long r = 1;
+            while ((t = stream_probe((const double *)a, (long)(bytes / 8), r, &sink)) < 0.05 * secs)
+                r *= 2;
+            keep += sink;
+            printf("  %7zu KiB: walk %6.1f ns a load; read %5.1f GB/s\n", bytes >> 10, ns,
+                   (double)bytes * (double)r / t / 1e9);
+            free(a);
+        }
+        keep += (double)(wsink & 1);
     }
     if (keep == 0.12345) printf("(%g)\n", keep);
     return 0;
