@@ -334,7 +334,11 @@ void sd_pf_trial_before(sd_world *w)
 {
     sd_pf_trial *p = &w->pf;
     const int n = w->b.n;
-    if (p->blk >= 0 || sd_front_prefetch_mode() != SD_PREFETCH_AUTO || n < SD_PF_MIN_BODIES) return;
+    if (sd_front_prefetch_mode() != SD_PREFETCH_AUTO) {
+        p->blk = -1; /* (a trial under a forced setting would time one mode against itself) */
+        return;
+    }
+    if (p->blk >= 0 || n < SD_PF_MIN_BODIES) return;
     if (w->step < p->next && 4 * labs((long)n - p->n) <= n) return;
     const long s = 2000000L / n;
     p->blk_steps = s < 2 ? 2 : s > 100 ? 100 : (int)s;

@@ -225,10 +225,12 @@ static void check_pf_trial(double t_on, double t_off)
     w->pf.n = n - n / 3;
     sd_pf_trial_before(w);
     CHECK(w->pf.blk == 0);
-    /* a setting other than auto runs no trial */
-    w->pf.blk = -1;
-    w->pf.n = 1;
+    /* a setting other than auto runs no trial, and ends one that was running */
+    CHECK(w->pf.blk == 0);
     sd_front_prefetch_set(SD_PREFETCH_OFF);
+    sd_pf_trial_before(w);
+    CHECK(w->pf.blk == -1);
+    w->pf.n = 1;
     sd_pf_trial_before(w);
     CHECK(w->pf.blk == -1);
     CHECK(sd_front_prefetch_on(w) == 0);
