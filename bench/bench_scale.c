@@ -6,18 +6,19 @@
  * dense bed at every N, but not the contact count per sphere: a small bed is mostly edge (the
  * cut, and the walls, whose contacts are not counted), and the count grows with N (2.85 at
  * 1e3, 3.7-3.8 at 1e4, 4.0 at 1e5, 4.4 at 1e6 on 2026-11-27), so the cost per contact-step is
- * printed beside the cost per particle-step. After a short warm-up, `steps` steps are timed.
+ * printed beside the cost per particle-step. After a short warm-up (and, the front prefetch on
+ * auto, past its first trial: docs/performance.md §8), `steps` steps are timed.
  *
  * --same: every sphere in the same surroundings at every N. A unit of ~1000 spheres (a square
  * corner of the bed) is settled once in its own box, then copied: N / unit copies side by
  * side, each in its own walls (2 mm apart, so no two copies touch). Every copy is the same
  * settled bed, so the work per sphere (contacts, walls, drift) is the same at 1e3 and at 1e6,
- * and what changes with N is only where the data live. The timed steps are a multiple of 100
- * at every N (steps, steps/2, steps/10, steps/20), so that each size takes its share of the
- * candidate rebuilds (every t_reset = 1 ms).
+ * and what changes with N is only where the data live.
+ * In both modes the timed steps are a multiple of 100 at every N (steps, steps/2, steps/10,
+ * steps/20), so that each size takes its share of the candidate rebuilds (every t_reset = 1 ms).
  * usage: bench_scale SETTLED.data [steps] [--threads N] [--big] [--only N] [--same]
- *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/50; steps/20 with
- *   --same); --only N runs that one size for `steps` steps (for profiling).
+ *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/20); --only N runs
+ *   that one size for `steps` steps (for profiling).
  * --ab prefetch|avx512 [--ab-groups G]: at each size, after the warm-up, instead of the timed
  *   steps, G groups (default 16) of four 100-step blocks with the switch off (A) and on (B) in
  *   the order A B B A; prints the median and quartiles of B/A (prefetch: the pass's front
@@ -359,16 +360,17 @@ int main(int argc, char **argv)
 #ifdef _OPENMP
     omp_set_num_threads(threads);
 #endif
-    /* the mode's sizes: 1e3, 1e4, 1e5 (steps, steps/2, steps/10), and with --big 1e6 (steps/20
-     * with --same, steps/50 without) */
+    /* the sizes: 1e3, 1e4, 1e5 (steps, steps/2, steps/10), and with --big 1e6 (steps/20: with
+     * the default 2000 steps, 100, so that each size takes its share of the rebuilds every 1 ms,
+     * which at 1e6 take ~1.5 s each; until §P37, 40 steps without --same, which held one rebuild
+     * or none as the warm-up ended) */
     double (*run)(int, long) = run_case;
-    long big_div = 50;
+    const long big_div = 20;
     if (same) {
         printf("threads %d, copies of one settled unit of the bed of %d spheres, each in its own walls\n", threads,
                g_n);
         if (make_unit(50000)) return 1;
         run = run_same;
-        big_div = 20;
     } else {
         printf("threads %d, bed of %d spheres tiled\n", threads, g_n);
     }
