@@ -2332,7 +2332,8 @@ static sd_status near_update(sd_world *w)
  * On the Zen 3 VM (32 MiB) the gain starts between 15,000 and 20,000 spheres, where the test puts
  * it (16,384); on the Zen 5 VM only near 60,000 (at 30,000 on is 6-13 % slower), so the size
  * test is only the guess before the run has tried both (sd_pf_trial, world.c) and for scenes too
- * small to try (below SD_PF_MIN_BODIES, where it says off). */
+ * small to try (below SD_PF_MIN_BODIES, where it says off on any last-level cache of 4 MiB or
+ * more). */
 #define PF_CHUNKS 2
 #define PF_BYTES_PER_BODY 512 /* about what one step reads and writes per sphere (bodies, pairs) */
 #define PF_LLC_SHARE 4        /* the data may take 1 / PF_LLC_SHARE of the last-level cache */

@@ -328,7 +328,7 @@ double sd_world_front_x(const sd_world *w)
     return f;
 }
 
-/* The front prefetch's trial (sd_pf_trial): a block lasts about 2e6 particle-steps (2 to 50
+/* The front prefetch's trial (sd_pf_trial): a block lasts about 2e6 particle-steps (2 to 100
  * steps), so that a trial takes a few seconds at any size. */
 void sd_pf_trial_before(sd_world *w)
 {
@@ -370,7 +370,7 @@ void sd_pf_trial_after(sd_world *w, double pass_s)
     double r[SD_PF_GROUPS];
     memcpy(r, p->r, sizeof r);
     qsort(r, SD_PF_GROUPS, sizeof r[0], cmp_dbl);
-    p->ratio = r[SD_PF_GROUPS / 2];
+    p->ratio = 0.5 * (r[(SD_PF_GROUPS - 1) / 2] + r[SD_PF_GROUPS / 2]); /* (the median) */
     p->verdict = p->ratio < 1.0;
     p->blk = -1;
     p->next = w->step + SD_PF_RETRY;
