@@ -162,11 +162,10 @@ static void ab_world(sd_world *w, int n)
 static double time_world(sd_world *w, int n, const char *what, long warm, long steps)
 {
     sd_world_run(w, warm);
-    /* past the front prefetch's first trial (auto mode: blocks off and on, ~4e7 particle-steps),
-     * so that the timed steps run with its verdict */
-    for (int k = 0; !ab_name && k < 100000 && sd_front_prefetch_mode() == SD_PREFETCH_AUTO && n >= SD_PF_MIN_BODIES &&
-                    sd_front_prefetch_verdict(w, NULL) < 0;
-         k++)
+    /* past the front prefetch's first trial, which the warm-up's first step began if the world
+     * takes one (auto mode: blocks off and on, ~6e7 particle-steps), so that the timed steps run
+     * with its verdict */
+    while (!ab_name && w->pf.blk >= 0)
         sd_world_run(w, 2);
     if (ab_name) {
         ab_world(w, n);
