@@ -2423,6 +2423,22 @@ static void pf_front(const sd_bodies *b, const int32_t *pa, const int32_t *pb, i
     *front = hi;
 }
 
+/* The slots of entries j0 .. j1 that hold a spring (act), with the front: the gather reads them
+ * for the touching lanes only, about one candidate slot in three (the slots are the candidates',
+ * 5.4 a sphere in the tiled bed, 2.8 near pairs, 1.7 touching), a sparse walk the hardware
+ * prefetchers do not follow. Without a branch (the others prefetch the list's first line, a
+ * hit): a test on act, true for three entries in five at random, cost 10-17 % at 1e4 in
+ * mispredictions. Part of the front prefetch, so the run's trial weighs it too: against the
+ * front alone, `bench_scale --ab prefetch` on/off went from 0.92 to 0.83 at 1e5 on one thread and
+ * from 0.99 to 0.85 on two, from 1.07-1.09 to 1.09-1.14 at 1e4 (docs/performance-log.md §P38). */
+static inline void pf_hist(const sd_hist *h, const int32_t *off, const uint8_t *act, int j0, int j1)
+{
+    for (int j = j0; j < j1; j++) {
+        const sd_hist *p = act[j] ? h + off[j] : h;
+        __builtin_prefetch(p, 1, 3);
+    }
+}
+
 static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
 {
     sd_bodies *b = &w->b;
@@ -2448,6 +2464,7 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
         if (pf) {
             const int p0 = k0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < nn ? p0 + SS_CHUNK : nn;
             if (p1 > p0) pf_front(b, w->near_soa.a, w->near_soa.b, p0, p1, b->n, &front);
+            if (p1 > p0) pf_hist(w->bb.hist, w->near_soa.off, w->near_soa.act, p0, p1);
         }
         const soa_view v = soa_at(&w->near_soa, k0);
         bb_chunk(w, law, &w->near[k0], &v, n, x->out, x->used, &x->q, b);
@@ -2756,6 +2773,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 if (pf) {
                     const int p0 = j0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < s1 ? p0 + SS_CHUNK : s1;
                     if (p1 > p0) pf_front(b, o->soa.a, o->soa.b, p0, p1, i1, &front);
+                    if (p1 > p0) pf_hist(w->bb.hist, o->soa.off, o->soa.act, p0, p1);
                 }
                 const int n = j1 - j0;
                 const soa_view v = soa_at(&o->soa, j0);
