@@ -2428,14 +2428,14 @@ static void pf_front(const sd_bodies *b, const int32_t *pa, const int32_t *pb, i
  * 5.4 a sphere in the tiled bed, 2.8 near pairs, 1.7 touching), a sparse walk the hardware
  * prefetchers do not follow. Without a branch (the others prefetch the list's first line, a
  * hit): a test on act, true for three entries in five at random, cost 10-17 % at 1e4 in
- * mispredictions. Part of the front prefetch, so the run's trial weighs it too: against the
+ * mispredictions. Into L2 (prefetcht2): 0.83 / 0.81 against 0.86 / 0.87 into L1 at 1e5 on one /
+ * two threads, the same at 1e4. Part of the front prefetch, so the run's trial weighs it too: against the
  * front alone, `bench_scale --ab prefetch` on/off went from 0.92 to 0.83 at 1e5 on one thread and
  * from 0.99 to 0.85 on two, from 1.07-1.09 to 1.09-1.14 at 1e4 (docs/performance-log.md §P38). */
 static inline void pf_hist(const sd_hist *h, const int32_t *off, const uint8_t *act, int j0, int j1)
 {
     for (int j = j0; j < j1; j++) {
-        const sd_hist *p = act[j] ? h + off[j] : h;
-        __builtin_prefetch(p, 1, 3);
+        __builtin_prefetch(h + (off[j] & -(int32_t)act[j]), 1, 1);
     }
 }
 
