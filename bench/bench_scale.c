@@ -16,13 +16,15 @@
  * and what changes with N is only where the data live.
  * In both modes the timed steps are a multiple of 100 at every N (steps, steps/2, steps/10,
  * steps/20), so that each size takes its share of the candidate rebuilds (every t_reset = 1 ms).
- * usage: bench_scale SETTLED.data [steps] [--threads N] [--big] [--only N] [--same]
+ * usage: bench_scale SETTLED.data [steps] [--threads N] [--big] [--only N] [--same] [--stages]
  *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/20); --only N runs
  *   that one size for `steps` steps (for profiling).
  * --ab prefetch|avx512 [--ab-groups G]: at each size, after the warm-up, instead of the timed
  *   steps, G groups (default 16) of four 100-step blocks with the switch off (A) and on (B) in
  *   the order A B B A; prints the median and quartiles of B/A (prefetch: the pass's front
- *   prefetch forced off and on; avx512: the AVX2 kernels against the AVX-512 ones). */
+ *   prefetch forced off and on; avx512: the AVX2 kernels against the AVX-512 ones).
+ * --stages: after each size, the candidate rebuild's stages (sd_neighbor_stage_name), ms a
+ *   rebuild over the timed steps' rebuilds. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -126,6 +128,7 @@ static int cmp_double(const void *a, const void *b)
 
 /* --ab: the switch alternated, and how many groups */
 static const char *ab_name;
+static int stages; /* --stages */
 static int ab_groups = 16;
 
 /* the switch named ab_name (main checks it): the engine's, as bench_flume --ab has them */
@@ -172,11 +175,14 @@ static double time_world(sd_world *w, int n, const char *what, long warm, long s
         sd_world_destroy(w);
         return 1.0;
     }
+    double rb[SD_RB_STAGES];
+    sd_neighbor_stages_take(rb); /* (the warm-up's rebuilds left out) */
     const sd_world_timers k0 = sd_world_get_timers(w);
     double t0 = sd_now();
     sd_status st = sd_world_run(w, steps);
     double wall = sd_now() - t0;
     const sd_world_timers k1 = sd_world_get_timers(w);
+    sd_neighbor_stages_take(rb);
     if (st) fprintf(stderr, "N %d: %s\n", n, sd_status_message(st));
     double ps = (double)n * steps / wall;
     const long nc = sd_world_contact_count(w);
@@ -187,6 +193,12 @@ static double time_world(sd_world *w, int n, const char *what, long warm, long s
            "ns/contact-step %5.1f  rebuilds %ld neighbor %.3f s  front-prefetch %s%s\n",
            n, what, steps, wall, ps, 1e9 / ps, 2.0 * nc / n, 1e9 * wall / ((double)(nc > 0 ? nc : 1) * steps),
            k1.rebuilds - k0.rebuilds, k1.neighbor - k0.neighbor, sd_front_prefetch_on(w) ? "on" : "off", trial);
+    if (stages && k1.rebuilds > k0.rebuilds) {
+        printf("  rebuild stages, ms a rebuild:");
+        for (int k = 0; k < SD_RB_STAGES; k++)
+            printf(" %s %.1f", sd_neighbor_stage_name(k), 1e3 * rb[k] / (double)(k1.rebuilds - k0.rebuilds));
+        printf("\n");
+    }
     fflush(stdout);
     sd_world_destroy(w);
     return ps;
@@ -324,6 +336,8 @@ int main(int argc, char **argv)
             big = 1;
         else if (!strcmp(argv[i], "--same"))
             same = 1;
+        else if (!strcmp(argv[i], "--stages"))
+            stages = 1;
         else if (!strcmp(argv[i], "--only") && i + 1 < argc)
             only = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--ab") && i + 1 < argc)
@@ -336,10 +350,11 @@ int main(int argc, char **argv)
             steps = atol(argv[i]);
     }
     if (!path || read_data(path)) {
-        fprintf(stderr,
-                "usage: %s SETTLED.data [steps] [--threads N] [--big] [--only N] [--same] [--ab prefetch|avx512 "
-                "[--ab-groups G]]\n",
-                argv[0]);
+        fprintf(
+            stderr,
+            "usage: %s SETTLED.data [steps] [--threads N] [--big] [--only N] [--same] [--stages] [--ab prefetch|avx512 "
+            "[--ab-groups G]]\n",
+            argv[0]);
         return 2;
     }
     if (ab_name) {

@@ -487,7 +487,11 @@ static int32_t *old_first_index(const sd_world *w)
 }
 
 /* Put carried history into the new lists' slots: the entries of the pair's key are a run
- * inside its gid's few entries. */
+ * inside its gid's few entries. The gids are not in the store's order, so each body's entries
+ * are a jump through first[] and the old entries: prefetched, the gid's start HIST_PF pairs
+ * ahead of its entries, 2 HIST_PF ahead of the pair (at 1e6 spheres 131 against 243 ms a
+ * rebuild, docs/performance-log.md §P38). */
+#define HIST_PF 8
 static sd_status restore_history(sd_world *w, sd_pairlist *l, const int32_t *first)
 {
     if (sd_grow((void **)&l->hist, &l->hcap, l->nh + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
@@ -503,6 +507,12 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l, const int32_t *fir
         for (int s = 0; s < p->cap; s++)
             l->hist[p->off + s].feature = -1;
         if (w->n_old == 0) continue;
+        if (k + 2 * HIST_PF < l->n) __builtin_prefetch(&first[w->b.gid[l->p[k + 2 * HIST_PF].a]], 0, 3);
+        if (k + HIST_PF < l->n) {
+            const int at = first[w->b.gid[l->p[k + HIST_PF].a]];
+            __builtin_prefetch(&w->old_keys[at], 0, 3);
+            __builtin_prefetch(&w->old_hist[at], 0, 3);
+        }
         const uint64_t key = key_of(w, p);
         const int g = (int)(key >> 32);
         int lo = first[g];
