@@ -119,9 +119,11 @@ typedef struct {
     uint64_t w[4];
 } blob32;
 
-/* a[i] <- a[perm[i]] for i < n, through the scratch t */
-static void permute_array(char *p, size_t elem, const int32_t *perm, int n, char *t)
+/* a[i] <- a[perm[i]] for i0 <= i < i1 (a block perm maps onto itself), through the scratch t */
+static void permute_array(char *p, size_t elem, const int32_t *perm, int i0, int i1, char *t)
 {
+    const int n = i1 - i0;
+    perm += i0;
     /* typed copies for the sizes the store has (a memcpy call per element was most of the
      * permutation at every rebuild) */
     switch (elem) {
@@ -149,7 +151,7 @@ static void permute_array(char *p, size_t elem, const int32_t *perm, int n, char
         for (int i = 0; i < n; i++)
             memcpy(t + (size_t)i * elem, p + (size_t)perm[i] * elem, elem);
     }
-    memcpy(p, t, (size_t)n * elem);
+    memcpy(p + (size_t)i0 * elem, t, (size_t)n * elem);
 }
 
 #define SD_MAX_FIELDS 64
@@ -175,21 +177,62 @@ sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n)
     field_list f = {.n = 0};
     sd_bodies_for_each_field(b, list_field, &f);
     if (f.n > SD_MAX_FIELDS) return SD_ERR_NOMEM;
-    int T = 1;
+    /* Only the blocks the permutation moves: a rebuild's sort moves a few bodies a few places
+     * each (neighbor.c), so most entries stay, and copying every field whole through an
+     * n-long scratch cost 100-280 ms a rebuild at 1e6 bodies, much of it the scratch's fresh
+     * pages (docs/performance-log.md §P38). A block is the shortest run from a moved entry
+     * that the permutation maps onto itself. */
+    int nblk = 0, widest = 0;
+    long moved = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        int32_t *blk = NULL;
+        if (pass == 1) {
+            if (nblk == 0) return SD_OK;
+            blk = malloc(2 * (size_t)nblk * sizeof(int32_t));
+            if (!blk) return SD_ERR_NOMEM;
+        }
+        int k = 0;
+        for (int i = 0; i < n; i++) {
+            if (perm[i] == i) continue;
+            const int i0 = i;
+            int hi = perm[i];
+            while (hi != i) {
+                i++;
+                if (perm[i] > hi) hi = perm[i];
+            }
+            if (pass == 0) {
+                nblk++;
+                moved += i + 1 - i0;
+                widest = i + 1 - i0 > widest ? i + 1 - i0 : widest;
+            } else {
+                blk[2 * k] = i0;
+                blk[2 * k + 1] = i + 1;
+                k++;
+            }
+        }
+        if (pass == 0) continue;
+        int T = 1;
 #ifdef _OPENMP
-    T = n > 2000 ? omp_get_max_threads() : 1;
+        T = moved > 2000 ? omp_get_max_threads() : 1;
 #endif
-    /* one scratch per thread, as wide as the widest field (a quaternion) */
-    char *scratch = malloc((size_t)T * (size_t)(n + 1) * sizeof(sd_quat));
-    if (!scratch) return SD_ERR_NOMEM;
+        /* one scratch per thread, as wide as the widest block and field (a quaternion) */
+        char *scratch = malloc((size_t)T * (size_t)(widest + 1) * sizeof(sd_quat));
+        if (!scratch) {
+            free(blk);
+            return SD_ERR_NOMEM;
+        }
 #pragma omp parallel for schedule(dynamic, 1) num_threads(T) if (T > 1)
-    for (int k = 0; k < f.n; k++) {
-        int tid = 0;
+        for (int q = 0; q < f.n; q++) {
+            int tid = 0;
 #ifdef _OPENMP
-        tid = omp_get_thread_num();
+            tid = omp_get_thread_num();
 #endif
-        permute_array(f.array[k], f.elem[k], perm, n, scratch + (size_t)tid * (size_t)(n + 1) * sizeof(sd_quat));
+            char *t = scratch + (size_t)tid * (size_t)(widest + 1) * sizeof(sd_quat);
+            for (int j = 0; j < nblk; j++)
+                permute_array(f.array[q], f.elem[q], perm, blk[2 * j], blk[2 * j + 1], t);
+        }
+        free(scratch);
+        free(blk);
     }
-    free(scratch);
     return SD_OK;
 }
