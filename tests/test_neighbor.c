@@ -1035,6 +1035,90 @@ static void test_scan_prefilter(void)
     }
 }
 
+/* sd_bodies_permute (the rebuild's re-sort, which copies only the blocks the permutation maps onto
+ * themselves): after it, body i holds every field of the body that was at perm[i], for
+ * permutations with fixed stretches, short swaps, a rotation, a reversal and one whole shuffle,
+ * over a store of spheres and logs (fields of 1, 4, 8, 24 and 32 bytes). */
+static void test_permute(void)
+{
+    enum { N = 300 };
+    sd_world *w = new_world();
+    for (int i = 0; i < N; i++) {
+        if (i % 7 == 3) {
+            sd_cylinder_def c = sd_cylinder_def_default();
+            c.pos = v3(0.1 * i, 0.02 * (i % 5), 0.3);
+            c.axis = v3(1.0, 0.1 * (i % 3), 0.2);
+            c.vel = v3(0.01 * i, -0.2, 0.0);
+            c.radius = 0.01 + 1e-5 * i;
+            c.length = 0.1;
+            c.tag = i;
+            CHECK(sd_world_add_cylinder(w, &c) >= 0);
+        } else {
+            sd_sphere_def d = sd_sphere_def_default();
+            d.pos = v3(0.1 * i, -0.03 * (i % 4), 0.1);
+            d.vel = v3(-0.01 * i, 0.3, 0.0);
+            d.omega = v3(0.0, 0.0, 0.5 * i);
+            d.radius = 0.005 + 1e-5 * i;
+            d.tag = i;
+            CHECK(sd_world_add_sphere(w, &d) >= 0);
+        }
+    }
+    sd_bodies *b = &w->b;
+    CHECK(b->n == N);
+    int32_t perm[N];
+    int32_t gid0[N], tag0[N];
+    sd_vec3 pos0[N], vel0[N];
+    sd_quat q0[N];
+    double r0[N];
+    uint8_t sh0[N];
+    for (int form = 0; form < 6; form++) {
+        for (int i = 0; i < N; i++)
+            perm[i] = i;
+        if (form == 0) { /* a few swaps of neighbours, apart */
+            for (int i = 10; i + 1 < N; i += 37) {
+                perm[i] = i + 1;
+                perm[i + 1] = i;
+            }
+        } else if (form == 1) { /* a body moved 5 places back, the others one on */
+            for (int i = 50; i < 55; i++)
+                perm[i] = i + 1;
+            perm[55] = 50;
+        } else if (form == 2) { /* blocks that touch: [0, 3) rotated, then [3, 5) swapped */
+            perm[0] = 2, perm[1] = 0, perm[2] = 1, perm[3] = 4, perm[4] = 3;
+        } else if (form == 3) { /* the last entries (the block ends at n) */
+            perm[N - 3] = N - 1, perm[N - 2] = N - 3, perm[N - 1] = N - 2;
+        } else if (form == 4) { /* reversed whole */
+            for (int i = 0; i < N; i++)
+                perm[i] = N - 1 - i;
+        } else { /* shuffled whole (Fisher-Yates, fixed seed) */
+            for (int i = N - 1; i > 0; i--) {
+                const int j = (int)(urand() * (i + 1)) % (i + 1);
+                const int32_t t = perm[i];
+                perm[i] = perm[j];
+                perm[j] = t;
+            }
+        }
+        for (int i = 0; i < N; i++) {
+            gid0[i] = b->gid[i], tag0[i] = b->tag[i], pos0[i] = b->pos[i], vel0[i] = b->vel[i];
+            q0[i] = b->quat[i], r0[i] = b->radius[i], sh0[i] = b->shape[i];
+        }
+        CHECK(sd_bodies_permute(b, perm, N) == SD_OK);
+        int wrong = 0;
+        for (int i = 0; i < N; i++) {
+            const int o = perm[i];
+            wrong += b->gid[i] != gid0[o] || b->tag[i] != tag0[o] || b->shape[i] != sh0[o] || b->radius[i] != r0[o] ||
+                     memcmp(&b->pos[i], &pos0[o], sizeof(sd_vec3)) || memcmp(&b->vel[i], &vel0[o], sizeof(sd_vec3)) ||
+                     memcmp(&b->quat[i], &q0[o], sizeof(sd_quat));
+        }
+        CHECK(wrong == 0);
+    }
+    /* the gids scattered: the world's map put back, as the rebuild's sort does */
+    for (int i = 0; i < N; i++)
+        w->gid_map[b->gid[i]] = i;
+    CHECK(sd_world_step(w) == SD_OK);
+    sd_world_destroy(w);
+}
+
 int main(void)
 {
     test_static(1);
@@ -1050,6 +1134,7 @@ int main(void)
     test_rebuild_threads();
     test_moving_index();
     test_scan_prefilter();
+    test_permute();
     printf("near-list checks of the owners' segments (two or more threads): %ld\n", near_by_owners);
     printf("near sphere pairs whose spring flag was checked against the slot: %ld, wrong %ld; (r_a + r_b)^2 wrong "
            "%ld\n",
