@@ -196,7 +196,7 @@ sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n)
             if (perm[i] == i) continue;
             const int i0 = i;
             int hi = perm[i];
-            while (hi != i) {
+            while (hi != i && i + 1 < n) { /* (the bound: perm is one of 0 .. n-1) */
                 i++;
                 if (perm[i] > hi) hi = perm[i];
             }
