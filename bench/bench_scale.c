@@ -128,8 +128,8 @@ static int cmp_double(const void *a, const void *b)
 
 /* --ab: the switch alternated, and how many groups */
 static const char *ab_name;
-static int stages; /* --stages */
 static int ab_groups = 16;
+static int stages; /* --stages: the rebuild's stages printed */
 
 /* the switch named ab_name (main checks it): the engine's, as bench_flume --ab has them */
 static int ab_set(int on) { return (!strcmp(ab_name, "prefetch") ? sd_front_prefetch_set : sd_simd512_set)(on); }

@@ -2426,12 +2426,13 @@ static void pf_front(const sd_bodies *b, const int32_t *pa, const int32_t *pb, i
 /* The slots of entries j0 .. j1 that hold a spring (act), with the front: the gather reads them
  * for the touching lanes only, about one candidate slot in three (the slots are the candidates',
  * 5.4 a sphere in the tiled bed, 2.8 near pairs, 1.7 touching), a sparse walk the hardware
- * prefetchers do not follow. Without a branch (the others prefetch the list's first line, a
- * hit): a test on act, true for three entries in five at random, cost 10-17 % at 1e4 in
- * mispredictions. Into L2 (prefetcht2): 0.83 / 0.81 against 0.86 / 0.87 into L1 at 1e5 on one /
- * two threads, the same at 1e4. Part of the front prefetch, so the run's trial weighs it too: against the
- * front alone, `bench_scale --ab prefetch` on/off went from 0.92 to 0.83 at 1e5 on one thread and
- * from 0.99 to 0.85 on two, from 1.07-1.09 to 1.09-1.14 at 1e4 (docs/performance-log.md §P38). */
+ * prefetchers do not follow. Part of the front prefetch, so the run's trial weighs it too.
+ * `bench_scale --ab prefetch` (on/off) at 1e5 went from 0.92 (the front alone) to 0.83 on one
+ * thread and from 0.99 to 0.81-0.85 on two; at 1e4, where the trial leaves it off, from 1.07-1.09
+ * to 1.08-1.11 (docs/performance-log.md §P38). Without a branch: a test on act, true for three
+ * entries in five at random, cost 10-17 % at 1e4 in mispredictions; the other entries prefetch
+ * the list's first line, a hit. Into L2 (prefetcht2): 0.83 / 0.81 at 1e5 on one / two threads,
+ * against 0.86 / 0.87 into L1. */
 static inline void pf_hist(const sd_hist *h, const int32_t *off, const uint8_t *act, int j0, int j1)
 {
     for (int j = j0; j < j1; j++) {
