@@ -172,6 +172,19 @@ static void list_field(void *array, size_t elem, const char *name, void *ctx)
     f->n++;
 }
 
+/* The end of the block that starts at i0 (perm[i0] != i0): the shortest run from i0 that perm
+ * maps onto itself, where the running maximum of perm comes back to the index (bounded by n:
+ * perm is one of 0 .. n-1). */
+static int block_end(const int32_t *perm, int n, int i0)
+{
+    int i = i0, hi = perm[i0];
+    while (hi != i && i + 1 < n) {
+        i++;
+        if (perm[i] > hi) hi = perm[i];
+    }
+    return i + 1;
+}
+
 sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n)
 {
     field_list f = {.n = 0};
@@ -180,59 +193,54 @@ sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n)
     /* Only the blocks the permutation moves: a rebuild's sort moves a few bodies a few places
      * each (neighbor.c), so most entries stay, and copying every field whole through an
      * n-long scratch cost 100-280 ms a rebuild at 1e6 bodies, much of it the scratch's fresh
-     * pages (docs/performance-log.md §P38). A block is the shortest run from a moved entry
-     * that the permutation maps onto itself. */
+     * pages (docs/performance-log.md §P38). */
     int nblk = 0, widest = 0;
     long moved = 0;
-    for (int pass = 0; pass < 2; pass++) {
-        int32_t *blk = NULL;
-        if (pass == 1) {
-            if (nblk == 0) return SD_OK;
-            blk = malloc(2 * (size_t)nblk * sizeof(int32_t));
-            if (!blk) return SD_ERR_NOMEM;
+    for (int i = 0; i < n;) {
+        if (perm[i] == i) {
+            i++;
+            continue;
         }
-        int k = 0;
-        for (int i = 0; i < n; i++) {
-            if (perm[i] == i) continue;
-            const int i0 = i;
-            int hi = perm[i];
-            while (hi != i && i + 1 < n) { /* (the bound: perm is one of 0 .. n-1) */
-                i++;
-                if (perm[i] > hi) hi = perm[i];
-            }
-            if (pass == 0) {
-                nblk++;
-                moved += i + 1 - i0;
-                widest = i + 1 - i0 > widest ? i + 1 - i0 : widest;
-            } else {
-                blk[2 * k] = i0;
-                blk[2 * k + 1] = i + 1;
-                k++;
-            }
-        }
-        if (pass == 0) continue;
-        int T = 1;
-#ifdef _OPENMP
-        T = moved > 2000 ? omp_get_max_threads() : 1;
-#endif
-        /* one scratch per thread, as wide as the widest block and field (a quaternion) */
-        char *scratch = malloc((size_t)T * (size_t)(widest + 1) * sizeof(sd_quat));
-        if (!scratch) {
-            free(blk);
-            return SD_ERR_NOMEM;
-        }
-#pragma omp parallel for schedule(dynamic, 1) num_threads(T) if (T > 1)
-        for (int q = 0; q < f.n; q++) {
-            int tid = 0;
-#ifdef _OPENMP
-            tid = omp_get_thread_num();
-#endif
-            char *t = scratch + (size_t)tid * (size_t)(widest + 1) * sizeof(sd_quat);
-            for (int j = 0; j < nblk; j++)
-                permute_array(f.array[q], f.elem[q], perm, blk[2 * j], blk[2 * j + 1], t);
-        }
-        free(scratch);
-        free(blk);
+        const int i1 = block_end(perm, n, i);
+        nblk++;
+        moved += i1 - i;
+        widest = i1 - i > widest ? i1 - i : widest;
+        i = i1;
     }
+    if (nblk == 0) return SD_OK;
+    int T = 1;
+#ifdef _OPENMP
+    T = moved > 2000 ? omp_get_max_threads() : 1;
+#endif
+    /* the blocks (start, end), and one scratch per thread as wide as the widest block and field
+     * (a quaternion) */
+    int32_t *blk = malloc(2 * (size_t)nblk * sizeof(int32_t));
+    char *scratch = malloc((size_t)T * (size_t)(widest + 1) * sizeof(sd_quat));
+    if (!blk || !scratch) {
+        free(blk);
+        free(scratch);
+        return SD_ERR_NOMEM;
+    }
+    for (int i = 0, k = 0; i < n;) {
+        if (perm[i] == i) {
+            i++;
+            continue;
+        }
+        blk[2 * k] = i;
+        blk[2 * k + 1] = i = block_end(perm, n, i);
+        k++;
+    }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(T) if (T > 1)
+    for (int q = 0; q < f.n; q++) {
+        int tid = 0;
+#ifdef _OPENMP
+        tid = omp_get_thread_num();
+#endif
+        char *t = scratch + (size_t)tid * (size_t)(widest + 1) * sizeof(sd_quat);
+        for (int j = 0; j < nblk; j++)
+            permute_array(f.array[q], f.elem[q], perm, blk[2 * j], blk[2 * j + 1], t);
+    }
+    free(scratch);
+    free(blk);
     return SD_OK;
 }

@@ -2350,8 +2350,8 @@ int sd_front_prefetch_set(int mode)
  * L3 of our AMD VM), else sysconf, else 32 MiB. On AMD a core reaches the L3 of its own complex
  * only, 32 MiB on Zen 2 to 5, where sysconf may give the whole package's (508 MiB on the Zen 5
  * VM, which has no cache sizes in sysfs: the prefetch stayed off at 1e5 spheres, where it makes
- * one thread's step 8-22 % faster and two threads' no slower, docs/performance-log.md §P36): so there a figure from sysconf
- * above 32 MiB counts as 32 MiB. Read once at load, before any thread. */
+ * one thread's step 8-22 % faster and two threads' no slower, docs/performance-log.md §P36): so
+ * there a figure from sysconf above 32 MiB counts as 32 MiB. Read once at load, before any thread. */
 static long llc_size;
 
 __attribute__((constructor)) static void llc_init(void)
@@ -2435,9 +2435,8 @@ static void pf_front(const sd_bodies *b, const int32_t *pa, const int32_t *pb, i
  * against 0.86 / 0.87 into L1. */
 static inline void pf_hist(const sd_hist *h, const int32_t *off, const uint8_t *act, int j0, int j1)
 {
-    for (int j = j0; j < j1; j++) {
+    for (int j = j0; j < j1; j++)
         __builtin_prefetch(h + (off[j] & -(int32_t)act[j]), 1, 1);
-    }
 }
 
 static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
@@ -2464,8 +2463,10 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
         /* the chunk adds its pairs onto the bodies itself, in pair order */
         if (pf) {
             const int p0 = k0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < nn ? p0 + SS_CHUNK : nn;
-            if (p1 > p0) pf_front(b, w->near_soa.a, w->near_soa.b, p0, p1, b->n, &front);
-            if (p1 > p0) pf_hist(w->bb.hist, w->near_soa.off, w->near_soa.act, p0, p1);
+            if (p1 > p0) {
+                pf_front(b, w->near_soa.a, w->near_soa.b, p0, p1, b->n, &front);
+                pf_hist(w->bb.hist, w->near_soa.off, w->near_soa.act, p0, p1);
+            }
         }
         const soa_view v = soa_at(&w->near_soa, k0);
         bb_chunk(w, law, &w->near[k0], &v, n, x->out, x->used, &x->q, b);
@@ -2773,8 +2774,10 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 const int j1 = s1 - j0 < SS_CHUNK ? s1 : j0 + SS_CHUNK;
                 if (pf) {
                     const int p0 = j0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < s1 ? p0 + SS_CHUNK : s1;
-                    if (p1 > p0) pf_front(b, o->soa.a, o->soa.b, p0, p1, i1, &front);
-                    if (p1 > p0) pf_hist(w->bb.hist, o->soa.off, o->soa.act, p0, p1);
+                    if (p1 > p0) {
+                        pf_front(b, o->soa.a, o->soa.b, p0, p1, i1, &front);
+                        pf_hist(w->bb.hist, o->soa.off, o->soa.act, p0, p1);
+                    }
                 }
                 const int n = j1 - j0;
                 const soa_view v = soa_at(&o->soa, j0);
