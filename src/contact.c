@@ -127,6 +127,7 @@ typedef struct {
     int32_t was[SS_CHUNK + SS_PAD]; /* the slot's feature before this step */
     int32_t sel[SS_CHUNK + SS_PAD]; /* the pair's place in the chunk */
     int bed_lim;                    /* the sums' bed test (bed_at): set by each pass before its chunks */
+    sd_hist *sh;                    /* the sphere lanes' slots: off[] into here (the chunk's view's) */
     sd_vec3 sink[8];                /* where a bed body's sums go (ss_sums256, add_pair_sink): never read */
     /* an owner's cross entries in pass 2 (ks < 0: pair cross[~ks], computed in pass 1): their
      * results and flags, and the owner's bodies [own_lo, own_hi), whose side alone it adds */
@@ -544,6 +545,7 @@ typedef struct {
     const int32_t *a, *b, *off, *ck;
     const double *sqm, *rs2;
     uint8_t *act; /* (written by the touch filter) */
+    sd_hist *sh;  /* where the sphere pairs' off point: bb.hist, or the list's own springs */
 } soa_view;
 
 void sd_pair_soa_free(sd_pair_soa *s)
@@ -628,9 +630,9 @@ static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p, const s
     s->act[j] = (uint8_t)(hist[p->off].feature >= 0);
 }
 
-static soa_view soa_at(const sd_pair_soa *s, int j0)
+static soa_view soa_at(const sd_pair_soa *s, int j0, sd_hist *sh)
 {
-    return (soa_view){s->a + j0, s->b + j0, s->off + j0, s->ck + j0, s->sqm + j0, s->rs2 + j0, s->act + j0};
+    return (soa_view){s->a + j0, s->b + j0, s->off + j0, s->ck + j0, s->sqm + j0, s->rs2 + j0, s->act + j0, sh};
 }
 
 /* Step 1 of bb_chunk (the touch filter) for the chunk's entries i0 .. i1: which pairs touch,
@@ -641,7 +643,7 @@ static soa_view soa_at(const sd_pair_soa *s, int j0)
 static inline void ss_filter_range(const sd_world *w, const int32_t *ks, const soa_view *v, int i0, int i1, int *used,
                                    ss_batch *q, int *mp, int *gen, int *ngp)
 {
-    sd_hist *restrict hist = w->bb.hist;
+    sd_hist *restrict hist = v->sh;
     const sd_vec3 *restrict pos = w->b.pos;
     const double *restrict rad = w->b.radius;
     int m = *mp;
@@ -675,7 +677,7 @@ static inline void ss_filter_range(const sd_world *w, const int32_t *ks, const s
  * each. */
 static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m)
 {
-    const sd_hist *restrict hist = w->bb.hist;
+    const sd_hist *restrict hist = q->sh;
     const sd_vec3 *restrict vel = w->b.vel, *restrict omega = w->b.omega;
     const double *restrict rad = w->b.radius;
     for (int j = j0; j < m; j++) {
@@ -782,7 +784,7 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
                                                                            const soa_view *v, int i, int n, int *used,
                                                                            ss_batch *q, int *mp, int *gen, int *ngp)
 {
-    sd_hist *hist = w->bb.hist;
+    sd_hist *hist = v->sh;
     const double *pos = &w->b.pos[0].x, *rad = w->b.radius;
     int m = *mp, ng = *ngp;
     const __m256i one = _mm256_set1_epi32(1), none = _mm256_set1_epi32(-1), hi16 = _mm256_set1_epi32((int)0xFFFF0000u),
@@ -808,9 +810,10 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
             _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)), _mm512_mul_pd(dz, dz));
         /* t = !(d2 >= rs^2), as the scalar loop (true for an unordered pair too); sphere pairs only */
         const __mmask8 t = (__mmask8)(_mm512_cmp_pd_mask(d2, _mm512_mul_pd(rs, rs), _CMP_NGE_UQ) & ss);
-        /* the spring's feature (slot off, 32-byte slots: index 4 off, scale 8) */
-        const __m256i was = _mm256_i32gather_epi32((const int *)((const char *)hist + offsetof(sd_hist, feature)),
-                                                   _mm256_slli_epi32(off, 2), 8);
+        /* the spring's feature (slot off, 32-byte slots: index 4 off, scale 8), of the sphere
+         * lanes only: the others' off point into bb.hist, which need not be where hist is */
+        const __m256i was = _mm256_mmask_i32gather_epi32(
+            none, ss, _mm256_slli_epi32(off, 2), (const int *)((const char *)hist + offsetof(sd_hist, feature)), 8);
         _mm256_mask_storeu_epi32(used + i, ss, _mm256_maskz_mov_epi32(t, one));
         /* the entries' flags: a spring after this step where they touch (soa_view.act; this
          * form reads the slots themselves) */
@@ -855,7 +858,7 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
 __attribute__((target("avx512f,avx512vl"))) static void ss_gather512(const sd_world *w, ss_batch *q, int m)
 {
     const double *vel = &w->b.vel[0].x, *om = &w->b.omega[0].x;
-    const char *sh = (const char *)w->bb.hist + offsetof(sd_hist, shear);
+    const char *sh = (const char *)q->sh + offsetof(sd_hist, shear);
     const __m512d zero = _mm512_setzero_pd();
     for (int j = 0; j < m; j += 8) {
         const __mmask8 live = (__mmask8)(m - j >= 8 ? 0xFF : (1u << (m - j)) - 1u);
@@ -935,7 +938,7 @@ __attribute__((constructor)) static void simd_tables_init(void)
 __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w, const soa_view *v, int i, int n,
                                                                int *used, ss_batch *q, int *mp, int *gen, int *ngp)
 {
-    sd_hist *hist = w->bb.hist;
+    sd_hist *hist = v->sh;
     const double *pos = &w->b.pos[0].x;
     /* the view's arrays in locals: the packing's 16-byte stores may alias anything, and gcc
      * loaded each address from *v again after them */
@@ -1012,7 +1015,7 @@ _Static_assert(sizeof(sd_hist) == 32 && offsetof(sd_hist, shear) == 8, "ss_gathe
 __attribute__((target("avx2"))) static int ss_gather256(const sd_world *w, ss_batch *q, int m)
 {
     const double *vel = &w->b.vel[0].x, *om = &w->b.omega[0].x, *rad = w->b.radius;
-    const sd_hist *hist = w->bb.hist;
+    const sd_hist *hist = q->sh;
     int j = 0;
     for (; j + 4 <= m; j += 4) {
         const int a0 = q->ia[j], a1 = q->ia[j + 1], a2 = q->ia[j + 2], a3 = q->ia[j + 3];
@@ -1063,11 +1066,11 @@ __attribute__((target("avx2"))) static inline void row_add(sd_vec3 *p, __m256d r
  * stored as 32-byte rows (the feature 0), and each pair onto its two bodies in lane order as
  * add_pair_lim does (same bits; a bed body's rows into q->sink, where the bed is from
  * q->bed_lim on). */
-__attribute__((target("avx2"))) static int ss_sums256(const sd_world *w, ss_batch *q, int j, sd_bodies *acc)
+__attribute__((target("avx2"))) static int ss_sums256(ss_batch *q, int j, sd_bodies *acc)
 {
     const __m256d zero = _mm256_setzero_pd();
     if (_mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(q->redo + j), zero, _CMP_NEQ_UQ))) return 0;
-    sd_hist *hist = w->bb.hist;
+    sd_hist *hist = q->sh;
     const __m256d nfx = _mm256_loadu_pd(q->nfx + j), nfy = _mm256_loadu_pd(q->nfy + j),
                   nfz = _mm256_loadu_pd(q->nfz + j);
     const __m256d sign = _mm256_set1_pd(-0.0); /* -la as the scalar loop negates it: the sign bit flipped */
@@ -1647,9 +1650,10 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
                      sd_pair_out *out, int *used, ss_batch *q, sd_bodies *acc)
 {
     const sd_pair *restrict pairs = w->bb.p;
-    sd_hist *restrict hist = w->bb.hist;
+    sd_hist *restrict hist = v->sh;
     int gen[SS_CHUNK];
     int m = 0, ng = 0;
+    q->sh = v->sh;
     /* 1. which pairs touch (ss_filter_range) */
     {
         /* (8 pairs at a time in AVX-512, 4 in AVX2, where the CPU has it; the rest, or all,
@@ -1732,7 +1736,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             /* four lanes at once where no other shape's pair comes between them and none is
              * to be redone (nearly always) */
             if (simd_level >= SD_SIMD_AVX2 && j + 4 <= m && (g == ng || gen[g] > q->sel[j + 3]) &&
-                ss_sums256(w, q, j, acc)) {
+                ss_sums256(q, j, acc)) {
                 j += 3;
                 continue;
             }
@@ -2271,6 +2275,74 @@ static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *li
 
 /* The near pairs (of either pass) still good: no rebuild since, and no surface has drifted
  * half the near skin (near_update). */
+/* The sphere pairs' springs of a near list in the list's own order (world_internal.h,
+ * springs_out). The candidates' slots are 5.4 a sphere in a dense bed, against 2.8 near pairs
+ * and 1.7 touching: the pass walked them as a sparse run of lines, one or two a sphere and
+ * step, which past the last-level cache came from DRAM. In the list's order the springs are
+ * one stream, read and written in step with the records. Moved out when a pass starts on a list
+ * made since, and back (sd_contact_springs_home) before the list is remade or anything reads
+ * bb.hist: a copy each way per near list, against a step's walk through them. Entries k0 ..
+ * k1 of the list (candidate indices, an owner's cross entry negative) whose records s are of a
+ * sphere pair (ck kind 0; the others keep their slots in bb.hist). */
+static void springs_out_range(sd_world *w, sd_pair_soa *s, sd_hist *h, int k0, int k1)
+{
+    const sd_hist *restrict bh = w->bb.hist;
+    for (int k = k0; k < k1; k++)
+        if (ck_kind(s->ck[k]) == SD_PAIR_SS) {
+            h[k] = bh[s->off[k]];
+            s->off[k] = k;
+        }
+}
+
+static void springs_home_range(sd_world *w, const int32_t *list, sd_pair_soa *s, const sd_hist *h, int k0, int k1)
+{
+    const sd_pair *restrict pairs = w->bb.p;
+    sd_hist *restrict bh = w->bb.hist;
+    for (int k = k0; k < k1; k++)
+        if (ck_kind(s->ck[k]) == SD_PAIR_SS) {
+            const int off = pairs[list[k]].off;
+            bh[off] = h[k];
+            s->off[k] = off;
+        }
+}
+
+void sd_contact_springs_home(sd_world *w)
+{
+    if (w->springs_out == 1)
+        springs_home_range(w, w->near, &w->near_soa, w->near_hist, 0, w->near_n);
+    else if (w->springs_out == 2) {
+        sd_owned *o = w->owned;
+        for (int t = 0; t < o->T; t++)
+            springs_home_range(w, o->list, &o->soa, o->hist, o->K[t], o->seg1[t]);
+    }
+    w->springs_out = 0;
+}
+
+/* The owners' lists' springs out (springs_out 2), from wherever they are (owned_update has
+ * made the lists current). */
+static sd_status springs_to_owned(sd_world *w)
+{
+    if (w->springs_out == 2) return SD_OK;
+    sd_contact_springs_home(w);
+    sd_owned *o = w->owned;
+    if (sd_grow((void **)&o->hist, &o->hist_cap, o->K[o->T] + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
+    for (int t = 0; t < o->T; t++)
+        springs_out_range(w, &o->soa, o->hist, o->K[t], o->seg1[t]);
+    w->springs_out = 2;
+    return SD_OK;
+}
+
+/* The serial list's springs out (springs_out 1), from wherever they are. */
+static sd_status springs_to_serial(sd_world *w)
+{
+    if (w->springs_out == 1) return SD_OK;
+    sd_contact_springs_home(w);
+    if (sd_grow((void **)&w->near_hist, &w->near_hist_cap, w->near_n + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
+    springs_out_range(w, &w->near_soa, w->near_hist, 0, w->near_n);
+    w->springs_out = 1;
+    return SD_OK;
+}
+
 static int near_still_good(const sd_world *w)
 {
     return w->near_stamp == w->timers.rebuilds && !w->rebuild_every_step && 2.0 * w->near_drift < 0.999 * w->near_skin;
@@ -2304,6 +2376,7 @@ static sd_status near_update(sd_world *w)
     const int nbb = w->bb.n;
     /* (near_soa_version: not remade since by the owners' path, which keeps its own lists) */
     if (near_still_good(w) && w->near_nbb == nbb && w->near && w->near_soa_version == w->near_version + 1) return SD_OK;
+    sd_contact_springs_home(w); /* (from the list about to go) */
     const double skin = SD_NEAR_SKIN * w->def.margin;
     if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     if (near_fast_make(w) < 0) return SD_ERR_NOMEM;
@@ -2465,10 +2538,10 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
             const int p0 = k0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < nn ? p0 + SS_CHUNK : nn;
             if (p1 > p0) {
                 pf_front(b, w->near_soa.a, w->near_soa.b, p0, p1, b->n, &front);
-                pf_hist(w->bb.hist, w->near_soa.off, w->near_soa.act, p0, p1);
+                pf_hist(w->near_hist, w->near_soa.off, w->near_soa.act, p0, p1);
             }
         }
-        const soa_view v = soa_at(&w->near_soa, k0);
+        const soa_view v = soa_at(&w->near_soa, k0, w->near_hist);
         bb_chunk(w, law, &w->near[k0], &v, n, x->out, x->used, &x->q, b);
         for (int i = 0; i < n; i++)
             count += x->used[i];
@@ -2596,6 +2669,7 @@ static sd_status owned_update(sd_world *w, int T)
     sd_owned *o = w->owned;
     const int same = o && o->T == T && o->n == n && o->nbb == nbb && o->pairs == w->bb.p && o->rb == w->timers.rebuilds;
     if (same && o->stamp == w->near_version && near_still_good(w) && !uneven(o)) return SD_OK;
+    sd_contact_springs_home(w); /* (from the lists about to go) */
     if (!(o = owned_get(w))) return SD_ERR_NOMEM;
     if (o->T != T) { /* new: even shares */
         for (int t = 0; t <= T; t++)
@@ -2734,7 +2808,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 c -= owned_xchunks(o, t++);
             c = o->K[t] + c * SS_CHUNK;
             const int n = o->xb[t] - c < SS_CHUNK ? o->xb[t] - c : SS_CHUNK;
-            const soa_view v = soa_at(&o->xsoa, c);
+            const soa_view v = soa_at(&o->xsoa, c, w->bb.hist);
             bb_chunk(w, law, &o->cross[c], &v, n, x->out, x->used, &x->q, NULL);
             /* into the cross pairs' own arrays, in cross order: the lines each owner then
              * reads from the other's cache are packed, not one or two per pair of the store */
@@ -2776,11 +2850,11 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     const int p0 = j0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < s1 ? p0 + SS_CHUNK : s1;
                     if (p1 > p0) {
                         pf_front(b, o->soa.a, o->soa.b, p0, p1, i1, &front);
-                        pf_hist(w->bb.hist, o->soa.off, o->soa.act, p0, p1);
+                        pf_hist(o->hist, o->soa.off, o->soa.act, p0, p1);
                     }
                 }
                 const int n = j1 - j0;
-                const soa_view v = soa_at(&o->soa, j0);
+                const soa_view v = soa_at(&o->soa, j0, o->hist);
                 bb_chunk(w, law, &o->list[j0], &v, n, x->out, x->used, &x->q, b);
                 for (int i = 0; i < n; i++)
                     count += x->used[i]; /* (a cross entry's 0: counted in pass 1) */
@@ -2856,6 +2930,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
 #ifdef _OPENMP
     if (T > 1) {
         sd_status st = owned_update(w, T);
+        if (!st) st = springs_to_owned(w);
         if (st) return st;
         int moved = 0;
         sd_moves mv = SD_MOVES_NONE;
@@ -2871,6 +2946,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
 #endif
     {
         sd_status nst = near_update(w);
+        if (!nst) nst = springs_to_serial(w);
         if (nst) return nst;
         count = bb_serial_pass(w, &law, w->bb_scratch);
         count += bt_range(w, &law, w->wall_list, w->wall_n, &((bb_scratch *)w->bb_scratch)[0].wq);

@@ -19,7 +19,7 @@
  * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
-_Static_assert(sizeof(struct sd_world) == 1608, "struct sd_world changed: update io_checkpoint.c");
+_Static_assert(sizeof(struct sd_world) == 1624, "struct sd_world changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_world_def) == 104, "sd_world_def changed: update io_checkpoint.c");
 /* sd_walls: its edge ids, seams and edge lines are derived (sd_walls_weld, again on load) */
 _Static_assert(sizeof(sd_walls) == 96, "sd_walls changed: update io_checkpoint.c");
@@ -313,6 +313,9 @@ static void sync_dir(const char *path)
 sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *extra, size_t extra_len)
 {
     if (!path || !*path || !w || (extra_len > 0 && !extra)) return SD_ERR_ARG;
+    /* the sphere pairs' springs into bb.hist, where the section reads them (where they are
+     * kept, not what they are: the world is const to the caller) */
+    sd_contact_springs_home((sd_world *)w);
     sd_contact_gather((sd_world *)w); /* the wall loads are a cache, summed when asked for */
     size_t plen = strlen(path);
     char *tmp = malloc(plen + sizeof(".tmp.XXXXXX"));

@@ -377,6 +377,7 @@ static inline const sd_hist *any_hist(const sd_pairlist *const *lists, int k, co
  * gid's few entries. */
 sd_status sd_neighbor_collect_history(sd_world *w)
 {
+    sd_contact_springs_home(w); /* (the near list's springs into their slots) */
     if (w->keys_collected) return SD_OK;
     sd_contact_gather(w); /* the wall loads of the last step, before its pairs go */
     const sd_pairlist *lists[2] = {&w->bb, &w->bt};

@@ -87,6 +87,7 @@ void sd_world_destroy(sd_world *w)
         free(w->owned->xout);
         free(w->owned->xact);
         free(w->owned->list);
+        free(w->owned->hist);
         sd_pair_soa_free(&w->owned->soa);
         sd_pair_soa_free(&w->owned->xsoa);
     }
@@ -108,6 +109,7 @@ void sd_world_destroy(sd_world *w)
     free(w->tflag);
     free(w->mov);
     free(w->near);
+    free(w->near_hist);
     free(w->near_mark);
     free(w->nfast);
     free(w->wall_list);
@@ -511,6 +513,7 @@ static double manifold_energy(const sd_world *w, const sd_pair *p, const sd_hist
 
 double sd_world_spring_energy(const sd_world *w)
 {
+    sd_contact_springs_home((sd_world *)w); /* (where the springs sit, not what they are) */
     double e = 0.0;
     const sd_bodies *b = &w->b;
     for (int k = 0; k < w->bb.n; k++) {
@@ -557,6 +560,7 @@ double sd_world_spring_energy(const sd_world *w)
 /* FNV-1a over the bytes of the dynamic state, in gid order. */
 uint64_t sd_world_state_hash(const sd_world *w)
 {
+    sd_contact_springs_home((sd_world *)w); /* (where the springs sit, not what they are) */
     uint64_t h = 1469598103934665603ULL;
     const sd_bodies *b = &w->b;
 #define SD_HASH_BYTES(ptr, len)                                                                                        \

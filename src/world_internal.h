@@ -166,6 +166,10 @@ typedef struct {
      * bodies with wall pairs were left out (wskip[t]) */
     int wn[SD_MAX_OWNERS];
     long wskip[SD_MAX_OWNERS];
+    /* the sphere pairs' springs of list[K[t] .. seg1[t]) at the same places, while the world's
+     * springs_out is 2 (sd_world's near_hist) */
+    sd_hist *hist;
+    int hist_cap;
     int passes; /* passes timed in tau */
 } sd_owned;
 
@@ -293,6 +297,14 @@ struct sd_world {
      * field by field: the touch filter loads them 8 at a time instead of gathering them */
     sd_pair_soa near_soa;
     long near_soa_version; /* near_version + 1 when near and near_soa are the current near pairs */
+    /* The sphere pairs' springs of a near list, in its own order (contact.c springs_take):
+     * near_hist[k] for entry k of the serial list (springs_out 1), sd_owned's hist for the
+     * owners' lists (springs_out 2); their records' off then points there, and those pairs'
+     * slots in bb.hist are stale until sd_contact_springs_home puts them back (springs_out 0).
+     * The pass reads and writes them in list order instead of the candidates' sparse slots. */
+    sd_hist *near_hist;
+    int near_hist_cap;
+    int springs_out;
     long near_stamp, near_version;
     double near_drift, near_skin; /* near_skin: the skin it was made with */
     /* nfast[i]: body i was among the fastest when the near pairs were last made, so every
@@ -402,6 +414,11 @@ void sd_contact_gather(sd_world *w);
  * last: the serial pass's list or the owners' segments). */
 int sd_contact_near_count(const sd_world *w);
 void sd_pair_soa_free(sd_pair_soa *s);
+/* The sphere pairs' springs held by a near list (springs_out) put back into bb.hist, and the
+ * list's records pointed at them again: called before anything reads bb.hist or changes the
+ * pairs (the rebuild's collect, a checkpoint, the hash and the spring energy, a near remake).
+ * It changes where the springs sit, not what they are: the const readers call it too. */
+void sd_contact_springs_home(sd_world *w);
 
 /* The bed roughness (fixed spheres, never made free): nobody reads its load, so nothing is
  * added to it and its force and torque stay at the zero they were created with (half the

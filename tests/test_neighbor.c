@@ -206,6 +206,7 @@ static void near_check(const sd_world *w, long *checked, long *shorter, long *mi
     }
     /* each near sphere pair's flag (sd_pair_soa.act) says whether its slot holds a spring,
      * as the slot does: the touch filter reads the flag instead */
+    sd_contact_springs_home((sd_world *)w); /* (the list's springs into their slots) */
     const sd_hist *hist = w->bb.hist;
     if (w->near_soa_version == w->near_version + 1) {
         for (int j = 0; j < w->near_n; j++) {
@@ -496,6 +497,7 @@ static void test_dynamic(void)
 /* first live history slot of the pair (kind, body gid) */
 static int find_hist(const sd_world *w, int bt, int gid, sd_vec3 *shear)
 {
+    sd_contact_springs_home((sd_world *)w); /* (a near list's springs into their slots) */
     const sd_pairlist *l = bt ? &w->bt : &w->bb;
     int i = w->gid_map[gid];
     for (int k = 0; k < l->n; k++) {
