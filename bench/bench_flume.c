@@ -77,7 +77,7 @@ static const struct {
     {"law256", sd_ss_law256_set},      {"sc_geom", sd_sc_geom_set},     {"sc_lanes", sd_sc_lanes_set},
     {"near_fast", sd_near_fast_set},   {"wall_near", sd_wall_near_set}, {"prefetch", sd_front_prefetch_set},
     {"move_lanes", sd_move_lanes_set}, {"cyl_batch", sd_cyl_batch_set}, {"scan_pre", sd_scan_pre_set},
-    {"bed_cache", sd_bed_cache_set},   {"avx512", sd_simd512_set},
+    {"bed_cache", sd_bed_cache_set},   {"avx512", sd_simd512_set},      {"springs", sd_springs_list_set},
 };
 enum { AB_SWITCHES = sizeof ab_switches / sizeof ab_switches[0] };
 

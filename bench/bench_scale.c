@@ -19,10 +19,11 @@
  * usage: bench_scale SETTLED.data [steps] [--threads N] [--big] [--only N] [--same] [--stages]
  *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/20); --only N runs
  *   that one size for `steps` steps (for profiling).
- * --ab prefetch|avx512 [--ab-groups G]: at each size, after the warm-up, instead of the timed
- *   steps, G groups (default 16) of four 100-step blocks with the switch off (A) and on (B) in
- *   the order A B B A; prints the median and quartiles of B/A (prefetch: the pass's front
- *   prefetch forced off and on; avx512: the AVX2 kernels against the AVX-512 ones).
+ * --ab prefetch|avx512|springs [--ab-groups G]: at each size, after the warm-up, instead of the
+ *   timed steps, G groups (default 16) of four 100-step blocks with the switch off (A) and on (B)
+ *   in the order A B B A; prints the median and quartiles of B/A (prefetch: the pass's front
+ *   prefetch forced off and on; avx512: the AVX2 kernels against the AVX-512 ones; springs: the
+ *   sphere pairs' springs in their candidates' slots against the near list's order).
  * --stages: after each size, the candidate rebuild's stages (sd_neighbor_stage_name), ms a
  *   rebuild over the timed steps' rebuilds. */
 #include <stdio.h>
@@ -132,7 +133,12 @@ static int ab_groups = 16;
 static int stages; /* --stages: the rebuild's stages printed */
 
 /* the switch named ab_name (main checks it): the engine's, as bench_flume --ab has them */
-static int ab_set(int on) { return (!strcmp(ab_name, "prefetch") ? sd_front_prefetch_set : sd_simd512_set)(on); }
+static int ab_set(int on)
+{
+    return (!strcmp(ab_name, "prefetch")  ? sd_front_prefetch_set
+            : !strcmp(ab_name, "springs") ? sd_springs_list_set
+                                          : sd_simd512_set)(on);
+}
 
 /* ab_groups groups of four blocks of 100 steps, the switch off (A) and on (B) in the order
  * A B B A; prints the median and quartiles of each group's B/A time. The switch is left as it
@@ -350,16 +356,17 @@ int main(int argc, char **argv)
             steps = atol(argv[i]);
     }
     if (!path || read_data(path)) {
-        fprintf(
-            stderr,
-            "usage: %s SETTLED.data [steps] [--threads N] [--big] [--only N] [--same] [--stages] [--ab prefetch|avx512 "
-            "[--ab-groups G]]\n",
-            argv[0]);
+        fprintf(stderr,
+                "usage: %s SETTLED.data [steps] [--threads N] [--big] [--only N] [--same] [--stages] [--ab "
+                "prefetch|avx512|springs "
+                "[--ab-groups G]]\n",
+                argv[0]);
         return 2;
     }
     if (ab_name) {
-        if (strcmp(ab_name, "prefetch") && strcmp(ab_name, "avx512")) {
-            fprintf(stderr, "%s: --ab: no switch named '%s'; the switches: prefetch avx512\n", argv[0], ab_name);
+        if (strcmp(ab_name, "prefetch") && strcmp(ab_name, "avx512") && strcmp(ab_name, "springs")) {
+            fprintf(stderr, "%s: --ab: no switch named '%s'; the switches: prefetch avx512 springs\n", argv[0],
+                    ab_name);
             return 2;
         }
         if (ab_groups < 1 || ab_groups > 1000) {

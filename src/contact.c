@@ -2205,9 +2205,10 @@ static int near_block(sd_world *w, double skin, int kb, int ke, int fresh, int n
 
 /* The candidates worth testing (near_update), into out in ascending order, with their
  * records; returns how many. */
-static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pair_soa *soa)
+static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pair_soa *soa, sd_hist *sh)
 {
     const sd_pair *pairs = w->bb.p;
+    const sd_hist *hist = w->bb.hist;
     const int nbb = w->bb.n, nf = sd_bed_start(&w->b);
     int m = 0;
     int32_t near[NEAR_BLOCK];
@@ -2215,9 +2216,16 @@ static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pai
         const int ke = nbb - kb < NEAR_BLOCK ? nbb : kb + NEAR_BLOCK;
         const int nn = near_block(w, skin, kb, ke, fresh, nf, near);
         for (int q = 0; q < nn; q++) {
+            const sd_pair *p = &pairs[near[q]];
             out[m] = near[q];
-            /* (its records too, while the record is at hand) */
-            pair_soa_set(soa, m++, &pairs[near[q]], w->bb.hist, w->b.radius);
+            /* (its records too, while the record is at hand; with sh, a sphere pair's spring
+             * out into the list's order, its slot's line just read for the flag) */
+            pair_soa_set(soa, m, p, hist, w->b.radius);
+            if (sh && p->kind == SD_PAIR_SS) {
+                sh[m] = hist[p->off];
+                soa->off[m] = m;
+            }
+            m++;
         }
     }
     return m;
@@ -2311,19 +2319,37 @@ void sd_contact_springs_home(sd_world *w)
     if (w->springs_out == 1)
         springs_home_range(w, w->near, &w->near_soa, w->near_hist, 0, w->near_n);
     else if (w->springs_out == 2) {
+        /* each owner's segment by a thread of its own, as the lists were made */
         sd_owned *o = w->owned;
+#pragma omp parallel for schedule(static, 1) num_threads(o->T) if (o->T > 1 && w->bb.n > w->def.parallel_min)
         for (int t = 0; t < o->T; t++)
             springs_home_range(w, o->list, &o->soa, o->hist, o->K[t], o->seg1[t]);
     }
     w->springs_out = 0;
 }
 
+static int springs_list_on = 1; /* (sd_springs_list_set) */
+
+int sd_springs_list_set(int on)
+{
+    const int was = springs_list_on;
+    springs_list_on = on != 0;
+    return was;
+}
+
+/* The sphere pairs' slots of the list whose springs are out as `out`, else bb.hist. */
+static inline sd_hist *springs_of(const sd_world *w, int out, sd_hist *h)
+{
+    return w->springs_out == out ? h : w->bb.hist;
+}
+
 /* The owners' lists' springs out (springs_out 2), from wherever they are (owned_update has
- * made the lists current). */
+ * made the lists current); home only, when the switch is off. */
 static sd_status springs_to_owned(sd_world *w)
 {
-    if (w->springs_out == 2) return SD_OK;
+    if (w->springs_out == 2 && springs_list_on) return SD_OK;
     sd_contact_springs_home(w);
+    if (!springs_list_on) return SD_OK;
     sd_owned *o = w->owned;
     if (sd_grow((void **)&o->hist, &o->hist_cap, o->K[o->T] + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
     for (int t = 0; t < o->T; t++)
@@ -2335,8 +2361,9 @@ static sd_status springs_to_owned(sd_world *w)
 /* The serial list's springs out (springs_out 1), from wherever they are. */
 static sd_status springs_to_serial(sd_world *w)
 {
-    if (w->springs_out == 1) return SD_OK;
+    if (w->springs_out == 1 && springs_list_on) return SD_OK;
     sd_contact_springs_home(w);
+    if (!springs_list_on) return SD_OK;
     if (sd_grow((void **)&w->near_hist, &w->near_hist_cap, w->near_n + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
     springs_out_range(w, &w->near_soa, w->near_hist, 0, w->near_n);
     w->springs_out = 1;
@@ -2384,7 +2411,11 @@ static sd_status near_update(sd_world *w)
     if (fresh < 0 || pair_soa_reserve(&w->near_soa, nbb + 1) ||
         sd_grow((void **)&w->wall_list, &w->wall_list_cap, w->b.n + 1, sizeof(int32_t)))
         return SD_ERR_NOMEM;
-    w->near_n = near_filter(w, skin, fresh, w->near, &w->near_soa);
+    /* the springs out as the list is made (springs_out 1), when the switch is on */
+    if (springs_list_on && sd_grow((void **)&w->near_hist, &w->near_hist_cap, nbb + 1, sizeof(sd_hist)))
+        return SD_ERR_NOMEM;
+    w->near_n = near_filter(w, skin, fresh, w->near, &w->near_soa, springs_list_on ? w->near_hist : NULL);
+    w->springs_out = springs_list_on;
     w->wall_n = wall_near_range(w, skin, 0, w->b.n, w->wall_list, &w->wall_skip);
     w->near_nbb = nbb;
     near_made(w, skin);
@@ -2538,10 +2569,10 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
             const int p0 = k0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < nn ? p0 + SS_CHUNK : nn;
             if (p1 > p0) {
                 pf_front(b, w->near_soa.a, w->near_soa.b, p0, p1, b->n, &front);
-                pf_hist(w->near_hist, w->near_soa.off, w->near_soa.act, p0, p1);
+                pf_hist(springs_of(w, 1, w->near_hist), w->near_soa.off, w->near_soa.act, p0, p1);
             }
         }
-        const soa_view v = soa_at(&w->near_soa, k0, w->near_hist);
+        const soa_view v = soa_at(&w->near_soa, k0, springs_of(w, 1, w->near_hist));
         bb_chunk(w, law, &w->near[k0], &v, n, x->out, x->used, &x->q, b);
         for (int i = 0; i < n; i++)
             count += x->used[i];
@@ -2709,6 +2740,9 @@ static sd_status owned_update(sd_world *w, int T)
     if (near_fast_make(w) < 0) return SD_ERR_NOMEM;
     const int fresh = near_mark_ready(w);
     if (fresh < 0) return SD_ERR_NOMEM;
+    /* the springs out as the lists are made (springs_out 2), when the switch is on */
+    const int take = springs_list_on;
+    if (take && sd_grow((void **)&o->hist, &o->hist_cap, nbb + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
 #pragma omp parallel num_threads(T)
     {
         const int tid = omp_get_thread_num(), nthr = omp_get_num_threads();
@@ -2730,6 +2764,7 @@ static sd_status owned_update(sd_world *w, int T)
             uint8_t *restrict sf = o->soa.act;
             const sd_pair *restrict pairs = w->bb.p;
             const sd_hist *restrict hist = w->bb.hist;
+            sd_hist *restrict oh = o->hist;
             int32_t near[NEAR_BLOCK];
             for (int kb = k0; kb < k1; kb += NEAR_BLOCK) {
                 const int ke = k1 - kb < NEAR_BLOCK ? k1 : kb + NEAR_BLOCK;
@@ -2751,6 +2786,10 @@ static sd_status owned_update(sd_world *w, int T)
                     sr[m] = pair_rs2(rad, p);
                     sf[m] = (uint8_t)(hist[p->off].feature >= 0);
                     list[m] = k;
+                    if (take && !cross && p->kind == SD_PAIR_SS) { /* (its slot's line just read) */
+                        oh[m] = hist[p->off];
+                        so[m] = m;
+                    }
                     if (cross) { /* few */
                         o->cross[xc] = k;
                         o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
@@ -2766,6 +2805,7 @@ static sd_status owned_update(sd_world *w, int T)
         }
     }
     near_made(w, skin);
+    w->springs_out = take ? 2 : 0;
     o->stamp = w->near_version;
     o->rb = w->timers.rebuilds;
     o->T = T;
@@ -2850,11 +2890,11 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     const int p0 = j0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < s1 ? p0 + SS_CHUNK : s1;
                     if (p1 > p0) {
                         pf_front(b, o->soa.a, o->soa.b, p0, p1, i1, &front);
-                        pf_hist(o->hist, o->soa.off, o->soa.act, p0, p1);
+                        pf_hist(springs_of(w, 2, o->hist), o->soa.off, o->soa.act, p0, p1);
                     }
                 }
                 const int n = j1 - j0;
-                const soa_view v = soa_at(&o->soa, j0, o->hist);
+                const soa_view v = soa_at(&o->soa, j0, springs_of(w, 2, o->hist));
                 bb_chunk(w, law, &o->list[j0], &v, n, x->out, x->used, &x->q, b);
                 for (int i = 0; i < n; i++)
                     count += x->used[i]; /* (a cross entry's 0: counted in pass 1) */

@@ -486,6 +486,10 @@ int sd_wall_near_set(int on);
 /* Whether the near pairs mark the fastest bodies (w->nfast; default off, contact.c): any
  * setting gives the same bits. Returns the previous setting. */
 int sd_near_fast_set(int on);
+/* The sphere pairs' springs kept in the near list's order while it lives (1, the default) or
+ * left in their candidates' slots (0); the same bits either way (contact.c springs_out).
+ * Returns the previous setting. */
+int sd_springs_list_set(int on);
 /* The logs' moves in batches of SIMD lanes (1, the default) or one by one (0); returns the
  * setting before. Either gives the same bits (integrate.c). */
 int sd_cyl_batch_set(int on);

@@ -315,6 +315,13 @@ int main(void)
         printf("1 and 2 threads in turn every 500 steps, hashed between: hash %016llx, %ld contacts\n",
                (unsigned long long)hm, cm);
         CHECK(hm == h1 && cm == c1);
+        /* and with the springs left in their slots (sd_springs_list_set) */
+        const int was = sd_springs_list_set(0);
+        long cs = 0;
+        const uint64_t hs = run(2, &cs);
+        sd_springs_list_set(was);
+        printf("springs in their slots: hash %016llx, %ld contacts\n", (unsigned long long)hs, cs);
+        CHECK(hs == h1 && cs == c1);
     }
     {
         /* every level of the hand-written SIMD kernels the CPU has (scalar; AVX2 filter, gather
