@@ -2292,6 +2292,8 @@ static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *li
  * bb.hist: a copy each way per near list, against a step's walk through them. Entries k0 ..
  * k1 of the list (candidate indices, an owner's cross entry negative) whose records s are of a
  * sphere pair (ck kind 0; the others keep their slots in bb.hist). */
+static int springs_list_on = 1; /* (sd_springs_list_set; SD_SPRINGS=slots at load, llc_init) */
+
 static void springs_out_range(sd_world *w, sd_pair_soa *s, sd_hist *h, int k0, int k1)
 {
     const sd_hist *restrict bh = w->bb.hist;
@@ -2327,8 +2329,6 @@ void sd_contact_springs_home(sd_world *w)
     }
     w->springs_out = 0;
 }
-
-static int springs_list_on = 1; /* (sd_springs_list_set) */
 
 int sd_springs_list_set(int on)
 {
@@ -2479,6 +2479,9 @@ __attribute__((constructor)) static void llc_init(void)
     const char *e = getenv("SD_PREFETCH");
     if (e && !strcmp(e, "on")) front_prefetch_mode = SD_PREFETCH_ON;
     if (e && !strcmp(e, "off")) front_prefetch_mode = SD_PREFETCH_OFF;
+    /* SD_SPRINGS = slots: the sphere pairs' springs left in their slots (sd_springs_list_set) */
+    e = getenv("SD_SPRINGS");
+    if (e && !strcmp(e, "slots")) springs_list_on = 0;
 }
 
 int sd_front_prefetch_mode(void) { return front_prefetch_mode; }
