@@ -2281,17 +2281,17 @@ static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *li
     return m;
 }
 
-/* The near pairs (of either pass) still good: no rebuild since, and no surface has drifted
- * half the near skin (near_update). */
 /* The sphere pairs' springs of a near list in the list's own order (world_internal.h,
  * springs_out). The candidates' slots are 5.4 a sphere in a dense bed, against 2.8 near pairs
  * and 1.7 touching: the pass walked them as a sparse run of lines, one or two a sphere and
  * step, which past the last-level cache came from DRAM. In the list's order the springs are
- * one stream, read and written in step with the records. Moved out when a pass starts on a list
- * made since, and back (sd_contact_springs_home) before the list is remade or anything reads
- * bb.hist: a copy each way per near list, against a step's walk through them. Entries k0 ..
- * k1 of the list (candidate indices, an owner's cross entry negative) whose records s are of a
- * sphere pair (ck kind 0; the others keep their slots in bb.hist). */
+ * one stream, read and written in step with the records (at 1e5 spheres the step 0.87-0.89x,
+ * docs/performance-log.md §P39). They go out as a list is made (near_filter, owned_update:
+ * the slot's line is read there for the flag), or at a pass's start when they were put back
+ * since (springs_to_serial, springs_to_owned), and back (sd_contact_springs_home) before the
+ * list is remade or anything reads bb.hist. Below: entries k0 .. k1 of a list (candidate
+ * indices, an owner's cross entry negative) whose records s are of a sphere pair (ck kind 0;
+ * the others keep their slots in bb.hist). */
 static int springs_list_on = 1; /* (sd_springs_list_set; SD_SPRINGS=slots at load, llc_init) */
 
 static void springs_out_range(sd_world *w, sd_pair_soa *s, sd_hist *h, int k0, int k1)
@@ -2370,6 +2370,8 @@ static sd_status springs_to_serial(sd_world *w)
     return SD_OK;
 }
 
+/* The near pairs (of either pass) still good: no rebuild since, and no surface has drifted
+ * half the near skin (near_update). */
 static int near_still_good(const sd_world *w)
 {
     return w->near_stamp == w->timers.rebuilds && !w->rebuild_every_step && 2.0 * w->near_drift < 0.999 * w->near_skin;
