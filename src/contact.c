@@ -630,6 +630,14 @@ static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p, const s
     s->act[j] = (uint8_t)(hist[p->off].feature >= 0);
 }
 
+/* Entry k's spring out of its slot off[k] of bh into h[k], and off[k] pointed there
+ * (the near lists' springs in list order, springs_out below). */
+static inline void spring_out(sd_hist *h, int32_t *off, int k, const sd_hist *bh)
+{
+    h[k] = bh[off[k]];
+    off[k] = k;
+}
+
 static soa_view soa_at(const sd_pair_soa *s, int j0, sd_hist *sh)
 {
     return (soa_view){s->a + j0, s->b + j0, s->off + j0, s->ck + j0, s->sqm + j0, s->rs2 + j0, s->act + j0, sh};
@@ -2221,10 +2229,7 @@ static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pai
             /* (its records too, while the record is at hand; with sh, a sphere pair's spring
              * out into the list's order, its slot's line just read for the flag) */
             pair_soa_set(soa, m, p, hist, w->b.radius);
-            if (sh && p->kind == SD_PAIR_SS) {
-                sh[m] = hist[p->off];
-                soa->off[m] = m;
-            }
+            if (sh && p->kind == SD_PAIR_SS) spring_out(sh, soa->off, m, hist);
             m++;
         }
     }
@@ -2288,7 +2293,7 @@ static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *li
  * one stream, read and written in step with the records (at 1e5 spheres the step 0.87-0.89x,
  * docs/performance-log.md §P39). They go out as a list is made (near_filter, owned_update:
  * the slot's line is read there for the flag), or at a pass's start when they were put back
- * since (springs_to_serial, springs_to_owned), and back (sd_contact_springs_home) before the
+ * since (springs_to), and back (sd_contact_springs_home) before the
  * list is remade or anything reads bb.hist. Below: entries k0 .. k1 of a list (candidate
  * indices, an owner's cross entry negative) whose records s are of a sphere pair (ck kind 0;
  * the others keep their slots in bb.hist). */
@@ -2296,12 +2301,8 @@ static int springs_list_on = 1; /* (sd_springs_list_set; SD_SPRINGS=slots at loa
 
 static void springs_out_range(sd_world *w, sd_pair_soa *s, sd_hist *h, int k0, int k1)
 {
-    const sd_hist *restrict bh = w->bb.hist;
     for (int k = k0; k < k1; k++)
-        if (ck_kind(s->ck[k]) == SD_PAIR_SS) {
-            h[k] = bh[s->off[k]];
-            s->off[k] = k;
-        }
+        if (ck_kind(s->ck[k]) == SD_PAIR_SS) spring_out(h, s->off, k, w->bb.hist);
 }
 
 static void springs_home_range(sd_world *w, const int32_t *list, sd_pair_soa *s, const sd_hist *h, int k0, int k1)
@@ -2343,30 +2344,25 @@ static inline sd_hist *springs_of(const sd_world *w, int out, sd_hist *h)
     return w->springs_out == out ? h : w->bb.hist;
 }
 
-/* The owners' lists' springs out (springs_out 2), from wherever they are (owned_update has
- * made the lists current); home only, when the switch is off. */
-static sd_status springs_to_owned(sd_world *w)
+/* The springs of the list the pass is about to use out of their slots, from wherever they
+ * are (after a hash or a checkpoint, or the other pass's list): `out` 1 the serial list (near
+ * list current), 2 the owners' (owned_update has made them current). Only put back when the
+ * switch is off. */
+static sd_status springs_to(sd_world *w, int out)
 {
-    if (w->springs_out == 2 && springs_list_on) return SD_OK;
+    if (w->springs_out == out && springs_list_on) return SD_OK;
     sd_contact_springs_home(w);
     if (!springs_list_on) return SD_OK;
-    sd_owned *o = w->owned;
-    if (sd_grow((void **)&o->hist, &o->hist_cap, o->K[o->T] + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
-    for (int t = 0; t < o->T; t++)
-        springs_out_range(w, &o->soa, o->hist, o->K[t], o->seg1[t]);
-    w->springs_out = 2;
-    return SD_OK;
-}
-
-/* The serial list's springs out (springs_out 1), from wherever they are. */
-static sd_status springs_to_serial(sd_world *w)
-{
-    if (w->springs_out == 1 && springs_list_on) return SD_OK;
-    sd_contact_springs_home(w);
-    if (!springs_list_on) return SD_OK;
-    if (sd_grow((void **)&w->near_hist, &w->near_hist_cap, w->near_n + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
-    springs_out_range(w, &w->near_soa, w->near_hist, 0, w->near_n);
-    w->springs_out = 1;
+    if (out == 1) {
+        if (sd_grow((void **)&w->near_hist, &w->near_hist_cap, w->near_n + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
+        springs_out_range(w, &w->near_soa, w->near_hist, 0, w->near_n);
+    } else {
+        sd_owned *o = w->owned;
+        if (sd_grow((void **)&o->hist, &o->hist_cap, o->K[o->T] + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
+        for (int t = 0; t < o->T; t++)
+            springs_out_range(w, &o->soa, o->hist, o->K[t], o->seg1[t]);
+    }
+    w->springs_out = out;
     return SD_OK;
 }
 
@@ -2417,7 +2413,7 @@ static sd_status near_update(sd_world *w)
     if (springs_list_on && sd_grow((void **)&w->near_hist, &w->near_hist_cap, nbb + 1, sizeof(sd_hist)))
         return SD_ERR_NOMEM;
     w->near_n = near_filter(w, skin, fresh, w->near, &w->near_soa, springs_list_on ? w->near_hist : NULL);
-    w->springs_out = springs_list_on;
+    w->springs_out = springs_list_on ? 1 : 0;
     w->wall_n = wall_near_range(w, skin, 0, w->b.n, w->wall_list, &w->wall_skip);
     w->near_nbb = nbb;
     near_made(w, skin);
@@ -2567,6 +2563,7 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
                 b->force[i] = v3(0, 0, 0);
                 b->torque[i] = v3(0, 0, 0);
             }
+    sd_hist *const sh = springs_of(w, 1, w->near_hist);
     for (int k0 = 0; k0 < nn; k0 += SS_CHUNK) {
         const int n = nn - k0 < SS_CHUNK ? nn - k0 : SS_CHUNK;
         /* the chunk adds its pairs onto the bodies itself, in pair order */
@@ -2574,10 +2571,10 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
             const int p0 = k0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < nn ? p0 + SS_CHUNK : nn;
             if (p1 > p0) {
                 pf_front(b, w->near_soa.a, w->near_soa.b, p0, p1, b->n, &front);
-                pf_hist(springs_of(w, 1, w->near_hist), w->near_soa.off, w->near_soa.act, p0, p1);
+                pf_hist(sh, w->near_soa.off, w->near_soa.act, p0, p1);
             }
         }
-        const soa_view v = soa_at(&w->near_soa, k0, springs_of(w, 1, w->near_hist));
+        const soa_view v = soa_at(&w->near_soa, k0, sh);
         bb_chunk(w, law, &w->near[k0], &v, n, x->out, x->used, &x->q, b);
         for (int i = 0; i < n; i++)
             count += x->used[i];
@@ -2791,10 +2788,8 @@ static sd_status owned_update(sd_world *w, int T)
                     sr[m] = pair_rs2(rad, p);
                     sf[m] = (uint8_t)(hist[p->off].feature >= 0);
                     list[m] = k;
-                    if (take && !cross && p->kind == SD_PAIR_SS) { /* (its slot's line just read) */
-                        oh[m] = hist[p->off];
-                        so[m] = m;
-                    }
+                    if (take && !cross && p->kind == SD_PAIR_SS) /* (its slot's line just read) */
+                        spring_out(oh, so, m, hist);
                     if (cross) { /* few */
                         o->cross[xc] = k;
                         o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
@@ -2835,6 +2830,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
     int moved = 0;
     sd_moves mm = SD_MOVES_NONE;
     const int pf = sd_front_prefetch_on(w);
+    sd_hist *const sh = springs_of(w, 2, o->hist); /* (the own entries' springs) */
 #pragma omp parallel num_threads(T) reduction(+ : count) reduction(| : moved) reduction(moves_max : mm)
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
@@ -2895,11 +2891,11 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     const int p0 = j0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < s1 ? p0 + SS_CHUNK : s1;
                     if (p1 > p0) {
                         pf_front(b, o->soa.a, o->soa.b, p0, p1, i1, &front);
-                        pf_hist(springs_of(w, 2, o->hist), o->soa.off, o->soa.act, p0, p1);
+                        pf_hist(sh, o->soa.off, o->soa.act, p0, p1);
                     }
                 }
                 const int n = j1 - j0;
-                const soa_view v = soa_at(&o->soa, j0, springs_of(w, 2, o->hist));
+                const soa_view v = soa_at(&o->soa, j0, sh);
                 bb_chunk(w, law, &o->list[j0], &v, n, x->out, x->used, &x->q, b);
                 for (int i = 0; i < n; i++)
                     count += x->used[i]; /* (a cross entry's 0: counted in pass 1) */
@@ -2975,7 +2971,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
 #ifdef _OPENMP
     if (T > 1) {
         sd_status st = owned_update(w, T);
-        if (!st) st = springs_to_owned(w);
+        if (!st) st = springs_to(w, 2);
         if (st) return st;
         int moved = 0;
         sd_moves mv = SD_MOVES_NONE;
@@ -2991,7 +2987,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
 #endif
     {
         sd_status nst = near_update(w);
-        if (!nst) nst = springs_to_serial(w);
+        if (!nst) nst = springs_to(w, 1);
         if (nst) return nst;
         count = bb_serial_pass(w, &law, w->bb_scratch);
         count += bt_range(w, &law, w->wall_list, w->wall_n, &((bb_scratch *)w->bb_scratch)[0].wq);
