@@ -78,6 +78,7 @@ static const struct {
     {"near_fast", sd_near_fast_set},   {"wall_near", sd_wall_near_set}, {"prefetch", sd_front_prefetch_set},
     {"move_lanes", sd_move_lanes_set}, {"cyl_batch", sd_cyl_batch_set}, {"scan_pre", sd_scan_pre_set},
     {"bed_cache", sd_bed_cache_set},   {"avx512", sd_simd512_set},      {"springs", sd_springs_list_set},
+    {"slot_sqm", sd_slot_sqm_set},
 };
 enum { AB_SWITCHES = sizeof ab_switches / sizeof ab_switches[0] };
 
@@ -107,6 +108,8 @@ static int ab_phase(sd_world *w, const char *name, int sw, int groups, int n)
         double t[4];
         for (int k = 0; k < 4 && !st; k++) {
             ab_switches[sw].set(order[k]);
+            /* (slot_sqm applies from the next time the springs go out: now) */
+            if (ab_switches[sw].set == sd_slot_sqm_set) sd_contact_springs_home(w);
             const double t0 = sd_now();
             st = sd_world_run(w, AB_BLOCK);
             t[k] = sd_now() - t0;

@@ -19,11 +19,12 @@
  * usage: bench_scale SETTLED.data [steps] [--threads N] [--big] [--only N] [--same] [--stages]
  *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/20); --only N runs
  *   that one size for `steps` steps (for profiling).
- * --ab prefetch|avx512|springs [--ab-groups G]: at each size, after the warm-up, instead of the
- *   timed steps, G groups (default 16) of four 100-step blocks with the switch off (A) and on (B)
- *   in the order A B B A; prints the median and quartiles of B/A (prefetch: the pass's front
+ * --ab prefetch|avx512|springs|slot_sqm [--ab-groups G]: at each size, after the warm-up, instead of the
+ *   timed steps, G groups (default 8) of eight 100-step blocks with the switch off (A) and on (B)
+ *   in the order A B B A B A A B; prints the median and quartiles of B/A (prefetch: the pass's front
  *   prefetch forced off and on; avx512: the AVX2 kernels against the AVX-512 ones; springs: the
- *   sphere pairs' springs in their candidates' slots against the near list's order).
+ *   sphere pairs' springs in their candidates' slots against the near list's order; slot_sqm:
+ *   each pair's sqrt_m_eff streamed with its record against kept in its spring's slot).
  * --stages: after each size, the candidate rebuild's stages (sd_neighbor_stage_name), ms a
  *   rebuild over the timed steps' rebuilds. */
 #include <stdio.h>
@@ -129,20 +130,25 @@ static int cmp_double(const void *a, const void *b)
 
 /* --ab: the switch alternated, and how many groups */
 static const char *ab_name;
-static int ab_groups = 16;
+static int ab_groups = 8;
 static int stages; /* --stages: the rebuild's stages printed */
 
 /* the switch named ab_name (main checks it): the engine's, as bench_flume --ab has them */
 static int ab_set(int on)
 {
-    return (!strcmp(ab_name, "prefetch")  ? sd_front_prefetch_set
-            : !strcmp(ab_name, "springs") ? sd_springs_list_set
-                                          : sd_simd512_set)(on);
+    return (!strcmp(ab_name, "prefetch")   ? sd_front_prefetch_set
+            : !strcmp(ab_name, "springs")  ? sd_springs_list_set
+            : !strcmp(ab_name, "slot_sqm") ? sd_slot_sqm_set
+                                           : sd_simd512_set)(on);
 }
 
-/* ab_groups groups of four blocks of 100 steps, the switch off (A) and on (B) in the order
- * A B B A; prints the median and quartiles of each group's B/A time. The switch is left as it
- * was. */
+/* ab_groups groups of eight blocks of 100 steps, the switch off (A) and on (B) in the order
+ * A B B A B A A B; prints the median and quartiles of each group's B/A time. The switch is left
+ * as it was. Why eight: the tiled bed rings (at 1e4 the step's cost swings a few per cent over a
+ * period of ~400 steps), and A B B A alone, four blocks of 100 steps, put B on the dear half of
+ * each swing: a switch that changes nothing read 1.045-1.050 at 1e4 (docs/performance-log.md
+ * §P40). The second half turns the first around, so a swing of four blocks cancels, as does a
+ * steady drift. */
 static void ab_world(sd_world *w, int n)
 {
     enum { BLOCK = 100 };
@@ -150,20 +156,21 @@ static void ab_world(sd_world *w, int n)
     if (!r) return;
     const int was = ab_set(0);
     for (int g = 0; g < ab_groups; g++) {
-        static const int order[4] = {0, 1, 1, 0};
-        double t[4];
-        for (int k = 0; k < 4; k++) {
+        static const int order[8] = {0, 1, 1, 0, 1, 0, 0, 1};
+        double t[2] = {0.0, 0.0};
+        for (int k = 0; k < 8; k++) {
             ab_set(order[k]);
+            if (!strcmp(ab_name, "slot_sqm")) sd_contact_springs_home(w); /* (from the next springs out: now) */
             const double t0 = sd_now();
             sd_world_run(w, BLOCK);
-            t[k] = sd_now() - t0;
+            t[order[k]] += sd_now() - t0;
         }
-        r[g] = (t[1] + t[2]) / (t[0] + t[3]);
+        r[g] = t[1] / t[0];
     }
     ab_set(was);
     qsort(r, (size_t)ab_groups, sizeof(double), cmp_double);
-    printf("AB N %8d %s: B/A median %.4f quartiles %.4f-%.4f (%d groups of A B B A, %d steps a block)\n", n, ab_name,
-           r[ab_groups / 2], r[ab_groups / 4], r[(3 * ab_groups) / 4], ab_groups, BLOCK);
+    printf("AB N %8d %s: B/A median %.4f quartiles %.4f-%.4f (%d groups of A B B A B A A B, %d steps a block)\n", n,
+           ab_name, r[ab_groups / 2], r[ab_groups / 4], r[(3 * ab_groups) / 4], ab_groups, BLOCK);
     fflush(stdout);
     free(r);
 }
@@ -358,14 +365,15 @@ int main(int argc, char **argv)
     if (!path || read_data(path)) {
         fprintf(stderr,
                 "usage: %s SETTLED.data [steps] [--threads N] [--big] [--only N] [--same] [--stages] [--ab "
-                "prefetch|avx512|springs "
+                "prefetch|avx512|springs|slot_sqm "
                 "[--ab-groups G]]\n",
                 argv[0]);
         return 2;
     }
     if (ab_name) {
-        if (strcmp(ab_name, "prefetch") && strcmp(ab_name, "avx512") && strcmp(ab_name, "springs")) {
-            fprintf(stderr, "%s: --ab: no switch named '%s'; the switches: prefetch avx512 springs\n", argv[0],
+        if (strcmp(ab_name, "prefetch") && strcmp(ab_name, "avx512") && strcmp(ab_name, "springs") &&
+            strcmp(ab_name, "slot_sqm")) {
+            fprintf(stderr, "%s: --ab: no switch named '%s'; the switches: prefetch avx512 springs slot_sqm\n", argv[0],
                     ab_name);
             return 2;
         }

@@ -128,6 +128,7 @@ typedef struct {
     int32_t sel[SS_CHUNK + SS_PAD]; /* the pair's place in the chunk */
     int bed_lim;                    /* the sums' bed test (bed_at): set by each pass before its chunks */
     sd_hist *sh;                    /* the sphere lanes' slots: off[] into here (the chunk's view's) */
+    int lsq;                        /* sh is a list's own springs: see soa_view.lsq */
     sd_vec3 sink[8];                /* where a bed body's sums go (ss_sums256, add_pair_sink): never read */
     /* an owner's cross entries in pass 2 (ks < 0: pair cross[~ks], computed in pass 1): their
      * results and flags, and the owner's bodies [own_lo, own_hi), whose side alone it adds */
@@ -436,6 +437,21 @@ static __attribute__((noinline)) void ss_scalar(const sd_world *w, const sd_law 
     out->t_b = v3_scale(nf, -lb);
 }
 
+/* ss_scalar on a lane's slot h: in a list's own slot (lsq) through a copy whose feature is the
+ * lane's was, only the spring written back (the slot keeps its sqm; the pair keeps touching,
+ * as ss_scalar leaves its feature 0, and so its flag). */
+static void ss_redo(const sd_world *w, const sd_law *law, const sd_pair *p, sd_hist *h, int lsq, int32_t was,
+                    sd_pair_out *out)
+{
+    if (!lsq) {
+        ss_scalar(w, law, p, h, out);
+        return;
+    }
+    sd_hist t = {.feature = was, .shear = h->shear};
+    ss_scalar(w, law, p, &t, out);
+    h->shear = t.shear;
+}
+
 /* A log's pair that fails its kernel's first exact rejection (most of them): skips the
  * manifold round trip. */
 static inline int log_pair_apart(const sd_bodies *b, const sd_pair *p)
@@ -546,6 +562,12 @@ typedef struct {
     const double *sqm, *rs2;
     uint8_t *act; /* (written by the touch filter) */
     sd_hist *sh;  /* where the sphere pairs' off point: bb.hist, or the list's own springs */
+    /* sh is a near list's own springs (springs_out): there a sphere pair's slot holds its
+     * sqrt_m_eff where bb.hist has the feature (slot_sqm), so that the law's mass comes with
+     * the spring for the touching pairs instead of in a stream of its own for every entry, and
+     * the feature is the entry's flag (act) */
+    int lsq;
+    int k0; /* the chunk's first entry (with lsq, a sphere pair's off is its entry's index) */
 } soa_view;
 
 void sd_pair_soa_free(sd_pair_soa *s)
@@ -630,17 +652,41 @@ static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p, const s
     s->act[j] = (uint8_t)(hist[p->off].feature >= 0);
 }
 
-/* Entry k's spring out of its slot off[k] of bh into h[k], and off[k] pointed there
- * (the near lists' springs in list order, springs_out below). */
-static inline void spring_out(sd_hist *h, int32_t *off, int k, const sd_hist *bh)
+static int slot_sqm_on = 1; /* (sd_slot_sqm_set) */
+
+int sd_slot_sqm_set(int on)
 {
-    h[k] = bh[off[k]];
+    const int was = slot_sqm_on;
+    slot_sqm_on = on != 0;
+    return was;
+}
+
+/* A list's own spring slot (soa_view.lsq): sqrt_m_eff in the feature's 8 bytes (the feature
+ * and its padding), the spring where bb.hist has it. */
+_Static_assert(sizeof(sd_hist) == 32 && offsetof(sd_hist, shear) == 8, "a list's slot: sqm in the first 8 bytes");
+static inline double slot_sqm(const sd_hist *h)
+{
+    double x;
+    memcpy(&x, h, sizeof x);
+    return x;
+}
+
+/* Entry k's spring out of its slot off[k] of bh into h[k], with its sqrt_m_eff sqm, and
+ * off[k] pointed there (the near lists' springs in list order, springs_out below). */
+static inline void spring_out(sd_hist *h, int32_t *off, int k, const sd_hist *bh, double sqm, int lsq)
+{
+    if (lsq) {
+        h[k].shear = bh[off[k]].shear;
+        memcpy(&h[k], &sqm, sizeof sqm);
+    } else
+        h[k] = bh[off[k]];
     off[k] = k;
 }
 
-static soa_view soa_at(const sd_pair_soa *s, int j0, sd_hist *sh)
+static soa_view soa_at(const sd_pair_soa *s, int j0, sd_hist *sh, int lsq)
 {
-    return (soa_view){s->a + j0, s->b + j0, s->off + j0, s->ck + j0, s->sqm + j0, s->rs2 + j0, s->act + j0, sh};
+    return (soa_view){s->a + j0,   s->b + j0,   s->off + j0, s->ck + j0, s->sqm + j0,
+                      s->rs2 + j0, s->act + j0, sh,          lsq,        j0};
 }
 
 /* Step 1 of bb_chunk (the touch filter) for the chunk's entries i0 .. i1: which pairs touch,
@@ -671,12 +717,14 @@ static inline void ss_filter_range(const sd_world *w, const int32_t *ks, const s
         const int act = v->act[i], was = act - 1;
         used[i] = t;
         q->dx[m] = dx, q->dy[m] = dy, q->dz[m] = dz;
-        q->ra[m] = ra, q->rb[m] = rb, q->sqm[m] = v->sqm[i];
+        q->ra[m] = ra, q->rb[m] = rb;
+        if (!v->lsq) q->sqm[m] = v->sqm[i]; /* (else the gather takes it from the slot) */
         q->ia[m] = ia, q->ib[m] = ib, q->off[m] = off, q->was[m] = was, q->sel[m] = i;
         m += t;
         v->act[i] = (uint8_t)t;
-        /* a contact that has just ended loses its spring (few in a step) */
-        if (act & !t) hist[off].feature = -1;
+        /* a contact that has just ended loses its spring (few in a step; in a list's own
+         * slots, the flag is the feature) */
+        if (act & !t & !v->lsq) hist[off].feature = -1;
     }
     *mp = m;
 }
@@ -701,6 +749,7 @@ static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m
         const uint64_t keep = -(uint64_t)(q->was[j] == 0);
         q->sx[j] = bits_and(h->shear.x, keep), q->sy[j] = bits_and(h->shear.y, keep),
         q->sz[j] = bits_and(h->shear.z, keep);
+        if (q->lsq) q->sqm[j] = slot_sqm(h);
     }
 }
 
@@ -805,7 +854,6 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
                       a = _mm256_loadu_si256((const __m256i *)(v->a + i)),
                       b = _mm256_loadu_si256((const __m256i *)(v->b + i)),
                       off = _mm256_loadu_si256((const __m256i *)(v->off + i));
-        const __m512d sqm = _mm512_loadu_pd(v->sqm + i);
         const __mmask8 other = _mm256_test_epi32_mask(ck, hi16), ss = (__mmask8)~other;
         const __m256i a3 = _mm256_add_epi32(a, _mm256_add_epi32(a, a)),
                       b3 = _mm256_add_epi32(b, _mm256_add_epi32(b, b));
@@ -820,15 +868,18 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
         const __mmask8 t = (__mmask8)(_mm512_cmp_pd_mask(d2, _mm512_mul_pd(rs, rs), _CMP_NGE_UQ) & ss);
         /* the spring's feature (slot off, 32-byte slots: index 4 off, scale 8), of the sphere
          * lanes only: the others' off point into bb.hist, which need not be where hist is */
-        const __m256i was = _mm256_mmask_i32gather_epi32(
-            none, ss, _mm256_slli_epi32(off, 2), (const int *)((const char *)hist + offsetof(sd_hist, feature)), 8);
+        /* (in a list's own slots, from the entries' flags: 0 with a spring, else -1) */
+        const __m256i was =
+            v->lsq ? _mm256_sub_epi32(_mm256_cvtepu8_epi32(_mm_loadl_epi64((const __m128i *)(v->act + i))), one)
+                   : _mm256_mmask_i32gather_epi32(none, ss, _mm256_slli_epi32(off, 2),
+                                                  (const int *)((const char *)hist + offsetof(sd_hist, feature)), 8);
         _mm256_mask_storeu_epi32(used + i, ss, _mm256_maskz_mov_epi32(t, one));
         /* the entries' flags: a spring after this step where they touch (soa_view.act; this
          * form reads the slots themselves) */
         for (int l = 0; l < 8; l++)
             v->act[i + l] = (uint8_t)(t >> l & 1);
         /* was | (t - 1): stored only where it changes (a contact that has just ended) */
-        __mmask8 gone = (__mmask8)(~t & ss & _mm256_cmpneq_epi32_mask(was, none));
+        __mmask8 gone = v->lsq ? 0 : (__mmask8)(~t & ss & _mm256_cmpneq_epi32_mask(was, none));
         if (gone) {
             int32_t o[8];
             _mm256_storeu_si256((__m256i *)o, off);
@@ -840,7 +891,7 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
         _mm512_storeu_pd(q->dz + m, _mm512_maskz_compress_pd(t, dz));
         _mm512_storeu_pd(q->ra + m, _mm512_maskz_compress_pd(t, ra));
         _mm512_storeu_pd(q->rb + m, _mm512_maskz_compress_pd(t, rb));
-        _mm512_storeu_pd(q->sqm + m, _mm512_maskz_compress_pd(t, sqm));
+        if (!v->lsq) _mm512_storeu_pd(q->sqm + m, _mm512_maskz_compress_pd(t, _mm512_loadu_pd(v->sqm + i)));
         _mm256_storeu_si256((__m256i *)(q->ia + m), _mm256_maskz_compress_epi32(t, a));
         _mm256_storeu_si256((__m256i *)(q->ib + m), _mm256_maskz_compress_epi32(t, b));
         _mm256_storeu_si256((__m256i *)(q->off + m), _mm256_maskz_compress_epi32(t, off));
@@ -892,6 +943,8 @@ __attribute__((target("avx512f,avx512vl"))) static void ss_gather512(const sd_wo
         _mm512_storeu_pd(q->sx + j, _mm512_mask_i32gather_pd(zero, held, o4, sh, 8));
         _mm512_storeu_pd(q->sy + j, _mm512_mask_i32gather_pd(zero, held, o4, sh + 8, 8));
         _mm512_storeu_pd(q->sz + j, _mm512_mask_i32gather_pd(zero, held, o4, sh + 16, 8));
+        if (q->lsq) /* (a list's own slot: sqm in the first 8 bytes) */
+            _mm512_storeu_pd(q->sqm + j, _mm512_mask_i32gather_pd(zero, live, o4, sh - 8, 8));
     }
 }
 
@@ -943,8 +996,9 @@ __attribute__((constructor)) static void simd_tables_init(void)
  * wide (the arrays are padded by SS_PAD). The group's other entries go to gen as they are (not
  * through filter_other: bb_chunk's step 2 takes them through other_pair). Runs while 4 pairs
  * remain and returns where it stopped; gen has room for 4 past *ngp (*ngp <= i). */
-__attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w, const soa_view *v, int i, int n,
-                                                               int *used, ss_batch *q, int *mp, int *gen, int *ngp)
+__attribute__((target("avx2,popcnt"), always_inline)) static inline int
+ss_filter256_k(const sd_world *w, const soa_view *v, int i, int n, int *used, ss_batch *q, int *mp, int *gen, int *ngp,
+               const int lsq)
 {
     sd_hist *hist = v->sh;
     const double *pos = &w->b.pos[0].x;
@@ -980,7 +1034,7 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
         memcpy(vact + i, &bit_u8[t], sizeof act4);
         /* a contact that has just ended loses its spring (few in a step, so the branch is
          * seldom taken) */
-        int gone = ~t & had & ss;
+        int gone = lsq ? 0 : ~t & had & ss;
         for (; gone; gone &= gone - 1)
             hist[voff[i + __builtin_ctz((unsigned)gone)]].feature = -1;
         const __m256i pp = _mm256_loadu_si256((const __m256i *)perm_pd[t]);
@@ -990,10 +1044,12 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
         PACK_PD(q->dx, dx);
         PACK_PD(q->dy, dy);
         PACK_PD(q->dz, dz);
-        PACK_PD(q->sqm, _mm256_loadu_pd(vsqm + i));
+        if (!lsq) PACK_PD(q->sqm, _mm256_loadu_pd(vsqm + i)); /* (else the gather: the slot) */
         PACK_I32(q->ia, _mm_loadu_si128((const __m128i *)(va + i)));
         PACK_I32(q->ib, _mm_loadu_si128((const __m128i *)(vb + i)));
-        PACK_I32(q->off, _mm_loadu_si128((const __m128i *)(voff + i)));
+        /* (in a list's own slots, off is the entry's index: not read) */
+        PACK_I32(q->off,
+                 lsq ? _mm_add_epi32(_mm_set1_epi32(v->k0 + i), lane) : _mm_loadu_si128((const __m128i *)(voff + i)));
         PACK_I32(q->was, was);
         PACK_I32(q->sel, _mm_add_epi32(_mm_set1_epi32(i), lane));
 #undef PACK_PD
@@ -1013,6 +1069,14 @@ __attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w
     *mp = m;
     *ngp = ng;
     return i;
+}
+
+/* ss_filter256_k for the view's kind of spring slots, each form compiled without the test */
+__attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w, const soa_view *v, int i, int n,
+                                                               int *used, ss_batch *q, int *mp, int *gen, int *ngp)
+{
+    return v->lsq ? ss_filter256_k(w, v, i, n, used, q, mp, gen, ngp, 1)
+                  : ss_filter256_k(w, v, i, n, used, q, mp, gen, ngp, 0);
 }
 
 /* Step 3 of bb_chunk in AVX2, 4 touching lanes at a time: each body's velocity and spin read as
@@ -1052,6 +1116,7 @@ __attribute__((target("avx2"))) static int ss_gather256(const sd_world *w, ss_ba
                       _mm256_loadu_pd((const double *)&hist[q->off[j + 3]]), r);
         const __m256d keep = _mm256_castsi256_pd(_mm256_cvtepi32_epi64(
             _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(q->was + j)), _mm_setzero_si128())));
+        if (q->lsq) _mm256_storeu_pd(q->sqm + j, r[0]); /* (a list's own slot: sqm first) */
         _mm256_storeu_pd(q->sx + j, _mm256_and_pd(r[1], keep));
         _mm256_storeu_pd(q->sy + j, _mm256_and_pd(r[2], keep));
         _mm256_storeu_pd(q->sz + j, _mm256_and_pd(r[3], keep));
@@ -1085,7 +1150,10 @@ __attribute__((target("avx2"))) static int ss_sums256(ss_batch *q, int j, sd_bod
     const __m256d mla = _mm256_xor_pd(_mm256_loadu_pd(q->la + j), sign),
                   mlb = _mm256_xor_pd(_mm256_loadu_pd(q->lb + j), sign);
     __m256d hr[4], fr[4], ta[4], tb[4];
-    sd_transpose4(zero, _mm256_loadu_pd(q->sx + j), _mm256_loadu_pd(q->sy + j), _mm256_loadu_pd(q->sz + j), hr);
+    /* the slot's first 8 bytes: the feature 0 and its padding, or in a list's own slot the sqm
+     * it holds */
+    sd_transpose4(q->lsq ? _mm256_loadu_pd(q->sqm + j) : zero, _mm256_loadu_pd(q->sx + j), _mm256_loadu_pd(q->sy + j),
+                  _mm256_loadu_pd(q->sz + j), hr);
     sd_transpose4(_mm256_loadu_pd(q->fx + j), _mm256_loadu_pd(q->fy + j), _mm256_loadu_pd(q->fz + j), zero, fr);
     sd_transpose4(_mm256_mul_pd(nfx, mla), _mm256_mul_pd(nfy, mla), _mm256_mul_pd(nfz, mla), zero, ta);
     sd_transpose4(_mm256_mul_pd(nfx, mlb), _mm256_mul_pd(nfy, mlb), _mm256_mul_pd(nfz, mlb), zero, tb);
@@ -1662,6 +1730,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
     int gen[SS_CHUNK];
     int m = 0, ng = 0;
     q->sh = v->sh;
+    q->lsq = v->lsq;
     /* 1. which pairs touch (ss_filter_range) */
     {
         /* (8 pairs at a time in AVX-512, 4 in AVX2, where the CPU has it; the rest, or all,
@@ -1752,12 +1821,12 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
             const int ia = q->ia[j], ib = q->ib[j];
             sd_hist *h = &hist[q->off[j]];
             if (q->redo[j] != 0.0) {
-                ss_scalar(w, law, &pairs[ks[i]], h, &out[i]);
+                ss_redo(w, law, &pairs[ks[i]], h, q->lsq, q->was[j], &out[i]);
                 add_pair_lim(acc, q->bed_lim, ia, 0, &out[i]);
                 add_pair_lim(acc, q->bed_lim, ib, 1, &out[i]);
                 continue;
             }
-            h->feature = 0;
+            if (!q->lsq) h->feature = 0; /* (a list's own slot keeps its sqm there) */
             h->shear = v3(q->sx[j], q->sy[j], q->sz[j]);
             const double mla = -q->la[j], mlb = -q->lb[j];
             sd_pair_out o;
@@ -1773,10 +1842,10 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
         const int i = q->sel[j];
         sd_hist *h = &hist[q->off[j]];
         if (q->redo[j] != 0.0) {
-            ss_scalar(w, law, &pairs[ks[i]], h, &out[i]);
+            ss_redo(w, law, &pairs[ks[i]], h, q->lsq, q->was[j], &out[i]);
             continue;
         }
-        h->feature = 0;
+        if (!q->lsq) h->feature = 0;
         h->shear = v3(q->sx[j], q->sy[j], q->sz[j]);
         const double mla = -q->la[j], mlb = -q->lb[j];
         out[i].f_a = v3(q->fx[j], q->fy[j], q->fz[j]);
@@ -2229,7 +2298,7 @@ static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pai
             /* (its records too, while the record is at hand; with sh, a sphere pair's spring
              * out into the list's order, its slot's line just read for the flag) */
             pair_soa_set(soa, m, p, hist, w->b.radius);
-            if (sh && p->kind == SD_PAIR_SS) spring_out(sh, soa->off, m, hist);
+            if (sh && p->kind == SD_PAIR_SS) spring_out(sh, soa->off, m, hist, soa->sqm[m], w->springs_lsq);
             m++;
         }
     }
@@ -2302,7 +2371,7 @@ static int springs_list_on = 1; /* (sd_springs_list_set; SD_SPRINGS=slots at loa
 static void springs_out_range(sd_world *w, sd_pair_soa *s, sd_hist *h, int k0, int k1)
 {
     for (int k = k0; k < k1; k++)
-        if (ck_kind(s->ck[k]) == SD_PAIR_SS) spring_out(h, s->off, k, w->bb.hist);
+        if (ck_kind(s->ck[k]) == SD_PAIR_SS) spring_out(h, s->off, k, w->bb.hist, s->sqm[k], w->springs_lsq);
 }
 
 static void springs_home_range(sd_world *w, const int32_t *list, sd_pair_soa *s, const sd_hist *h, int k0, int k1)
@@ -2312,7 +2381,11 @@ static void springs_home_range(sd_world *w, const int32_t *list, sd_pair_soa *s,
     for (int k = k0; k < k1; k++)
         if (ck_kind(s->ck[k]) == SD_PAIR_SS) {
             const int off = pairs[list[k]].off;
-            bh[off] = h[k];
+            if (w->springs_lsq) { /* (the feature from the entry's flag: the slot holds the sqm there) */
+                bh[off].feature = s->act[k] ? 0 : -1;
+                bh[off].shear = h[k].shear;
+            } else
+                bh[off] = h[k];
             s->off[k] = off;
         }
 }
@@ -2353,6 +2426,7 @@ static sd_status springs_to(sd_world *w, int out)
     if (w->springs_out == out && springs_list_on) return SD_OK;
     sd_contact_springs_home(w);
     if (!springs_list_on) return SD_OK;
+    w->springs_lsq = slot_sqm_on;
     if (out == 1) {
         if (sd_grow((void **)&w->near_hist, &w->near_hist_cap, w->near_n + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
         springs_out_range(w, &w->near_soa, w->near_hist, 0, w->near_n);
@@ -2412,6 +2486,7 @@ static sd_status near_update(sd_world *w)
     /* the springs out as the list is made (springs_out 1), when the switch is on */
     if (springs_list_on && sd_grow((void **)&w->near_hist, &w->near_hist_cap, nbb + 1, sizeof(sd_hist)))
         return SD_ERR_NOMEM;
+    w->springs_lsq = slot_sqm_on;
     w->near_n = near_filter(w, skin, fresh, w->near, &w->near_soa, springs_list_on ? w->near_hist : NULL);
     w->springs_out = springs_list_on ? 1 : 0;
     w->wall_n = wall_near_range(w, skin, 0, w->b.n, w->wall_list, &w->wall_skip);
@@ -2574,7 +2649,7 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
                 pf_hist(sh, w->near_soa.off, w->near_soa.act, p0, p1);
             }
         }
-        const soa_view v = soa_at(&w->near_soa, k0, sh);
+        const soa_view v = soa_at(&w->near_soa, k0, sh, sh != w->bb.hist && w->springs_lsq);
         bb_chunk(w, law, &w->near[k0], &v, n, x->out, x->used, &x->q, b);
         for (int i = 0; i < n; i++)
             count += x->used[i];
@@ -2743,7 +2818,8 @@ static sd_status owned_update(sd_world *w, int T)
     const int fresh = near_mark_ready(w);
     if (fresh < 0) return SD_ERR_NOMEM;
     /* the springs out as the lists are made (springs_out 2), when the switch is on */
-    const int take = springs_list_on;
+    const int take = springs_list_on, lsq = slot_sqm_on;
+    w->springs_lsq = lsq;
     if (take && sd_grow((void **)&o->hist, &o->hist_cap, nbb + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
 #pragma omp parallel num_threads(T)
     {
@@ -2789,7 +2865,7 @@ static sd_status owned_update(sd_world *w, int T)
                     sf[m] = (uint8_t)(hist[p->off].feature >= 0);
                     list[m] = k;
                     if (take && !cross && p->kind == SD_PAIR_SS) /* (its slot's line just read) */
-                        spring_out(oh, so, m, hist);
+                        spring_out(oh, so, m, hist, sq[m], lsq);
                     if (cross) { /* few */
                         o->cross[xc] = k;
                         o->xo[xc] = (uint8_t)(ta == t ? tb : ta);
@@ -2849,7 +2925,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                 c -= owned_xchunks(o, t++);
             c = o->K[t] + c * SS_CHUNK;
             const int n = o->xb[t] - c < SS_CHUNK ? o->xb[t] - c : SS_CHUNK;
-            const soa_view v = soa_at(&o->xsoa, c, w->bb.hist);
+            const soa_view v = soa_at(&o->xsoa, c, w->bb.hist, 0);
             bb_chunk(w, law, &o->cross[c], &v, n, x->out, x->used, &x->q, NULL);
             /* into the cross pairs' own arrays, in cross order: the lines each owner then
              * reads from the other's cache are packed, not one or two per pair of the store */
@@ -2895,7 +2971,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     }
                 }
                 const int n = j1 - j0;
-                const soa_view v = soa_at(&o->soa, j0, sh);
+                const soa_view v = soa_at(&o->soa, j0, sh, sh != w->bb.hist && w->springs_lsq);
                 bb_chunk(w, law, &o->list[j0], &v, n, x->out, x->used, &x->q, b);
                 for (int i = 0; i < n; i++)
                     count += x->used[i]; /* (a cross entry's 0: counted in pass 1) */

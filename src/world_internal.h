@@ -305,6 +305,7 @@ struct sd_world {
     sd_hist *near_hist;
     int near_hist_cap;
     int springs_out;
+    int springs_lsq; /* those springs' slots hold the pair's sqrt_m_eff where the feature was (contact.c slot_sqm) */
     long near_stamp, near_version;
     double near_drift, near_skin; /* near_skin: the skin it was made with */
     /* nfast[i]: body i was among the fastest when the near pairs were last made, so every
@@ -490,6 +491,11 @@ int sd_near_fast_set(int on);
  * left in their candidates' slots (0); the same bits either way (contact.c springs_out).
  * Returns the previous setting. */
 int sd_springs_list_set(int on);
+/* With the springs in a near list's order, each sphere pair's sqrt_m_eff kept in its spring's
+ * slot (1, the default: the touch filter then does not stream it for every entry) or in the
+ * records only (0); the same bits either way, from the next time the springs go out
+ * (contact.c slot_sqm). Returns the previous setting. */
+int sd_slot_sqm_set(int on);
 /* The logs' moves in batches of SIMD lanes (1, the default) or one by one (0); returns the
  * setting before. Either gives the same bits (integrate.c). */
 int sd_cyl_batch_set(int on);

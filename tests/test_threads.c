@@ -54,21 +54,28 @@ static uint64_t run_mixed(long seg, long *contacts)
     if (sd_world_create(&s.world, &w)) return 0;
     sd_build_info info;
     if (sd_build_scene(w, &s, &info, stderr)) return 0;
-    int outs[3] = {0, 0, 0};
+    int outs[3] = {0, 0, 0}, lsqs[2] = {0, 0};
+    /* (and each pair's sqrt_m_eff in its spring's slot or not, in turn every two segments:
+     * sd_slot_sqm_set, from the next time the springs go out) */
+    const int sq_was = sd_slot_sqm_set(1);
     for (long done = 0, k = 0; done < 8000; done += seg, k++) {
 #ifdef _OPENMP
         omp_set_num_threads(1 + (int)(k & 1));
 #endif
+        sd_slot_sqm_set((int)(k >> 1 & 1));
         if (done == 6000) sd_world_set_group_active(w, SD_GROUP_GATE, 0);
         CHECK(sd_world_run(w, seg) == SD_OK);
         outs[w->springs_out]++;
+        if (w->springs_out) lsqs[w->springs_lsq != 0]++;
         (void)sd_world_state_hash(w);
         CHECK(w->springs_out == 0);
         CHECK(isfinite(sd_world_spring_energy(w)));
     }
+    sd_slot_sqm_set(sq_was);
 #ifdef _OPENMP
     CHECK(outs[1] > 0 && outs[2] > 0); /* both lists held the springs */
 #endif
+    CHECK(lsqs[0] > 0 && lsqs[1] > 0); /* in both forms of slot */
     *contacts = sd_world_contact_count(w);
     uint64_t h = sd_world_state_hash(w);
     sd_world_destroy(w);
@@ -322,6 +329,15 @@ int main(void)
         sd_springs_list_set(was);
         printf("springs in their slots: hash %016llx, %ld contacts\n", (unsigned long long)hs, cs);
         CHECK(hs == h1 && cs == c1);
+        /* and in the list's order without the pairs' sqrt_m_eff in their slots (sd_slot_sqm_set),
+         * on 1 and 2 threads */
+        const int sq = sd_slot_sqm_set(0);
+        long cq1 = 0, cq2 = 0;
+        const uint64_t hq1 = run(1, &cq1), hq2 = run(2, &cq2);
+        sd_slot_sqm_set(sq);
+        printf("sqrt_m_eff with the records only: hash %016llx / %016llx, %ld contacts\n", (unsigned long long)hq1,
+               (unsigned long long)hq2, cq1);
+        CHECK(hq1 == h1 && hq2 == h1 && cq1 == c1 && cq2 == c1);
     }
     {
         /* every level of the hand-written SIMD kernels the CPU has (scalar; AVX2 filter, gather
