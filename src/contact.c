@@ -640,10 +640,17 @@ static inline double pair_rs2(const double *rad, const sd_pair *p)
     return rs * rs;
 }
 
+/* An entry's rs2 (sd_pair_soa): a sphere pair's (r_a + r_b)^2, -1 for any other entry, whose
+ * sign then tells the AVX2 filter that it is not a sphere pair (ss_filter256 reads no ck). */
+static inline double entry_rs2(const double *rad, const sd_pair *p)
+{
+    return p->kind == SD_PAIR_SS ? pair_rs2(rad, p) : -1.0;
+}
+
 /* Entry j of s from the record p (and its first slot in hist; rad: the bodies' radii). */
 static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p, const sd_hist *hist, const double *rad)
 {
-    s->rs2[j] = pair_rs2(rad, p);
+    s->rs2[j] = entry_rs2(rad, p);
     s->a[j] = p->a;
     s->b[j] = p->b;
     s->off[j] = p->off;
@@ -1004,16 +1011,17 @@ ss_filter256_k(const sd_world *w, const soa_view *v, int i, int n, int *used, ss
     const double *pos = &w->b.pos[0].x;
     /* the view's arrays in locals: the packing's 16-byte stores may alias anything, and gcc
      * loaded each address from *v again after them */
-    const int32_t *const va = v->a, *const vb = v->b, *const voff = v->off, *const vck = v->ck;
+    const int32_t *const va = v->a, *const vb = v->b, *const voff = v->off;
     const double *const vsqm = v->sqm, *const vrs2 = v->rs2;
     uint8_t *const vact = v->act;
     int m = *mp, ng = *ngp;
-    const __m128i kind = _mm_set1_epi32((int)0xFFFF0000u), lane = _mm_setr_epi32(0, 1, 2, 3);
+    const __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
     for (; i + 4 <= n; i += 4) {
-        /* the lanes of sphere pairs (kind 0 in ck's high half); a log's pair takes the scalar
-         * loop's path after the group (in pair order among the log pairs) */
-        const int ss = _mm_movemask_ps(_mm_castsi128_ps(
-            _mm_cmpeq_epi32(_mm_and_si128(_mm_loadu_si128((const __m128i *)(vck + i)), kind), _mm_setzero_si128())));
+        /* the lanes of sphere pairs, by the sign of the entries' rs2 (-1 for any other:
+         * entry_rs2; ck is not read); a log's pair takes the scalar loop's path after the
+         * group (in pair order among the log pairs) */
+        const __m256d rs2 = _mm256_loadu_pd(vrs2 + i);
+        const int ss = ~_mm256_movemask_pd(rs2) & 15;
         __m256d dx, dy, dz;
         diff_lanes(pos, va + i, vb + i, &dx, &dy, &dz);
         const __m256d d2 =
@@ -1021,7 +1029,7 @@ ss_filter256_k(const sd_world *w, const soa_view *v, int i, int n, int *used, ss
         /* t = !(d2 >= rs^2), as the scalar loop (true for an unordered pair too); rs^2 from the
          * entry (made with the list), the radii themselves read by the gather for the
          * touching lanes only (ss_gather256) */
-        const int t = _mm256_movemask_pd(_mm256_cmp_pd(d2, _mm256_loadu_pd(vrs2 + i), _CMP_NGE_UQ)) & ss;
+        const int t = _mm256_movemask_pd(_mm256_cmp_pd(d2, rs2, _CMP_NGE_UQ)) & ss;
         /* the slots' features from the entries' flags (0 with a spring, else -1), not from the
          * slots: a line of its own for each near pair, most of them apart in a flow (the
          * slots' load was a tenth of this loop's samples in the paper's capture) */
@@ -2613,10 +2621,14 @@ static void pf_front(const sd_bodies *b, const int32_t *pa, const int32_t *pb, i
  * entries in five at random, cost 10-17 % at 1e4 in mispredictions; the other entries prefetch
  * the list's first line, a hit. Into L2 (prefetcht2): 0.83 / 0.81 at 1e5 on one / two threads,
  * against 0.86 / 0.87 into L1. */
-static inline void pf_hist(const sd_hist *h, const int32_t *off, const uint8_t *act, int j0, int j1)
+static inline void pf_hist(const sd_hist *h, const int32_t *off, const uint8_t *act, int j0, int j1, int lsq)
 {
-    for (int j = j0; j < j1; j++)
-        __builtin_prefetch(h + (off[j] & -(int32_t)act[j]), 1, 1);
+    if (lsq) /* (a list's own slots: entry j's at j, off not read) */
+        for (int j = j0; j < j1; j++)
+            __builtin_prefetch(h + (j & -(int32_t)act[j]), 1, 1);
+    else
+        for (int j = j0; j < j1; j++)
+            __builtin_prefetch(h + (off[j] & -(int32_t)act[j]), 1, 1);
 }
 
 static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
@@ -2646,7 +2658,7 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
             const int p0 = k0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < nn ? p0 + SS_CHUNK : nn;
             if (p1 > p0) {
                 pf_front(b, w->near_soa.a, w->near_soa.b, p0, p1, b->n, &front);
-                pf_hist(sh, w->near_soa.off, w->near_soa.act, p0, p1);
+                pf_hist(sh, w->near_soa.off, w->near_soa.act, p0, p1, sh != w->bb.hist && w->springs_lsq);
             }
         }
         const soa_view v = soa_at(&w->near_soa, k0, sh, sh != w->bb.hist && w->springs_lsq);
@@ -2861,7 +2873,7 @@ static sd_status owned_update(sd_world *w, int T)
                     so[m] = p->off;
                     sc[m] = ck_pack(p->kind, p->cap);
                     sq[m] = p->sqrt_m_eff;
-                    sr[m] = pair_rs2(rad, p);
+                    sr[m] = entry_rs2(rad, p);
                     sf[m] = (uint8_t)(hist[p->off].feature >= 0);
                     list[m] = k;
                     if (take && !cross && p->kind == SD_PAIR_SS) /* (its slot's line just read) */
@@ -2872,6 +2884,7 @@ static sd_status owned_update(sd_world *w, int T)
                         pair_soa_set(&o->xsoa, xc, p, hist, rad);
                         list[m] = ~xc++;
                         sc[m] = SD_CK_CROSS;
+                        sr[m] = -1.0; /* (not a sphere pair of this list: entry_rs2) */
                     }
                     m++;
                 }
@@ -2967,7 +2980,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     const int p0 = j0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < s1 ? p0 + SS_CHUNK : s1;
                     if (p1 > p0) {
                         pf_front(b, o->soa.a, o->soa.b, p0, p1, i1, &front);
-                        pf_hist(sh, o->soa.off, o->soa.act, p0, p1);
+                        pf_hist(sh, o->soa.off, o->soa.act, p0, p1, sh != w->bb.hist && w->springs_lsq);
                     }
                 }
                 const int n = j1 - j0;
