@@ -559,7 +559,8 @@ static inline double bits_and(double x, uint64_t mask)
  * the touch filter reads of each pair, in entry order. */
 typedef struct {
     const int32_t *a, *b, *off, *ck;
-    const double *sqm, *rs2;
+    const double *sqm;
+    const float *rs2;
     uint8_t *act; /* (written by the touch filter) */
     sd_hist *sh;  /* where the sphere pairs' off point: bb.hist, or the list's own springs */
     /* sh is a near list's own springs (springs_out): there a sphere pair's slot holds its
@@ -599,7 +600,7 @@ static int pair_soa_reserve(sd_pair_soa *s, int n)
     if (t.ck) s->ck = t.ck;
     t.sqm = realloc(s->sqm, (size_t)cap * sizeof(double));
     if (t.sqm) s->sqm = t.sqm;
-    t.rs2 = realloc(s->rs2, (size_t)cap * sizeof(double));
+    t.rs2 = realloc(s->rs2, (size_t)cap * sizeof(float));
     if (t.rs2) s->rs2 = t.rs2;
     t.act = realloc(s->act, (size_t)cap);
     if (t.act) s->act = t.act;
@@ -640,11 +641,16 @@ static inline double pair_rs2(const double *rad, const sd_pair *p)
     return rs * rs;
 }
 
-/* An entry's rs2 (sd_pair_soa): a sphere pair's (r_a + r_b)^2, -1 for any other entry, whose
- * sign then tells the AVX2 filter that it is not a sphere pair (ss_filter256 reads no ck). */
-static inline double entry_rs2(const double *rad, const sd_pair *p)
+/* An entry's rs2 (sd_pair_soa), for the AVX2 filter (ss_filter256), which reads no ck: a
+ * sphere pair's (r_a + r_b)^2 rounded to a float, so within a relative 2^-24 of the double;
+ * +NaN where that would leave the float's normal range (the filter then tests every such pair
+ * exactly); -1 for any other entry, whose sign tells that it is not a sphere pair. */
+#define RS2_EDGE 0x1p-22 /* the filter's band around the float: wider than its rounding */
+static inline float entry_rs2(const double *rad, const sd_pair *p)
 {
-    return p->kind == SD_PAIR_SS ? pair_rs2(rad, p) : -1.0;
+    if (p->kind != SD_PAIR_SS) return -1.0f;
+    const double r = pair_rs2(rad, p);
+    return r >= 0x1p-100 && r <= 0x1p100 ? (float)r : NAN;
 }
 
 /* Entry j of s from the record p (and its first slot in hist; rad: the bodies' radii). */
@@ -1012,7 +1018,8 @@ ss_filter256_k(const sd_world *w, const soa_view *v, int i, int n, int *used, ss
     /* the view's arrays in locals: the packing's 16-byte stores may alias anything, and gcc
      * loaded each address from *v again after them */
     const int32_t *const va = v->a, *const vb = v->b, *const voff = v->off;
-    const double *const vsqm = v->sqm, *const vrs2 = v->rs2;
+    const double *const vsqm = v->sqm, *const rad = w->b.radius;
+    const float *const vrs2 = v->rs2;
     uint8_t *const vact = v->act;
     int m = *mp, ng = *ngp;
     const __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
@@ -1020,16 +1027,31 @@ ss_filter256_k(const sd_world *w, const soa_view *v, int i, int n, int *used, ss
         /* the lanes of sphere pairs, by the sign of the entries' rs2 (-1 for any other:
          * entry_rs2; ck is not read); a log's pair takes the scalar loop's path after the
          * group (in pair order among the log pairs) */
-        const __m256d rs2 = _mm256_loadu_pd(vrs2 + i);
-        const int ss = ~_mm256_movemask_pd(rs2) & 15;
+        const __m128 rs2f = _mm_loadu_ps(vrs2 + i);
+        const int ss = ~_mm_movemask_ps(rs2f) & 15;
         __m256d dx, dy, dz;
         diff_lanes(pos, va + i, vb + i, &dx, &dy, &dz);
         const __m256d d2 =
             _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
-        /* t = !(d2 >= rs^2), as the scalar loop (true for an unordered pair too); rs^2 from the
-         * entry (made with the list), the radii themselves read by the gather for the
-         * touching lanes only (ss_gather256) */
-        const int t = _mm256_movemask_pd(_mm256_cmp_pd(d2, rs2, _CMP_NGE_UQ)) & ss;
+        /* t = !(d2 >= rs^2), as the scalar loop (true for an unordered pair too), from the
+         * entry's rs^2 as a float (4 bytes of stream, not 8): below it less a relative 2^-22, a
+         * pair touches; at or above it plus as much, it does not (the float is within 2^-24 of
+         * rs^2); in between, or with a NaN, the radii are read and the test made exactly (a
+         * gap within ~1e-7 of the radii: seldom). The radii themselves are read by the gather
+         * for the touching lanes (ss_gather256) */
+        const __m256d r = _mm256_cvtps_pd(rs2f);
+        const int in = _mm256_movemask_pd(
+                      _mm256_cmp_pd(d2, _mm256_mul_pd(r, _mm256_set1_pd(1.0 - RS2_EDGE)), _CMP_LT_OQ)),
+                  out = _mm256_movemask_pd(
+                      _mm256_cmp_pd(d2, _mm256_mul_pd(r, _mm256_set1_pd(1.0 + RS2_EDGE)), _CMP_GE_OQ));
+        int t = in & ss;
+        for (int edge = ~(in | out) & ss & 15; edge; edge &= edge - 1) {
+            const int l = __builtin_ctz((unsigned)edge);
+            double d2l[4];
+            _mm256_storeu_pd(d2l, d2);
+            const double rs = rad[va[i + l]] + rad[vb[i + l]];
+            t |= !(d2l[l] >= rs * rs) << l;
+        }
         /* the slots' features from the entries' flags (0 with a spring, else -1), not from the
          * slots: a line of its own for each near pair, most of them apart in a flow (the
          * slots' load was a tenth of this loop's samples in the paper's capture) */
@@ -2849,7 +2871,8 @@ static sd_status owned_update(sd_world *w, int T)
              * load the next array's address again (about half of this loop's samples) */
             int32_t *restrict sa = o->soa.a, *restrict sb = o->soa.b, *restrict so = o->soa.off,
                               *restrict sc = o->soa.ck, *restrict list = o->list;
-            double *restrict sq = o->soa.sqm, *restrict sr = o->soa.rs2;
+            double *restrict sq = o->soa.sqm;
+            float *restrict sr = o->soa.rs2;
             const double *restrict rad = w->b.radius;
             uint8_t *restrict sf = o->soa.act;
             const sd_pair *restrict pairs = w->bb.p;
@@ -2884,7 +2907,7 @@ static sd_status owned_update(sd_world *w, int T)
                         pair_soa_set(&o->xsoa, xc, p, hist, rad);
                         list[m] = ~xc++;
                         sc[m] = SD_CK_CROSS;
-                        sr[m] = -1.0; /* (not a sphere pair of this list: entry_rs2) */
+                        sr[m] = -1.0f; /* (not a sphere pair of this list: entry_rs2) */
                     }
                     m++;
                 }

@@ -111,8 +111,8 @@ typedef struct {
 typedef struct {
     int32_t *a, *b, *off, *ck; /* ck: cap in the low half, kind in the high half */
     double *sqm;
-    double *rs2; /* (r_a + r_b)^2: a sphere pair touches when its centres are nearer; -1 for any
-                  * other entry (contact.c entry_rs2) */
+    float *rs2; /* (r_a + r_b)^2 as a float (a sphere pair touches when its centres are nearer);
+                 * -1 for any other entry (contact.c entry_rs2) */
     /* a sphere pair's slot holds a spring (its feature is 0, else -1): set from the slot when
      * the list is made, then by the touch filter at each step (touching now, a spring after
      * the step), so that the filter does not read the slot of every near pair */

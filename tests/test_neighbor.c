@@ -180,7 +180,7 @@ static long near_logs_out;  /* log pairs left out of the near list, summed over 
 static long near_by_owners; /* checks of the owners' segments (two threads) */
 
 static long flags_wrong, flags_checked; /* near_check: spring flags against their slots */
-static long rs2_wrong;                  /* near_check: the entries' (r_a + r_b)^2 against the radii */
+static long rs2_wrong; /* near_check: the entries' (r_a + r_b)^2 (a float) against the radii, and -1 for the others */
 /* near_check: the pairs holding a spring, each marked near (near_mark) as the spring
  * collection at the next rebuild takes for granted (it reads no other pair's slots) */
 static long marks_checked, marks_wrong;
@@ -189,6 +189,17 @@ static double rs2_of(const sd_world *w, const sd_pair *p)
 {
     const double rs = w->b.radius[p->a] + w->b.radius[p->b];
     return rs * rs;
+}
+
+/* an entry's rs2 not what contact.c's entry_rs2 makes of its pair: a sphere pair's (r_a + r_b)^2
+ * rounded to a float (NaN outside [2^-100, 2^100]), -1 for any other kind */
+static int rs2_bad(float got, const sd_world *w, const sd_pair *p)
+{
+    if (p->kind != SD_PAIR_SS) return got != -1.0f;
+    const double r = rs2_of(w, p);
+    if (!(r >= 0x1p-100 && r <= 0x1p100)) return !isnan(got);
+    /* (and within 2^-24 of the double, which the AVX2 filter's band takes for granted) */
+    return got != (float)r || fabs((double)got - r) > 0x1p-24 * r;
 }
 
 static void near_check(const sd_world *w, long *checked, long *shorter, long *missing)
@@ -212,10 +223,8 @@ static void near_check(const sd_world *w, long *checked, long *shorter, long *mi
         for (int j = 0; j < w->near_n; j++) {
             near[nn++] = w->near[j];
             const sd_pair *p = &w->bb.p[w->near[j]];
-            if (p->kind == SD_PAIR_SS) {
-                flags_wrong += w->near_soa.act[j] != (hist[p->off].feature >= 0);
-                rs2_wrong += w->near_soa.rs2[j] != rs2_of(w, p);
-            }
+            if (p->kind == SD_PAIR_SS) flags_wrong += w->near_soa.act[j] != (hist[p->off].feature >= 0);
+            rs2_wrong += rs2_bad(w->near_soa.rs2[j], w, p);
             flags_checked += p->kind == SD_PAIR_SS;
         }
     } else if (w->owned && w->owned->stamp == w->near_version) {
@@ -227,11 +236,10 @@ static void near_check(const sd_world *w, long *checked, long *shorter, long *mi
                 near[nn++] = own ? o->list[j] : o->cross[~o->list[j]];
                 const sd_pair *p = &w->bb.p[near[nn - 1]];
                 const uint8_t act = own ? o->soa.act[j] : o->xsoa.act[~o->list[j]];
-                const double rs2 = own ? o->soa.rs2[j] : o->xsoa.rs2[~o->list[j]];
-                if (p->kind == SD_PAIR_SS) {
-                    flags_wrong += act != (hist[p->off].feature >= 0);
-                    rs2_wrong += rs2 != rs2_of(w, p);
-                }
+                if (p->kind == SD_PAIR_SS) flags_wrong += act != (hist[p->off].feature >= 0);
+                /* (a cross entry: its record in xsoa, and -1 in the owner's list) */
+                rs2_wrong += own ? rs2_bad(o->soa.rs2[j], w, p)
+                                 : rs2_bad(o->xsoa.rs2[~o->list[j]], w, p) + (o->soa.rs2[j] != -1.0f);
                 flags_checked += p->kind == SD_PAIR_SS;
             }
     } else {

@@ -5,6 +5,7 @@
  * motion, so that new contacts, held springs, small and large tilts of the spring, sliding and
  * a clipped dashpot all occur (counted, and required to occur). Empty slots carry stale
  * springs, which a new contact must not pick up. */
+#include <math.h>
 #include <string.h>
 
 #include "check.h"
@@ -18,6 +19,7 @@
 
 typedef struct {
     long pairs, touching, fresh, held, tilt_small, tilt_large, sliding, clipped;
+    long edge, edge_touch; /* the pairs placed within the AVX2 filter's band, and of them touching */
 } cases;
 
 /* reference forces from the springs in old[], summed per body in ascending pair order */
@@ -111,8 +113,8 @@ static void run(int threads, cases *c, long *bad)
     sd_world *w;
     CHECK(sd_world_create(&d, &w) == SD_OK);
     sd_rng rng = {20261123};
-    const int n = 1500;
-    for (int i = 0; i < n; i++) {
+    const int ncloud = 1500;
+    for (int i = 0; i < ncloud; i++) {
         sd_sphere_def s = sd_sphere_def_default();
         s.radius = sd_rng_range(&rng, 0.0025, 0.01);
         s.pos = v3(sd_rng_range(&rng, 0, 0.2), sd_rng_range(&rng, 0, 0.1), sd_rng_range(&rng, 0, 0.1));
@@ -121,6 +123,26 @@ static void run(int threads, cases *c, long *bad)
         s.fixed = i % 10 == 0; /* bed spheres: sqrt(m_i) for the effective mass */
         CHECK(sd_world_add_sphere(w, &s) >= 0);
     }
+    /* pairs apart from the cloud, at centre distances within a relative 1e-6 of r_a + r_b:
+     * the AVX2 filter keeps (r_a + r_b)^2 as a float and tests a pair exactly within a
+     * relative 2^-22 of it (contact.c entry_rs2); the first evaluation (no move) has them */
+    static const double rel[] = {-1e-6, -1e-7, -3e-8, -1e-8, -1e-9, -1e-12, 0.0, 1e-12, 1e-9, 1e-8, 3e-8, 1e-7, 1e-6};
+    for (int k = 0; k < (int)(sizeof rel / sizeof rel[0]); k++) {
+        sd_sphere_def s = sd_sphere_def_default();
+        s.radius = sd_rng_range(&rng, 0.0025, 0.01);
+        s.pos = v3(0.3 + 0.05 * k, 0.05, 0.05);
+        s.fixed = 1;
+        const double ra = s.radius;
+        CHECK(sd_world_add_sphere(w, &s) >= 0);
+        s.radius = sd_rng_range(&rng, 0.0025, 0.01);
+        s.pos.x += (ra + s.radius) * (1.0 + rel[k]);
+        s.fixed = 0;
+        CHECK(sd_world_add_sphere(w, &s) >= 0);
+        const double dx = s.pos.x - 0.3 - 0.05 * k, rs = ra + s.radius;
+        c->edge += fabs(dx * dx / (rs * rs) - 1.0) < 0x1p-22;
+        c->edge_touch += dx * dx < rs * rs;
+    }
+    const int n = w->b.n;
     CHECK(sd_neighbor_rebuild(w) == SD_OK);
     const int nh = w->bb.nh;
     sd_hist *old = malloc((size_t)(nh + 1) * sizeof *old), *hist = malloc((size_t)(nh + 1) * sizeof *hist);
@@ -206,6 +228,8 @@ int main(void)
             CHECK(c.tilt_large > 100);
             CHECK(c.sliding > 10);
             CHECK(c.clipped > 10);
+            /* pairs at the edge of touching on both sides of it, in the AVX2 filter's band */
+            CHECK(c.edge >= 8 && c.edge_touch >= 4 && c.edge_touch <= c.edge);
         }
     }
     CHECK(levels >= 1);
