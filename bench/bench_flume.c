@@ -108,8 +108,6 @@ static int ab_phase(sd_world *w, const char *name, int sw, int groups, int n)
         double t[4];
         for (int k = 0; k < 4 && !st; k++) {
             ab_switches[sw].set(order[k]);
-            /* (slot_sqm applies from the next time the springs go out: now) */
-            if (ab_switches[sw].set == sd_slot_sqm_set) sd_contact_springs_home(w);
             const double t0 = sd_now();
             st = sd_world_run(w, AB_BLOCK);
             t[k] = sd_now() - t0;

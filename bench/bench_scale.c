@@ -160,7 +160,6 @@ static void ab_world(sd_world *w, int n)
         double t[2] = {0.0, 0.0};
         for (int k = 0; k < 8; k++) {
             ab_set(order[k]);
-            if (!strcmp(ab_name, "slot_sqm")) sd_contact_springs_home(w); /* (from the next springs out: now) */
             const double t0 = sd_now();
             sd_world_run(w, BLOCK);
             t[order[k]] += sd_now() - t0;

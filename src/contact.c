@@ -1009,9 +1009,8 @@ __attribute__((constructor)) static void simd_tables_init(void)
  * wide (the arrays are padded by SS_PAD). The group's other entries go to gen as they are (not
  * through filter_other: bb_chunk's step 2 takes them through other_pair). Runs while 4 pairs
  * remain and returns where it stopped; gen has room for 4 past *ngp (*ngp <= i). */
-__attribute__((target("avx2,popcnt"), always_inline)) static inline int
-ss_filter256_k(const sd_world *w, const soa_view *v, int i, int n, int *used, ss_batch *q, int *mp, int *gen, int *ngp,
-               const int lsq)
+__attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w, const soa_view *v, int i, int n,
+                                                               int *used, ss_batch *q, int *mp, int *gen, int *ngp)
 {
     sd_hist *hist = v->sh;
     const double *pos = &w->b.pos[0].x;
@@ -1021,6 +1020,7 @@ ss_filter256_k(const sd_world *w, const soa_view *v, int i, int n, int *used, ss
     const double *const vsqm = v->sqm, *const rad = w->b.radius;
     const float *const vrs2 = v->rs2;
     uint8_t *const vact = v->act;
+    const int lsq = v->lsq;
     int m = *mp, ng = *ngp;
     const __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
     for (; i + 4 <= n; i += 4) {
@@ -1044,13 +1044,15 @@ ss_filter256_k(const sd_world *w, const soa_view *v, int i, int n, int *used, ss
                       _mm256_cmp_pd(d2, _mm256_mul_pd(r, _mm256_set1_pd(1.0 - RS2_EDGE)), _CMP_LT_OQ)),
                   out = _mm256_movemask_pd(
                       _mm256_cmp_pd(d2, _mm256_mul_pd(r, _mm256_set1_pd(1.0 + RS2_EDGE)), _CMP_GE_OQ));
-        int t = in & ss;
-        for (int edge = ~(in | out) & ss & 15; edge; edge &= edge - 1) {
-            const int l = __builtin_ctz((unsigned)edge);
+        int t = in & ss, edge = ~(in | out) & ss & 15;
+        if (edge) {
             double d2l[4];
             _mm256_storeu_pd(d2l, d2);
-            const double rs = rad[va[i + l]] + rad[vb[i + l]];
-            t |= !(d2l[l] >= rs * rs) << l;
+            for (; edge; edge &= edge - 1) {
+                const int l = __builtin_ctz((unsigned)edge);
+                const double rs = rad[va[i + l]] + rad[vb[i + l]];
+                t |= !(d2l[l] >= rs * rs) << l;
+            }
         }
         /* the slots' features from the entries' flags (0 with a spring, else -1), not from the
          * slots: a line of its own for each near pair, most of them apart in a flow (the
@@ -1099,14 +1101,6 @@ ss_filter256_k(const sd_world *w, const soa_view *v, int i, int n, int *used, ss
     *mp = m;
     *ngp = ng;
     return i;
-}
-
-/* ss_filter256_k for the view's kind of spring slots, each form compiled without the test */
-__attribute__((target("avx2,popcnt"))) static int ss_filter256(const sd_world *w, const soa_view *v, int i, int n,
-                                                               int *used, ss_batch *q, int *mp, int *gen, int *ngp)
-{
-    return v->lsq ? ss_filter256_k(w, v, i, n, used, q, mp, gen, ngp, 1)
-                  : ss_filter256_k(w, v, i, n, used, q, mp, gen, ngp, 0);
 }
 
 /* Step 3 of bb_chunk in AVX2, 4 touching lanes at a time: each body's velocity and spin read as
@@ -2448,12 +2442,12 @@ static inline sd_hist *springs_of(const sd_world *w, int out, sd_hist *h)
 }
 
 /* The springs of the list the pass is about to use out of their slots, from wherever they
- * are (after a hash or a checkpoint, or the other pass's list): `out` 1 the serial list (near
- * list current), 2 the owners' (owned_update has made them current). Only put back when the
- * switch is off. */
+ * are (after a hash or a checkpoint, or the other pass's list), in the slots' form the switch
+ * asks for (sd_slot_sqm_set): `out` 1 the serial list (near list current), 2 the owners'
+ * (owned_update has made them current). Only put back when the switch is off. */
 static sd_status springs_to(sd_world *w, int out)
 {
-    if (w->springs_out == out && springs_list_on) return SD_OK;
+    if (w->springs_out == out && springs_list_on && w->springs_lsq == slot_sqm_on) return SD_OK;
     sd_contact_springs_home(w);
     if (!springs_list_on) return SD_OK;
     w->springs_lsq = slot_sqm_on;
@@ -2673,6 +2667,7 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
                 b->torque[i] = v3(0, 0, 0);
             }
     sd_hist *const sh = springs_of(w, 1, w->near_hist);
+    const int lsq = sh != w->bb.hist && w->springs_lsq; /* (soa_view.lsq) */
     for (int k0 = 0; k0 < nn; k0 += SS_CHUNK) {
         const int n = nn - k0 < SS_CHUNK ? nn - k0 : SS_CHUNK;
         /* the chunk adds its pairs onto the bodies itself, in pair order */
@@ -2680,10 +2675,10 @@ static long bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
             const int p0 = k0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < nn ? p0 + SS_CHUNK : nn;
             if (p1 > p0) {
                 pf_front(b, w->near_soa.a, w->near_soa.b, p0, p1, b->n, &front);
-                pf_hist(sh, w->near_soa.off, w->near_soa.act, p0, p1, sh != w->bb.hist && w->springs_lsq);
+                pf_hist(sh, w->near_soa.off, w->near_soa.act, p0, p1, lsq);
             }
         }
-        const soa_view v = soa_at(&w->near_soa, k0, sh, sh != w->bb.hist && w->springs_lsq);
+        const soa_view v = soa_at(&w->near_soa, k0, sh, lsq);
         bb_chunk(w, law, &w->near[k0], &v, n, x->out, x->used, &x->q, b);
         for (int i = 0; i < n; i++)
             count += x->used[i];
@@ -2943,6 +2938,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
     sd_moves mm = SD_MOVES_NONE;
     const int pf = sd_front_prefetch_on(w);
     sd_hist *const sh = springs_of(w, 2, o->hist); /* (the own entries' springs) */
+    const int lsq = sh != w->bb.hist && w->springs_lsq; /* (soa_view.lsq) */
 #pragma omp parallel num_threads(T) reduction(+ : count) reduction(| : moved) reduction(moves_max : mm)
     {
         const int nthr = omp_get_num_threads(), tid = omp_get_thread_num();
@@ -3003,11 +2999,11 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
                     const int p0 = j0 + PF_CHUNKS * SS_CHUNK, p1 = p0 + SS_CHUNK < s1 ? p0 + SS_CHUNK : s1;
                     if (p1 > p0) {
                         pf_front(b, o->soa.a, o->soa.b, p0, p1, i1, &front);
-                        pf_hist(sh, o->soa.off, o->soa.act, p0, p1, sh != w->bb.hist && w->springs_lsq);
+                        pf_hist(sh, o->soa.off, o->soa.act, p0, p1, lsq);
                     }
                 }
                 const int n = j1 - j0;
-                const soa_view v = soa_at(&o->soa, j0, sh, sh != w->bb.hist && w->springs_lsq);
+                const soa_view v = soa_at(&o->soa, j0, sh, lsq);
                 bb_chunk(w, law, &o->list[j0], &v, n, x->out, x->used, &x->q, b);
                 for (int i = 0; i < n; i++)
                     count += x->used[i]; /* (a cross entry's 0: counted in pass 1) */

@@ -298,7 +298,7 @@ struct sd_world {
      * field by field: the touch filter loads them 8 at a time instead of gathering them */
     sd_pair_soa near_soa;
     long near_soa_version; /* near_version + 1 when near and near_soa are the current near pairs */
-    /* The sphere pairs' springs of a near list, in its own order (contact.c springs_take):
+    /* The sphere pairs' springs of a near list, in its own order (contact.c springs_to):
      * near_hist[k] for entry k of the serial list (springs_out 1), sd_owned's hist for the
      * owners' lists (springs_out 2); their records' off then points there, and those pairs'
      * slots in bb.hist are stale until sd_contact_springs_home puts them back (springs_out 0).
@@ -494,8 +494,8 @@ int sd_near_fast_set(int on);
 int sd_springs_list_set(int on);
 /* With the springs in a near list's order, each sphere pair's sqrt_m_eff kept in its spring's
  * slot (1, the default: the touch filter then does not stream it for every entry) or in the
- * records only (0); the same bits either way, from the next time the springs go out
- * (contact.c slot_sqm). Returns the previous setting. */
+ * records only (0); the same bits either way, from the next contact pass (contact.c slot_sqm).
+ * Returns the previous setting. */
 int sd_slot_sqm_set(int on);
 /* The logs' moves in batches of SIMD lanes (1, the default) or one by one (0); returns the
  * setting before. Either gives the same bits (integrate.c). */

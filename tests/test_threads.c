@@ -56,7 +56,7 @@ static uint64_t run_mixed(long seg, long *contacts)
     if (sd_build_scene(w, &s, &info, stderr)) return 0;
     int outs[3] = {0, 0, 0}, lsqs[2] = {0, 0};
     /* (and each pair's sqrt_m_eff in its spring's slot or not, in turn every two segments:
-     * sd_slot_sqm_set, from the next time the springs go out) */
+     * sd_slot_sqm_set, from the next pass) */
     const int sq_was = sd_slot_sqm_set(1);
     for (long done = 0, k = 0; done < 8000; done += seg, k++) {
 #ifdef _OPENMP
