@@ -247,7 +247,10 @@ static double run_case(int n, long steps)
     }
     free(all);
     open_box(w, nt * tile, ymax, 0.5);
-    return time_world(w, n, "", 50, steps); /* (warm-up: candidate lists, history, caches) */
+    /* warm-up past the first 1 ms rebuild, as --same: candidate lists, history, caches, and
+     * the buffers that grow once (their pages first touched; at 1e6 the first rebuild took
+     * ~330 ms more than the next ones, docs/performance-log.md §P41) */
+    return time_world(w, n, "", 110, steps);
 }
 
 /* --same: the settled unit (its spheres and its box) and how each size is timed */

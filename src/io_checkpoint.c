@@ -19,7 +19,7 @@
  * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
-_Static_assert(sizeof(struct sd_world) == 1632, "struct sd_world changed: update io_checkpoint.c");
+_Static_assert(sizeof(struct sd_world) == 1696, "struct sd_world changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_world_def) == 104, "sd_world_def changed: update io_checkpoint.c");
 /* sd_walls: its edge ids, seams and edge lines are derived (sd_walls_weld, again on load) */
 _Static_assert(sizeof(sd_walls) == 96, "sd_walls changed: update io_checkpoint.c");
@@ -835,11 +835,22 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
             st = fail(r, "section OLDH: bad flag");
             goto out;
         }
-        for (int k = 1; k < m; k++)
-            if (w->old_keys[k] >> 32 < w->old_keys[k - 1] >> 32) {
+        /* each first body's entries are one run (neighbor.c old_ranges) */
+        uint8_t *seen = m > 0 ? calloc((size_t)w->next_gid + 1, 1) : NULL;
+        if (m > 0 && !seen) {
+            st = SD_ERR_NOMEM;
+            goto out;
+        }
+        for (int k = 0; k < m && !st; k++) {
+            const uint64_t g = w->old_keys[k] >> 32;
+            if (k > 0 && g == w->old_keys[k - 1] >> 32) continue;
+            if (g >= (uint64_t)w->next_gid || seen[g])
                 st = fail(r, "section OLDH: keys not grouped by body");
-                goto out;
-            }
+            else
+                seen[g] = 1;
+        }
+        free(seen);
+        if (st) goto out;
     }
 
     /* clock and flags */

@@ -371,22 +371,29 @@ static inline const sd_hist *any_hist(const sd_pairlist *const *lists, int k, co
 
 /* The held springs of every pair, taken out of the lists before they are remade (sd_hist,
  * keyed by the pair's gids and kind, so they survive the reordering of the store). Grouped by
- * the first body's gid, ascending (a counting sort: the threads count their share of the
- * pairs per gid, then each puts its entries in place), and inside a gid in list order; a
- * pair's entries, in feature order, are one run. restore_history looks up a pair's run in its
- * gid's few entries. */
+ * the first body's store index, ascending (a counting sort: the threads count their share of
+ * the pairs per body, then each puts its entries in place), and inside a body in list order;
+ * a pair's entries, in feature order, are one run. The list runs in store order and a pair's
+ * first body is at most a slab of cells from its lower one, so the counts and the entries are
+ * written within a window that the caches hold (grouped by gid, which the store does not
+ * follow, the writes went anywhere: 218 against ~35 ms a rebuild at 1e6 spheres,
+ * docs/performance-log.md §P41). restore_history finds a body's entries through the rebuild's
+ * sort, or, when the store changed since the collect, through the gid in the keys. */
 sd_status sd_neighbor_collect_history(sd_world *w)
 {
     sd_contact_springs_home(w); /* (the near list's springs into their slots) */
     if (w->keys_collected) return SD_OK;
     sd_contact_gather(w); /* the wall loads of the last step, before its pairs go */
     const sd_pairlist *lists[2] = {&w->bb, &w->bt};
-    const int np = w->bb.n + w->bt.n, G = w->next_gid;
+    const int np = w->bb.n + w->bt.n, n = w->b.n;
     const int T = rebuild_threads(w, np);
-    /* cnt[t * (G + 1) + g]: thread t's entries of gid g, then where they go */
-    int32_t *cnt = calloc((size_t)T * (G + 1) + 1, sizeof(int32_t));
-    if (!cnt) return SD_ERR_NOMEM;
-    const int32_t *gid = w->b.gid;
+    /* cnt[t * (n + 1) + i]: thread t's entries of body i, then where they go */
+    const size_t ncnt = (size_t)T * (n + 1) + 1;
+    if (ncnt > INT32_MAX || sd_grow((void **)&w->old_cnt, &w->old_cnt_cap, (int)ncnt, sizeof(int32_t)) ||
+        sd_grow((void **)&w->old_start, &w->old_start_cap, n + 1, sizeof(int32_t)))
+        return SD_ERR_NOMEM;
+    int32_t *cnt = w->old_cnt;
+    memset(cnt, 0, ncnt * sizeof(int32_t));
     /* only a body-body pair near when the near pairs were last made, since the last rebuild,
      * can hold a spring (contact.c near_keep_range): the others' records and slots are not
      * read, when those marks are there */
@@ -395,7 +402,7 @@ sd_status sd_neighbor_collect_history(sd_world *w)
         w->near_mark_rb == w->timers.rebuilds && w->near_mark_cap >= 2 * (nbb + 1) ? w->near_mark : NULL;
 #pragma omp parallel for schedule(static, 1) num_threads(T) if (T > 1)
     for (int t = 0; t < T; t++) {
-        int32_t *c = cnt + (size_t)t * (G + 1);
+        int32_t *c = cnt + (size_t)t * (n + 1);
         const int k0 = (int)((long)np * t / T), k1 = (int)((long)np * (t + 1) / T);
         for (int k = k0; k < k1; k++) {
             if (mark && k < nbb && !mark[k]) continue;
@@ -404,26 +411,27 @@ sd_status sd_neighbor_collect_history(sd_world *w)
             int m = 0;
             for (int s = 0; s < p->cap; s++)
                 m += h[s].feature >= 0;
-            c[gid[p->a]] += m;
+            c[p->a] += m;
         }
     }
     int total = 0;
-    for (int g = 0; g < G; g++)
+    for (int i = 0; i < n; i++) {
+        w->old_start[i] = total;
         for (int t = 0; t < T; t++) {
-            const int32_t m = cnt[(size_t)t * (G + 1) + g];
-            cnt[(size_t)t * (G + 1) + g] = total;
+            const int32_t m = cnt[(size_t)t * (n + 1) + i];
+            cnt[(size_t)t * (n + 1) + i] = total;
             total += m;
         }
-    if (sd_grow((void **)&w->old_keys, &w->old_cap, total + 1, sizeof(uint64_t)) ||
-        sd_grow((void **)&w->old_hist, &w->old_hist_cap, total + 1, sizeof(sd_hist))) {
-        free(cnt);
-        return SD_ERR_NOMEM;
     }
+    w->old_start[n] = total;
+    if (sd_grow((void **)&w->old_keys, &w->old_cap, total + 1, sizeof(uint64_t)) ||
+        sd_grow((void **)&w->old_hist, &w->old_hist_cap, total + 1, sizeof(sd_hist)))
+        return SD_ERR_NOMEM;
     uint64_t *keys = w->old_keys;
     sd_hist *hist = w->old_hist;
 #pragma omp parallel for schedule(static, 1) num_threads(T) if (T > 1)
     for (int t = 0; t < T; t++) {
-        int32_t *c = cnt + (size_t)t * (G + 1);
+        int32_t *c = cnt + (size_t)t * (n + 1);
         const int k0 = (int)((long)np * t / T), k1 = (int)((long)np * (t + 1) / T);
         for (int k = k0; k < k1; k++) {
             if (mark && k < nbb && !mark[k]) continue;
@@ -432,7 +440,7 @@ sd_status sd_neighbor_collect_history(sd_world *w)
             int m0 = -1, m = 0;
             for (int s = 0; s < p->cap; s++) {
                 if (h[s].feature < 0) continue;
-                if (m0 < 0) m0 = c[gid[p->a]];
+                if (m0 < 0) m0 = c[p->a];
                 /* the pair's slots in feature order (insertion: a handful at most) */
                 int j = m0 + m++;
                 while (j > m0 && hist[j - 1].feature > h[s].feature) {
@@ -445,11 +453,11 @@ sd_status sd_neighbor_collect_history(sd_world *w)
             const uint64_t key = key_of(w, p);
             for (int j = m0; j < m0 + m; j++)
                 keys[j] = key;
-            c[gid[p->a]] = m0 + m;
+            c[p->a] = m0 + m;
         }
     }
-    free(cnt);
     w->n_old = total;
+    w->old_n_bodies = n;
     w->keys_collected = 1;
     w->bb.n = w->bt.n = 0;
     w->bb.nh = w->bt.nh = 0;
@@ -470,30 +478,55 @@ static sd_status push_pair(sd_pairlist *l, int32_t a, int32_t b, int kind)
     return SD_OK;
 }
 
-/* Where each gid's carried history starts: first[g] is the first old entry whose key has
- * gid_a >= g (the entries are grouped by gid_a, ascending, the key's high half), for
- * g = 0 .. next_gid. */
-static int32_t *old_first_index(const sd_world *w)
+/* Where each new body's carried springs are: old_rng[i] = {first, end} in the old entries.
+ * by_index: the rebuild made the collect itself and only its sort moved the bodies since, so
+ * body i's entries are those of the store index it came from (in nearly the store's order).
+ * Else (a body came or went, or the entries came from a checkpoint) each gid's one run is
+ * found from the keys and looked up by gid. */
+static sd_status old_ranges(sd_world *w, int by_index)
 {
-    const int G = w->next_gid;
-    int32_t *first = malloc((size_t)(G + 2) * sizeof(int32_t));
-    if (!first) return NULL;
-    int k = 0;
-    for (int g = 0; g <= G + 1; g++) {
-        while (k < w->n_old && (int64_t)(w->old_keys[k] >> 32) < g)
-            k++;
-        first[g] = k;
+    const int n = w->b.n;
+    if (sd_grow((void **)&w->old_rng, &w->old_rng_cap, n + 1, sizeof(*w->old_rng))) return SD_ERR_NOMEM;
+    int32_t(*rng)[2] = w->old_rng;
+    if (w->n_old == 0) {
+        memset(rng, 0, (size_t)(n + 1) * sizeof(*rng));
+        return SD_OK;
     }
-    return first;
+    if (by_index) {
+        const int32_t *perm = w->rb_perm, *st = w->old_start;
+        const int pm = w->rb_perm_m;
+#pragma omp parallel for schedule(static) if (n > w->def.parallel_min)
+        for (int i = 0; i < n; i++) {
+            const int j = i < pm ? perm[i] : i;
+            rng[i][0] = st[j];
+            rng[i][1] = st[j + 1];
+        }
+        return SD_OK;
+    }
+    const int G = w->next_gid;
+    int32_t(*gr)[2] = calloc((size_t)G + 1, sizeof(*gr));
+    if (!gr) return SD_ERR_NOMEM;
+    for (int k = 0; k < w->n_old;) {
+        const int64_t g = (int64_t)(w->old_keys[k] >> 32);
+        int e = k + 1;
+        while (e < w->n_old && (int64_t)(w->old_keys[e] >> 32) == g)
+            e++;
+        if (g >= 0 && g < G) gr[g][0] = k, gr[g][1] = e;
+        k = e;
+    }
+    for (int i = 0; i < n; i++) {
+        const int g = w->b.gid[i];
+        rng[i][0] = gr[g][0];
+        rng[i][1] = gr[g][1];
+    }
+    free(gr);
+    return SD_OK;
 }
 
 /* Put carried history into the new lists' slots: the entries of the pair's key are a run
- * inside its gid's few entries. The gids are not in the store's order, so each body's entries
- * are a jump through first[] and the old entries: prefetched, the gid's start HIST_PF pairs
- * ahead of its entries, 2 HIST_PF ahead of the pair (at 1e6 spheres 131 against 243 ms a
- * rebuild, docs/performance-log.md §P38). */
+ * inside its first body's few entries (old_ranges). */
 #define HIST_PF 8
-static sd_status restore_history(sd_world *w, sd_pairlist *l, const int32_t *first)
+static sd_status restore_history(sd_world *w, sd_pairlist *l)
 {
     if (sd_grow((void **)&l->hist, &l->hcap, l->nh + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
     if (l == &w->bt) { /* the wall pairs' results (sd_contact_gather) */
@@ -501,6 +534,7 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l, const int32_t *fir
         if (sd_grow((void **)&l->active, &l->active_cap, l->n + 1, 1)) return SD_ERR_NOMEM;
         memset(l->active, 0, (size_t)l->n + 1);
     }
+    const int32_t(*rng)[2] = (const int32_t(*)[2])w->old_rng;
     /* each pair fills its own slots */
 #pragma omp parallel for schedule(static) if (l->n > w->def.parallel_min)
     for (int k = 0; k < l->n; k++) {
@@ -508,17 +542,16 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l, const int32_t *fir
         for (int s = 0; s < p->cap; s++)
             l->hist[p->off + s].feature = -1;
         if (w->n_old == 0) continue;
-        if (k + 2 * HIST_PF < l->n) __builtin_prefetch(&first[w->b.gid[l->p[k + 2 * HIST_PF].a]], 0, 3);
         if (k + HIST_PF < l->n) {
-            const int at = first[w->b.gid[l->p[k + HIST_PF].a]];
+            const int at = rng[l->p[k + HIST_PF].a][0];
             __builtin_prefetch(&w->old_keys[at], 0, 3);
             __builtin_prefetch(&w->old_hist[at], 0, 3);
         }
+        int lo = rng[p->a][0];
+        const int hi = rng[p->a][1];
+        if (lo == hi) continue;
         const uint64_t key = key_of(w, p);
-        const int g = (int)(key >> 32);
-        int lo = first[g];
-        const int hi = first[g + 1];
-        while (lo < hi && w->old_keys[lo] != key) /* the pair's run inside its gid's entries */
+        while (lo < hi && w->old_keys[lo] != key) /* the pair's run inside its body's entries */
             lo++;
         for (int s = 0; lo < hi && w->old_keys[lo] == key && s < p->cap; lo++, s++)
             l->hist[p->off + s] = w->old_hist[lo];
@@ -597,7 +630,7 @@ static sd_status rebuild_triangle_grid(sd_world *w, double cell)
 }
 
 /* Re-sort the store by the grid cell of each centre (stable counting sort), so that
- * neighbours in space are neighbours in memory; the history was already taken out by gid.
+ * neighbours in space are neighbours in memory; the history was already taken out by key.
  * Bodies 0 .. n-1 only: the caller knows the rest (the bed, in the bed cache's layout) to be
  * in order already, after every other body. */
 static sd_status sort_bodies_by_cell(sd_world *w, int n)
@@ -605,14 +638,15 @@ static sd_status sort_bodies_by_cell(sd_world *w, int n)
     sd_bodies *b = &w->b;
     const sd_grid *g = &w->grid;
     int ncell = g->nx * g->ny * g->nz;
+    w->rb_perm_m = 0;
     int32_t *cell = malloc((size_t)(n + 1) * sizeof(int32_t));
-    int32_t *perm = malloc((size_t)(n + 1) * sizeof(int32_t));
     int32_t *count = NULL;
     sd_status st = SD_OK;
-    if (!cell || !perm) {
+    if (!cell || sd_grow((void **)&w->rb_perm, &w->rb_perm_cap, n + 1, sizeof(int32_t))) {
         st = SD_ERR_NOMEM;
         goto done;
     }
+    int32_t *const perm = w->rb_perm;
     int unsorted = 0;
 #pragma omp parallel for schedule(static) reduction(| : unsorted) if (n > w->def.parallel_min)
     for (int i = 0; i < n; i++) {
@@ -663,12 +697,12 @@ static sd_status sort_bodies_by_cell(sd_world *w, int n)
         m--;
     st = sd_bodies_permute(b, perm, m);
     if (st) goto done;
+    w->rb_perm_m = m; /* (for restore_history) */
     for (int i = 0; i < m; i++)
         w->gid_map[b->gid[i]] = i;
 done:
     free(cell);
     free(count);
-    free(perm);
     return st;
 }
 
@@ -1299,6 +1333,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
 {
     sd_bodies *b = &w->b;
     double rb_t = sd_now();
+    const int fresh = !w->keys_collected; /* the collect is this rebuild's own */
     sd_status st = sd_neighbor_collect_history(w);
     if (st) return st;
     RB_STAGE(SD_RB_COLLECT);
@@ -1466,11 +1501,9 @@ sd_status sd_neighbor_rebuild(sd_world *w)
 
     set_effective_masses(w);
     RB_STAGE(SD_RB_MASSES);
-    int32_t *first = old_first_index(w);
-    if (!first) return SD_ERR_NOMEM;
-    st = restore_history(w, &w->bb, first);
-    if (!st) st = restore_history(w, &w->bt, first);
-    free(first);
+    st = old_ranges(w, fresh && w->old_n_bodies == b->n);
+    if (!st) st = restore_history(w, &w->bb);
+    if (!st) st = restore_history(w, &w->bt);
     if (st) return st;
     w->n_old = 0;
     RB_STAGE(SD_RB_RESTORE);

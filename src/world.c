@@ -97,6 +97,10 @@ void sd_world_destroy(sd_world *w)
     free(w->gid_map);
     free(w->old_hist);
     free(w->old_keys);
+    free(w->old_start);
+    free(w->old_cnt);
+    free(w->rb_perm);
+    free(w->old_rng);
     free(w->range);
     free(w->box);
     sd_bed_cache_free(&w->bed);

@@ -248,6 +248,17 @@ struct sd_world {
     uint64_t *old_keys;
     int n_old, old_cap, old_hist_cap;
     int keys_collected;  /* old keys already taken (a body was removed since) */
+    /* the old entries are grouped by the first body's store index at the collect (any one
+     * run a gid: a checkpoint's, or the gid order of earlier versions, reads the same):
+     * old_start[i] .. old_start[i + 1] are body i's, for old_n_bodies bodies; scratch, not
+     * saved (neighbor.c) */
+    int32_t *old_start, *old_cnt;
+    int old_start_cap, old_cnt_cap, old_n_bodies;
+    /* the rebuild's sort: body i came from perm[i] for i < rb_perm_m, the rest stayed */
+    int32_t *rb_perm;
+    int rb_perm_cap, rb_perm_m;
+    int32_t (*old_rng)[2]; /* the restore's lookup: new body i's old entries */
+    int old_rng_cap;
     int32_t (*range)[6]; /* per-body cell range in the body grid */
     int range_cap;
     /* box[2i], box[2i+1]: body i's margin-expanded box (low, high corner) as the last rebuild

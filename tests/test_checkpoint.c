@@ -380,6 +380,69 @@ static void check_refused(const char *path, const char *what, const char *expect
     sd_world_destroy(r == (sd_world *)(uintptr_t)1 ? NULL : r);
 }
 
+/* The carried springs of a checkpoint taken between a removal and the next rebuild: any
+ * grouping with one run a first body is read (neighbor.c groups them by store index, earlier
+ * versions by gid), a body's keys in two runs are refused. */
+static void test_oldh_runs(void)
+{
+    sd_world *w = make_scene();
+    run(w, 3500);
+    int victim = -1;
+    sd_contact_springs_home(w);
+    for (int k = 0; k < w->bb.n && victim < 0; k++)
+        if (w->bb.hist[w->bb.p[k].off].feature >= 0 && !w->b.fixed[w->bb.p[k].a]) victim = w->b.gid[w->bb.p[k].a];
+    CHECK(victim >= 0);
+    CHECK(sd_world_remove_body(w, victim) == SD_OK);
+    const int m = w->n_old;
+    int gid_down = 0; /* the keys not in gid order: grouped by store index */
+    for (int k = 1; k < m; k++)
+        gid_down |= (w->old_keys[k] >> 32) < (w->old_keys[k - 1] >> 32);
+    char path[128], bad[128];
+    path_in_dir(path, sizeof(path), "oldh.bin");
+    path_in_dir(bad, sizeof(bad), "oldh_bad.bin");
+    CHECK(sd_checkpoint_write(path, w, NULL, 0) == SD_OK);
+    sd_world_destroy(w);
+    size_t n;
+    unsigned char *data = read_all(path, &n);
+    CHECK(data != NULL);
+    if (!data) return;
+    sd_world *r = NULL;
+    CHECK(sd_checkpoint_read(path, &r, NULL, NULL, NULL, 0) == SD_OK);
+    sd_world_destroy(r);
+    /* the section: tag, 0, length (8), the flag, the count, then the keys */
+    size_t at = 64;
+    while (at + 24 < n && !(memcmp(data + at, "OLDH", 4) == 0 && data[at + 4] == 0 && data[at + 5] == 0))
+        at++;
+    CHECK(at + 24 < n);
+    int32_t cnt;
+    memcpy(&cnt, data + at + 20, 4);
+    CHECK(cnt == m && m >= 3);
+    uint64_t *keys = malloc((size_t)m * sizeof(uint64_t));
+    CHECK(keys != NULL);
+    if (keys && at + 24 + (size_t)m * 8 <= n && cnt == m && m >= 3) {
+        memcpy(keys, data + at + 24, (size_t)m * 8);
+        int j = 1; /* the first key of another body, then the last key made the first's */
+        while (j < m - 1 && keys[j] >> 32 == keys[0] >> 32)
+            j++;
+        CHECK(j < m - 1);
+        keys[m - 1] = (keys[0] & 0xffffffff00000000ULL) | (keys[m - 1] & 0xffffffffULL);
+        memcpy(data + at + 24, keys, (size_t)m * 8);
+        uint64_t h = 1469598103934665603ULL;
+        for (size_t q = 64; q < n; q++) {
+            h ^= data[q];
+            h *= 1099511628211ULL;
+        }
+        memcpy(data + 40, &h, 8);
+        write_all(bad, data, n);
+        check_refused(bad, "one body's keys in two runs", "not grouped by body");
+    }
+    printf("carried springs of a checkpoint after a removal: %d entries, %s gid order, read back; one body in two "
+           "runs refused\n",
+           m, gid_down ? "not in" : "in");
+    free(keys);
+    free(data);
+}
+
 static void test_refused(void)
 {
     char good[128], bad[128];
@@ -562,6 +625,7 @@ int main(void)
     }
     test_restart();
     test_refused();
+    test_oldh_runs();
     test_failed_write();
     remove_dir();
     return check_report("test_checkpoint");
