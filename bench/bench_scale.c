@@ -19,12 +19,13 @@
  * usage: bench_scale SETTLED.data [steps] [--threads N] [--big] [--only N] [--same] [--stages]
  *   N = 1e3, 1e4, 1e5 (steps, steps/2, steps/10) and with --big 1e6 (steps/20); --only N runs
  *   that one size for `steps` steps (for profiling).
- * --ab prefetch|avx512|springs|slot_sqm [--ab-groups G]: at each size, after the warm-up, instead of the
+ * --ab prefetch|avx512|springs|slot_sqm|ext [--ab-groups G]: at each size, after the warm-up, instead of the
  *   timed steps, G groups (default 8) of eight 100-step blocks with the switch off (A) and on (B)
  *   in the order A B B A B A A B; prints the median and quartiles of B/A (prefetch: the pass's front
  *   prefetch forced off and on; avx512: the AVX2 kernels against the AVX-512 ones; springs: the
  *   sphere pairs' springs in their candidates' slots against the near list's order; slot_sqm:
- *   each pair's sqrt_m_eff streamed with its record against kept in its spring's slot).
+ *   each pair's sqrt_m_eff streamed with its record against kept in its spring's slot; ext: the
+ *   store's external forces, all zero here, read by the moves against skipped).
  * --stages: after each size, the candidate rebuild's stages (sd_neighbor_stage_name), ms a
  *   rebuild over the timed steps' rebuilds. */
 #include <stdio.h>
@@ -139,6 +140,7 @@ static int ab_set(int on)
     return (!strcmp(ab_name, "prefetch")   ? sd_front_prefetch_set
             : !strcmp(ab_name, "springs")  ? sd_springs_list_set
             : !strcmp(ab_name, "slot_sqm") ? sd_slot_sqm_set
+            : !strcmp(ab_name, "ext")      ? sd_ext_skip_set
                                            : sd_simd512_set)(on);
 }
 
@@ -367,16 +369,16 @@ int main(int argc, char **argv)
     if (!path || read_data(path)) {
         fprintf(stderr,
                 "usage: %s SETTLED.data [steps] [--threads N] [--big] [--only N] [--same] [--stages] [--ab "
-                "prefetch|avx512|springs|slot_sqm "
+                "prefetch|avx512|springs|slot_sqm|ext "
                 "[--ab-groups G]]\n",
                 argv[0]);
         return 2;
     }
     if (ab_name) {
         if (strcmp(ab_name, "prefetch") && strcmp(ab_name, "avx512") && strcmp(ab_name, "springs") &&
-            strcmp(ab_name, "slot_sqm")) {
-            fprintf(stderr, "%s: --ab: no switch named '%s'; the switches: prefetch avx512 springs slot_sqm\n", argv[0],
-                    ab_name);
+            strcmp(ab_name, "slot_sqm") && strcmp(ab_name, "ext")) {
+            fprintf(stderr, "%s: --ab: no switch named '%s'; the switches: prefetch avx512 springs slot_sqm ext\n",
+                    argv[0], ab_name);
             return 2;
         }
         if (ab_groups < 1 || ab_groups > 1000) {

@@ -34,6 +34,17 @@ int sd_move_lanes_set(int on)
     return was;
 }
 
+/* The store's external forces not read while none was ever set (w->ext_any): the moves add
+ * a zero constant instead, the same bits (sd_ext_skip_set(0) reads them anyway). */
+static int ext_skip_on = 1;
+
+int sd_ext_skip_set(int on)
+{
+    const int was = ext_skip_on;
+    ext_skip_on = on != 0;
+    return was;
+}
+
 int sd_cyl_batch_set(int on)
 {
     const int was = cyl_batch_on;
@@ -248,9 +259,10 @@ static inline int move_block(const int32_t *restrict mov, int kb, int ke, double
     double vm = *vmax, vs = *vslow, xf = *xfront;
     for (int k = kb; k < ke; k++) {
         const int i = mov[k];
-        /* the external force from the block's buffer (ext_blk: ext[k - kb]) or the store's */
-        move_one(i, ext[ext_blk ? k - kb : i], dt, g, force, inv_mass, vel, pos, omega, torque, inv_i_ax, radius,
-                 shape, nf, &vm, &vs, &xf, lg, &nlg);
+        /* the external force from the block's buffer (ext_blk: ext[k - kb]), the store's, or
+         * none set (ext NULL: a zero, added all the same) */
+        move_one(i, ext ? ext[ext_blk ? k - kb : i] : v3(0.0, 0.0, 0.0), dt, g, force, inv_mass, vel, pos, omega,
+                 torque, inv_i_ax, radius, shape, nf, &vm, &vs, &xf, lg, &nlg);
     }
     *vmax = vm;
     *vslow = vs;
@@ -278,7 +290,7 @@ __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict
                                                          int32_t *restrict lg, int nlg, const int ext_blk)
 {
     double vm = *vmax, vs = *vslow, xf = *xfront;
-    const __m256d vdt = _mm256_set1_pd(dt);
+    const __m256d vdt = _mm256_set1_pd(dt), zero = _mm256_setzero_pd();
     /* g spread over the rows' elements: x y z x | y z x y | z x y z */
     const __m256d g0 = _mm256_setr_pd(g.x, g.y, g.z, g.x), g1 = _mm256_setr_pd(g.y, g.z, g.x, g.y),
                   g2 = _mm256_setr_pd(g.z, g.x, g.y, g.z);
@@ -297,12 +309,12 @@ __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict
             group = sh == four;
         }
         if (!group) {
-            move_one(i, ext[ext_blk ? k - kb : i], dt, g, force, inv_mass, vel, pos, omega, torque, inv_i_ax, radius,
-                     shape, NULL, &vm, &vs, &xf, lg, &nlg);
+            move_one(i, ext ? ext[ext_blk ? k - kb : i] : v3(0.0, 0.0, 0.0), dt, g, force, inv_mass, vel, pos, omega,
+                     torque, inv_i_ax, radius, shape, NULL, &vm, &vs, &xf, lg, &nlg);
             ones++;
             continue;
         }
-        const double *fp = &force[i].x, *ep = &ext[ext_blk ? k - kb : i].x;
+        const double *fp = &force[i].x, *ep = ext ? &ext[ext_blk ? k - kb : i].x : NULL;
         double *vp = &vel[i].x, *pp = &pos[i].x, *op = &omega[i].x;
         const double *tp = &torque[i].x;
         /* 1/m and Δt/I of bodies 0..3 spread as b0 b0 b0 b1 | b1 b1 b2 b2 | b2 b3 b3 b3 */
@@ -315,7 +327,7 @@ __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict
         __m256d v[3], p[3];
         const __m256d m[3] = {m0, m1, m2}, s[3] = {s0, s1, s2}, gg[3] = {g0, g1, g2};
         for (int r = 0; r < 3; r++) {
-            const __m256d f = _mm256_add_pd(_mm256_loadu_pd(fp + 4 * r), _mm256_loadu_pd(ep + 4 * r));
+            const __m256d f = _mm256_add_pd(_mm256_loadu_pd(fp + 4 * r), ep ? _mm256_loadu_pd(ep + 4 * r) : zero);
             const __m256d acc = _mm256_add_pd(gg[r], _mm256_mul_pd(m[r], f));
             v[r] = _mm256_add_pd(_mm256_loadu_pd(vp + 4 * r), _mm256_mul_pd(vdt, acc));
             p[r] = _mm256_add_pd(_mm256_loadu_pd(pp + 4 * r), _mm256_mul_pd(vdt, v[r]));
@@ -366,7 +378,7 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves 
     sd_vec3 ext[SD_EXT_BLOCK]; /* a block's external forces (ext_fn) */
     /* the external forces: the block's buffer from ext_fn (ext[k - kb]), else the store's */
     const int blk = w->ext_fn != NULL;
-    const sd_vec3 *const ex = blk ? ext : b->ext_force;
+    const sd_vec3 *const ex = blk ? ext : w->ext_any || !ext_skip_on ? b->ext_force : NULL;
     int nlg = 0;
 #ifdef SD_MOVE256
     const int lanes = move_lanes_on && !nf && sd_simd_level() >= SD_SIMD_AVX2;

@@ -19,7 +19,7 @@
  * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
-_Static_assert(sizeof(struct sd_world) == 1696, "struct sd_world changed: update io_checkpoint.c");
+_Static_assert(sizeof(struct sd_world) == 1704, "struct sd_world changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_world_def) == 104, "sd_world_def changed: update io_checkpoint.c");
 /* sd_walls: its edge ids, seams and edge lines are derived (sd_walls_weld, again on load) */
 _Static_assert(sizeof(sd_walls) == 96, "sd_walls changed: update io_checkpoint.c");
@@ -764,11 +764,13 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
             st = fail(r, "section GIDS: %d live gids for %d bodies", live, b->n);
             goto out;
         }
-        for (int i = 0; i < b->n; i++)
+        for (int i = 0; i < b->n; i++) {
             if (b->shape[i] > SD_SHAPE_CYLINDER || b->fixed[i] > 1 || !body_sane(b, i)) {
                 st = fail(r, "section BODY: body %d (gid %d) has a bad shape, flag or non-finite state", i, b->gid[i]);
                 goto out;
             }
+            w->ext_any |= sd_ext_set(b->ext_force[i]); /* (world_internal.h ext_any) */
+        }
     }
 
     /* walls */

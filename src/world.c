@@ -473,6 +473,7 @@ sd_status sd_world_set_external_force(sd_world *w, int gid, sd_vec3 f)
 {
     if (gid < 0 || gid >= w->next_gid || w->gid_map[gid] < 0) return SD_ERR_NOTFOUND;
     w->b.ext_force[w->gid_map[gid]] = f;
+    w->ext_any |= sd_ext_set(f);
     return SD_OK;
 }
 

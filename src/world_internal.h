@@ -248,6 +248,8 @@ struct sd_world {
     uint64_t *old_keys;
     int n_old, old_cap, old_hist_cap;
     int keys_collected;  /* old keys already taken (a body was removed since) */
+    int ext_any;         /* a body's external force was ever set non-zero (else the moves skip the
+                          * store's zeros; a checkpoint's read sets it from the forces) */
     /* the old entries are grouped by the first body's store index at the collect (any one
      * run a gid: a checkpoint's, or the gid order of earlier versions, reads the same):
      * old_start[i] .. old_start[i + 1] are body i's, for old_n_bodies bodies; scratch, not
@@ -512,6 +514,7 @@ int sd_slot_sqm_set(int on);
  * setting before. Either gives the same bits (integrate.c). */
 int sd_cyl_batch_set(int on);
 int sd_scan_pre_set(int on);   /* neighbor.c: the rebuild scan's float prefilter (on by default; the same candidates) */
+int sd_ext_skip_set(int on);   /* integrate.c: the store's external forces skipped while none was set (on) */
 int sd_move_lanes_set(int on); /* integrate.c: the spheres moved in AVX2 lanes (on by default) */
 long sd_move_lanes_count(void); /* the groups of four spheres the calling thread moved in lanes */
 /* Sphere-log lanes filled by the AVX2 geometry since the start (for the tests). */
@@ -653,6 +656,13 @@ double sd_world_front_x(const sd_world *w);
 sd_status sd_world_moving_update(sd_world *w);
 
 /* helpers */
+/* an external force other than (+0, +0, +0): the moves must add it (a -0 too: f + -0 is not
+ * f + +0 when f is -0) */
+static inline int sd_ext_set(sd_vec3 f)
+{
+    return f.x != 0.0 || f.y != 0.0 || f.z != 0.0 || signbit(f.x) || signbit(f.y) || signbit(f.z);
+}
+
 static inline int sd_grow(void **p, int *cap, int need, size_t elem)
 {
     if (need <= *cap) return 0;

@@ -1,12 +1,15 @@
 /* Determinism: the same input twice gives the same sd_world_state_hash; 1 and 2 OpenMP threads
  * give the same hash (the pile is above SD_OMP_MIN_ITEMS, so the loops really run in parallel);
  * rebuilding the candidate lists every step instead of by margin changes only rounding, so the
- * final contact count agrees within 2 % and positions within a small tolerance. */
+ * final contact count agrees within 2 % and positions within a small tolerance. The moves skip
+ * the store's external forces while none was set: the same hash as reading its zeros, and one
+ * body's force set is read whether or not the skip is on. */
 #include <string.h>
 
 #include "check.h"
-#include "sabodem.h"
 #include "core/vmath.h"
+#include "sabodem.h"
+#include "world_internal.h" /* (sd_ext_skip_set) */
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -95,6 +98,23 @@ static result run(int threads, int rebuild_every_step, long steps)
     return r;
 }
 
+/* the pile on one thread, the store's external forces skipped while none is set (skip) or
+ * always read, body gid 5 given fx along x when fx is not 0 */
+static uint64_t run_ext(int skip, double fx, long steps)
+{
+#ifdef _OPENMP
+    omp_set_num_threads(1);
+#endif
+    const int was = sd_ext_skip_set(skip);
+    sd_world *w = make_pile(1, 0);
+    if (fx != 0.0) CHECK(sd_world_set_external_force(w, 5, v3(fx, 0.0, 0.0)) == SD_OK);
+    CHECK(sd_world_run(w, steps) == SD_OK);
+    const uint64_t h = sd_world_state_hash(w);
+    sd_world_destroy(w);
+    sd_ext_skip_set(was);
+    return h;
+}
+
 int main(void)
 {
     const long steps = 300;
@@ -123,6 +143,12 @@ int main(void)
            e.contacts, a.contacts, e.hash == a.hash ? "equal" : "differs", dmax);
     CHECK(labs(e.contacts - a.contacts) <= 0.02 * a.contacts);
     CHECK(dmax < 1e-6);
+    const uint64_t read0 = run_ext(0, 0.0, steps), skip1 = run_ext(1, 1e-3, steps), read1 = run_ext(0, 1e-3, steps);
+    printf("external forces: none set, read as zeros %016llx (skipped: run1); 1 mN on one body %016llx skip on, "
+           "%016llx read\n",
+           (unsigned long long)read0, (unsigned long long)skip1, (unsigned long long)read1);
+    CHECK(read0 == a.hash);
+    CHECK(skip1 == read1 && skip1 != a.hash);
     free(a.pos);
     free(b.pos);
     free(t2.pos);
