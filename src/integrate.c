@@ -376,9 +376,10 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves 
     /* the logs, turned in batches once a batch has gathered (each body's move is its own) */
     int32_t lg[CYL_BATCH + SD_EXT_BLOCK];
     sd_vec3 ext[SD_EXT_BLOCK]; /* a block's external forces (ext_fn) */
-    /* the external forces: the block's buffer from ext_fn (ext[k - kb]), else the store's */
+    /* the external forces: the block's buffer from ext_fn (ext[k - kb]), else the store's, or
+     * none (NULL) while none was ever set */
     const int blk = w->ext_fn != NULL;
-    const sd_vec3 *const ex = blk ? ext : w->ext_any || !ext_skip_on ? b->ext_force : NULL;
+    const sd_vec3 *const ex = blk ? ext : (w->ext_any || !ext_skip_on) ? b->ext_force : NULL;
     int nlg = 0;
 #ifdef SD_MOVE256
     const int lanes = move_lanes_on && !nf && sd_simd_level() >= SD_SIMD_AVX2;
