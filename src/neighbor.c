@@ -376,8 +376,8 @@ static inline const sd_hist *any_hist(const sd_pairlist *const *lists, int k, co
  * a pair's entries, in feature order, are one run. The list runs in store order and a pair's
  * first body is at most a slab of cells from its lower one, so the counts and the entries are
  * written within a window that the caches hold (grouped by gid, which the store does not
- * follow, the writes went anywhere: 218 against ~35 ms a rebuild at 1e6 spheres,
- * docs/performance-log.md §P41). restore_history finds a body's entries through the rebuild's
+ * follow, the writes went anywhere: the collect took 109-186 ms a rebuild at 1e6 spheres,
+ * 50-55 since, docs/performance-log.md §P41). restore_history finds a body's entries through the rebuild's
  * sort, or, when the store changed since the collect, through the gid in the keys. */
 sd_status sd_neighbor_collect_history(sd_world *w)
 {

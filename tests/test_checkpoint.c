@@ -221,6 +221,29 @@ static void write_all(const char *path, const void *p, size_t n)
     fclose(f);
 }
 
+/* the payload's checksum (FNV-1a over the bytes from 64 on, at offset 40) remade after an edit */
+static void remake_checksum(unsigned char *data, size_t n)
+{
+    uint64_t h = 1469598103934665603ULL;
+    for (size_t q = 64; q < n; q++) {
+        h ^= data[q];
+        h *= 1099511628211ULL;
+    }
+    memcpy(data + 40, &h, 8);
+}
+
+/* a moving body that holds a sphere spring removed: its springs and the others' are taken out
+ * and wait, keyed, for the next rebuild */
+static void remove_body_in_contact(sd_world *w)
+{
+    int victim = -1;
+    sd_contact_springs_home(w); /* (a near list's springs into their slots) */
+    for (int k = 0; k < w->bb.n && victim < 0; k++)
+        if (w->bb.hist[w->bb.p[k].off].feature >= 0 && !w->b.fixed[w->bb.p[k].a]) victim = w->b.gid[w->bb.p[k].a];
+    CHECK(victim >= 0);
+    CHECK(sd_world_remove_body(w, victim) == SD_OK);
+}
+
 static int count_temp_files(void)
 {
     DIR *d = opendir(dir);
@@ -349,12 +372,7 @@ static void test_restart(void)
     /* right after removing a body in contact and opening the gate: the history waits, keyed by
      * gid, for the next rebuild, and the walls are dirty */
     run(w, 700);
-    int victim = -1;
-    sd_contact_springs_home(w); /* (a near list's springs into their slots) */
-    for (int k = 0; k < w->bb.n && victim < 0; k++)
-        if (w->bb.hist[w->bb.p[k].off].feature >= 0 && !w->b.fixed[w->bb.p[k].a]) victim = w->b.gid[w->bb.p[k].a];
-    CHECK(victim >= 0);
-    CHECK(sd_world_remove_body(w, victim) == SD_OK);
+    remove_body_in_contact(w);
     CHECK(sd_world_set_group_active(w, G_GATE, 0) == SD_OK);
     CHECK(w->keys_collected && w->n_old > 0 && w->w.dirty && w->need_rebuild);
     restart_matches(w, 2000, "restart after remove + gate open");
@@ -387,12 +405,7 @@ static void test_oldh_runs(void)
 {
     sd_world *w = make_scene();
     run(w, 3500);
-    int victim = -1;
-    sd_contact_springs_home(w);
-    for (int k = 0; k < w->bb.n && victim < 0; k++)
-        if (w->bb.hist[w->bb.p[k].off].feature >= 0 && !w->b.fixed[w->bb.p[k].a]) victim = w->b.gid[w->bb.p[k].a];
-    CHECK(victim >= 0);
-    CHECK(sd_world_remove_body(w, victim) == SD_OK);
+    remove_body_in_contact(w);
     const int m = w->n_old;
     int gid_down = 0; /* the keys not in gid order: grouped by store index */
     for (int k = 1; k < m; k++)
@@ -427,12 +440,7 @@ static void test_oldh_runs(void)
         CHECK(j < m - 1);
         keys[m - 1] = (keys[0] & 0xffffffff00000000ULL) | (keys[m - 1] & 0xffffffffULL);
         memcpy(data + at + 24, keys, (size_t)m * 8);
-        uint64_t h = 1469598103934665603ULL;
-        for (size_t q = 64; q < n; q++) {
-            h ^= data[q];
-            h *= 1099511628211ULL;
-        }
-        memcpy(data + 40, &h, 8);
+        remake_checksum(data, n);
         write_all(bad, data, n);
         check_refused(bad, "one body's keys in two runs", "not grouped by body");
     }
@@ -518,12 +526,7 @@ static void test_refused(void)
                 m[at] = (k & 1) ? (unsigned char)(m[at] ^ (1u << (sd_rng_next(&rng) % 8)))
                                 : (unsigned char)sd_rng_next(&rng);
             }
-            uint64_t h = 1469598103934665603ULL;
-            for (size_t q = 64; q < n; q++) {
-                h ^= m[q];
-                h *= 1099511628211ULL;
-            }
-            memcpy(m + 40, &h, 8);
+            remake_checksum(m, n);
             write_all(bad, m, n);
             free(m);
             r = NULL;
