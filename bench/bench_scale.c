@@ -34,6 +34,15 @@
 
 #include "world_internal.h"
 
+/* the timed steps alone instrumented when run under callgrind (bench/work.sh); no-ops
+ * otherwise */
+#if defined(__has_include)
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#define SD_HAVE_CALLGRIND 1
+#endif
+#endif
+
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -193,7 +202,13 @@ static double time_world(sd_world *w, int n, const char *what, long warm, long s
     sd_neighbor_stages_take(rb); /* (the warm-up's rebuilds left out) */
     const sd_world_timers k0 = sd_world_get_timers(w);
     double t0 = sd_now();
+#ifdef SD_HAVE_CALLGRIND
+    CALLGRIND_START_INSTRUMENTATION;
+#endif
     sd_status st = sd_world_run(w, steps);
+#ifdef SD_HAVE_CALLGRIND
+    CALLGRIND_STOP_INSTRUMENTATION;
+#endif
     double wall = sd_now() - t0;
     const sd_world_timers k1 = sd_world_get_timers(w);
     sd_neighbor_stages_take(rb);

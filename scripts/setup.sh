@@ -4,6 +4,8 @@
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libyaml-dev python3 python3-matplotlib python3-numpy)
 if [ "${1:-}" = "--bench" ]; then pkgs+=(lammps openmpi-bin); fi
+# bench/work.sh: callgrind and its client requests' header
+if [ "${1:-}" = "--work" ]; then pkgs+=(valgrind); fi
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
