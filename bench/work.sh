@@ -34,6 +34,7 @@ if [ -n "$settled" ] && [ ! -r "$settled" ]; then
   exit 2
 fi
 bash scripts/setup.sh --work
+# a plain Release build of its own (no profile: build-bench may hold the profile-guided flags)
 cmake -S . -B build-work -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build-work -j "$(nproc)" --target bench_scale >/dev/null
 work=$(mktemp -d)
