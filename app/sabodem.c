@@ -11,10 +11,6 @@
 #include "scenario.h"
 #include "sweep.h"
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 static volatile sig_atomic_t stop_flag = 0;
 
 static void on_sigint(int sig)
@@ -42,7 +38,21 @@ static void usage(FILE *f)
             "        that differ only in the dam layout share one packing + flow (docs/sweep.md)\n"
             "          --dry-run    list the runs and shared flows, and what is already done\n"
             "          --no-branch  every run packs and flows on its own\n"
-            "params  list every scenario key with its type, unit, default and range\n");
+            "params  list every scenario key with its type, unit, default and range\n"
+            "\n"
+            "environment (how the engine runs; the results are the same bits whatever they say):\n"
+            "  SD_SIMD=scalar|avx2|avx512|auto   the hand-written kernels' width (auto: the CPU's best,\n"
+            "                                    AVX2 on AMD CPUs)\n"
+            "  SD_PREFETCH=on|off|auto           the contact pass's prefetch (auto: tried during the run)\n"
+            "  OMP_NUM_THREADS                   threads when --threads is not given\n");
+}
+
+/* The engine's tuning from the environment (SD_SIMD, SD_PREFETCH; sd_tuning_from_env): how it
+ * runs, never what it computes, so a value it does not know is a warning, not an error. */
+static void tuning_from_env(sd_tuning *t)
+{
+    char msg[200];
+    if (sd_tuning_from_env(t, msg, sizeof msg)) fprintf(stderr, "sabodem: warning: %s: ignored\n", msg);
 }
 
 static const char *basename_noext(const char *path, char *buf, size_t n)
@@ -72,7 +82,8 @@ int main(int argc, char **argv)
     }
     if (!strcmp(cmd, "sweep")) {
         const char *file = NULL, *outdir = NULL;
-        sd_sweep_opts so = {0, 0, 0};
+        sd_sweep_opts so;
+        memset(&so, 0, sizeof so);
         for (int i = 2; i < argc; i++) {
             if ((!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) && i + 1 < argc) outdir = argv[++i];
             else if (!strcmp(argv[i], "--parallel") && i + 1 < argc) {
@@ -104,6 +115,7 @@ int main(int argc, char **argv)
         sa.sa_handler = on_sigint;
         sigaction(SIGINT, &sa, NULL);
         sigaction(SIGTERM, &sa, NULL);
+        tuning_from_env(&so.tuning);
         int code = sd_sweep_run(file, outdir, &so, &stop_flag, stdout, stderr);
         if ((code == 0 || code == 1) && !so.dry_run) printf("sweep results in %s/results.csv, %s/cases.csv\n", outdir, outdir);
         return code;
@@ -162,9 +174,7 @@ int main(int argc, char **argv)
         return 2;
     }
     free(sets);
-#ifdef _OPENMP
-    if (s.world.threads > 0) omp_set_num_threads(s.world.threads);
-#endif
+    tuning_from_env(&s.world.tuning);
     if (!strcmp(cmd, "check")) {
         /* build the scene too: placement and stability are part of validity */
         sd_world *w;

@@ -13,8 +13,9 @@
  * engine's switches off (A) and on (B) inside this process: G groups (default 20) of four
  * blocks of 250 steps in the order A B B A, on the settled bed, then again after the gate has
  * been open for 3000 steps. Prints the median and quartiles of each group's B/A time: a slow
- * spell of the machine falls on both forms alike (docs/performance.md §3). SWITCH is one of
- * the names in ab_switches below (avx512: the AVX-512 kernels against the AVX2 ones). */
+ * spell of the machine falls on both forms alike (docs/performance.md §3). SWITCH is the
+ * name of one of the engine's switches (world_internal.h SD_SWITCH_TABLE, in lower case:
+ * springs_list, prefetch, ...) or avx512 (the AVX-512 kernels against the AVX2 ones). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -63,35 +64,59 @@ static void quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d, int gr
     sd_world_add_triangle(w, a, c, d, group);
 }
 
+/* a switch's table name in lower case, as --ab takes it (a static buffer: one at a time) */
+static const char *bench_lower(const char *name)
+{
+    static char buf[64];
+    size_t k = 0;
+    for (; name[k] && k + 1 < sizeof buf; k++)
+        buf[k] = (char)(name[k] >= 'A' && name[k] <= 'Z' ? name[k] + 32 : name[k]);
+    buf[k] = 0;
+    return buf;
+}
+
 static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
 }
 
-/* The engine's runtime switches an A/B run can alternate (each returns its previous setting). */
-static const struct {
-    const char *name;
-    int (*set)(int);
-} ab_switches[] = {
-    {"law256", sd_ss_law256_set},      {"sc_geom", sd_sc_geom_set},     {"sc_lanes", sd_sc_lanes_set},
-    {"near_fast", sd_near_fast_set},   {"wall_near", sd_wall_near_set}, {"prefetch", sd_front_prefetch_set},
-    {"move_lanes", sd_move_lanes_set}, {"cyl_batch", sd_cyl_batch_set}, {"scan_pre", sd_scan_pre_set},
-    {"bed_cache", sd_bed_cache_set},   {"avx512", sd_simd512_set},      {"springs", sd_springs_list_set},
-    {"slot_sqm", sd_slot_sqm_set},
-};
-enum { AB_SWITCHES = sizeof ab_switches / sizeof ab_switches[0] };
+/* The switch an A/B run alternates: one of the engine's (world_internal.h SD_SWITCH_TABLE, by its
+ * name in lower case: springs_list, prefetch, ...) or avx512 (the AVX-512 kernels against the
+ * AVX2 ones). */
+enum { AB_AVX512 = SD_SWITCH_COUNT };
 
 /* The switch named `name`; -2 (and a message listing them) when there is none. */
 static int ab_find(const char *prog, const char *name)
 {
-    for (int k = 0; k < AB_SWITCHES; k++)
-        if (!strcmp(name, ab_switches[k].name)) return k;
-    fprintf(stderr, "%s: --ab: no switch named '%s'; the switches:", prog, name);
-    for (int k = 0; k < AB_SWITCHES; k++)
-        fprintf(stderr, " %s", ab_switches[k].name);
+    if (!strcmp(name, "avx512")) return AB_AVX512;
+    const int k = sd_switch_by_name(name);
+    if (k >= 0 && k != SD_SW_MOVING_INDEX_MIN) return k;
+    fprintf(stderr, "%s: --ab: no switch named '%s'; the switches: avx512", prog, name);
+    for (int j = 0; j < SD_SWITCH_COUNT; j++)
+        if (j != SD_SW_MOVING_INDEX_MIN) fprintf(stderr, " %s", bench_lower(sd_switch_name((sd_switch)j)));
     fprintf(stderr, "\n");
     return -2;
+}
+
+/* switch sw of w off (on = 0) or on; returns its setting before, for ab_restore */
+static int ab_set(sd_world *w, int sw, int on)
+{
+    if (sw == AB_AVX512) {
+        const int was = sd_world_simd_level(w);
+        sd_world_set_simd_level(w, on ? SD_SIMD_AVX512 : SD_SIMD_AVX2);
+        return was;
+    }
+    if (sw == SD_SW_PREFETCH) return sd_world_switch(w, SD_SW_PREFETCH, on ? SD_PREFETCH_ON : SD_PREFETCH_OFF);
+    return sd_world_switch(w, (sd_switch)sw, on);
+}
+
+static void ab_restore(sd_world *w, int sw, int was)
+{
+    if (sw == AB_AVX512)
+        sd_world_set_simd_level(w, was);
+    else
+        sd_world_switch(w, (sd_switch)sw, was);
 }
 
 /* G groups of A B B A blocks of 250 steps with the switch off (A) and on (B); the switch is
@@ -99,7 +124,7 @@ static int ab_find(const char *prog, const char *name)
 static int ab_phase(sd_world *w, const char *name, int sw, int groups, int n)
 {
     enum { AB_BLOCK = 250 };
-    const int was = ab_switches[sw].set(0);
+    const int was = ab_set(w, sw, 0);
     double *r = malloc((size_t)groups * sizeof(double)), ta = 0.0, tb = 0.0;
     if (!r) return 1;
     sd_status st = SD_OK;
@@ -107,7 +132,7 @@ static int ab_phase(sd_world *w, const char *name, int sw, int groups, int n)
         static const int order[4] = {0, 1, 1, 0};
         double t[4];
         for (int k = 0; k < 4 && !st; k++) {
-            ab_switches[sw].set(order[k]);
+            ab_set(w, sw, order[k]);
             const double t0 = sd_now();
             st = sd_world_run(w, AB_BLOCK);
             t[k] = sd_now() - t0;
@@ -115,7 +140,7 @@ static int ab_phase(sd_world *w, const char *name, int sw, int groups, int n)
         r[g] = (t[1] + t[2]) / (t[0] + t[3]);
         ta += t[0] + t[3], tb += t[1] + t[2];
     }
-    ab_switches[sw].set(was);
+    ab_restore(w, sw, was);
     if (st) {
         fprintf(stderr, "%s: %s\n", name, sd_status_message(st));
         free(r);
@@ -124,8 +149,8 @@ static int ab_phase(sd_world *w, const char *name, int sw, int groups, int n)
     qsort(r, (size_t)groups, sizeof(double), cmp_double);
     const double steps = 2.0 * AB_BLOCK * groups;
     printf("AB %-6s %s: B/A median %.4f quartiles %.4f-%.4f (%d groups) | off %.4e on %.4e particle-steps/s\n", name,
-           ab_switches[sw].name, r[groups / 2], r[groups / 4], r[(3 * groups) / 4], groups, n * steps / ta,
-           n * steps / tb);
+           sw == AB_AVX512 ? "avx512" : bench_lower(sd_switch_name((sd_switch)sw)), r[groups / 2], r[groups / 4],
+           r[(3 * groups) / 4], groups, n * steps / ta, n * steps / tb);
     fflush(stdout);
     free(r);
     return 0;
@@ -223,7 +248,7 @@ int main(int argc, char **argv)
             steps[ns++] = atol(argv[i]);
     }
     if (ab == -2) return 2;
-    if (ab >= 0 && ab_switches[ab].set == sd_simd512_set && sd_simd_cpu_level() < SD_SIMD_AVX512) {
+    if (ab == AB_AVX512 && sd_cpu_simd_level() < SD_SIMD_AVX512) {
         fprintf(stderr, "%s: --ab avx512: this CPU has no AVX-512 (both forms would be AVX2)\n", argv[0]);
         return 2;
     }
@@ -231,10 +256,9 @@ int main(int argc, char **argv)
         fprintf(stderr, "%s: --ab-groups must be at least 1\n", argv[0]);
         return 2;
     }
-#ifdef _OPENMP
-    omp_set_num_threads(threads);
-#endif
     sd_world_def d = sd_world_def_default(); /* paper's springs, Δt = 1e-5, 15° gravity */
+    d.threads = threads;
+    sd_tuning_from_env(&d.tuning, NULL, 0);
     if (t_reset > 0.0) d.t_reset = t_reset;
     sd_world *w;
     if (sd_world_create(&d, &w)) return 1;

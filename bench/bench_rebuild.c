@@ -73,15 +73,14 @@ int main(int argc, char **argv)
         fprintf(stderr, "%s\n", msg[0] ? msg : sd_status_message(st));
         return 1;
     }
-#ifdef _OPENMP
+    sd_tuning tuning;
+    sd_tuning_from_env(&tuning, NULL, 0);
+    sd_world_set_tuning(w, &tuning);
     if (threads > 0) {
-        omp_set_num_threads(threads);
+        sd_world_set_threads(w, threads);
         w->def.threads = threads;
     }
-    threads = omp_get_max_threads();
-#else
-    threads = 1;
-#endif
+    threads = sd_world_threads(w);
     /* a few steps: the lists, the owners and the bed's cache made as a run has them */
     for (int s = 0; s < 5 && !st; s++)
         st = sd_world_step(w);

@@ -110,11 +110,15 @@ static void open_box(sd_world *w, double X, double Y, double H)
     quad(w, v3(X, 0, 0), v3(X, Y, 0), v3(X, Y, H), v3(X, 0, H));
 }
 
-/* a world with vertical gravity, or NULL */
+static int g_threads = 1; /* --threads */
+
+/* a world with vertical gravity, or NULL; its tuning from the environment (SD_SIMD, SD_PREFETCH) */
 static sd_world *new_world(void)
 {
     sd_world_def d = sd_world_def_default();
     d.gravity = v3(0, 0, -9.81);
+    d.threads = g_threads;
+    sd_tuning_from_env(&d.tuning, NULL, 0);
     sd_world *w;
     return sd_world_create(&d, &w) ? NULL : w;
 }
@@ -143,14 +147,27 @@ static const char *ab_name;
 static int ab_groups = 8;
 static int stages; /* --stages: the rebuild's stages printed */
 
-/* the switch named ab_name (main checks it): the engine's, as bench_flume --ab has them */
-static int ab_set(int on)
+/* the switch named ab_name (main checks it) of w off or on, as bench_flume --ab has them: one
+ * of the engine's (prefetch, springs_list, slot_sqm, ext_skip) or avx512; returns its setting
+ * before (for ab_restore) */
+static int ab_set(sd_world *w, int on)
 {
-    return (!strcmp(ab_name, "prefetch")   ? sd_front_prefetch_set
-            : !strcmp(ab_name, "springs")  ? sd_springs_list_set
-            : !strcmp(ab_name, "slot_sqm") ? sd_slot_sqm_set
-            : !strcmp(ab_name, "ext")      ? sd_ext_skip_set
-                                           : sd_simd512_set)(on);
+    if (!strcmp(ab_name, "avx512")) {
+        const int was = sd_world_simd_level(w);
+        sd_world_set_simd_level(w, on ? SD_SIMD_AVX512 : SD_SIMD_AVX2);
+        return was;
+    }
+    const int k = sd_switch_by_name(ab_name);
+    if (k == SD_SW_PREFETCH) return sd_world_switch(w, SD_SW_PREFETCH, on ? SD_PREFETCH_ON : SD_PREFETCH_OFF);
+    return sd_world_switch(w, (sd_switch)k, on);
+}
+
+static void ab_restore(sd_world *w, int was)
+{
+    if (!strcmp(ab_name, "avx512"))
+        sd_world_set_simd_level(w, was);
+    else
+        sd_world_switch(w, (sd_switch)sd_switch_by_name(ab_name), was);
 }
 
 /* ab_groups groups of eight blocks of 100 steps, the switch off (A) and on (B) in the order
@@ -165,19 +182,19 @@ static void ab_world(sd_world *w, int n)
     enum { BLOCK = 100 };
     double *r = malloc((size_t)ab_groups * sizeof(double));
     if (!r) return;
-    const int was = ab_set(0);
+    const int was = ab_set(w, 0);
     for (int g = 0; g < ab_groups; g++) {
         static const int order[8] = {0, 1, 1, 0, 1, 0, 0, 1};
         double t[2] = {0.0, 0.0};
         for (int k = 0; k < 8; k++) {
-            ab_set(order[k]);
+            ab_set(w, order[k]);
             const double t0 = sd_now();
             sd_world_run(w, BLOCK);
             t[order[k]] += sd_now() - t0;
         }
         r[g] = t[1] / t[0];
     }
-    ab_set(was);
+    ab_restore(w, was);
     qsort(r, (size_t)ab_groups, sizeof(double), cmp_double);
     printf("AB N %8d %s: B/A median %.4f quartiles %.4f-%.4f (%d groups of A B B A B A A B, %d steps a block)\n", n,
            ab_name, r[ab_groups / 2], r[ab_groups / 4], r[(3 * ab_groups) / 4], ab_groups, BLOCK);
@@ -390,9 +407,10 @@ int main(int argc, char **argv)
         return 2;
     }
     if (ab_name) {
-        if (strcmp(ab_name, "prefetch") && strcmp(ab_name, "avx512") && strcmp(ab_name, "springs") &&
-            strcmp(ab_name, "slot_sqm") && strcmp(ab_name, "ext")) {
-            fprintf(stderr, "%s: --ab: no switch named '%s'; the switches: prefetch avx512 springs slot_sqm ext\n",
+        if (strcmp(ab_name, "prefetch") && strcmp(ab_name, "avx512") && strcmp(ab_name, "springs_list") &&
+            strcmp(ab_name, "slot_sqm") && strcmp(ab_name, "ext_skip")) {
+            fprintf(stderr,
+                    "%s: --ab: no switch named '%s'; the switches: prefetch avx512 springs_list slot_sqm ext_skip\n",
                     argv[0], ab_name);
             return 2;
         }
@@ -400,14 +418,12 @@ int main(int argc, char **argv)
             fprintf(stderr, "%s: --ab-groups must be between 1 and 1000\n", argv[0]);
             return 2;
         }
-        if (!strcmp(ab_name, "avx512") && sd_simd_cpu_level() < SD_SIMD_AVX512) {
+        if (!strcmp(ab_name, "avx512") && sd_cpu_simd_level() < SD_SIMD_AVX512) {
             fprintf(stderr, "%s: --ab avx512: this CPU has no AVX-512 (both forms would be AVX2)\n", argv[0]);
             return 2;
         }
     }
-#ifdef _OPENMP
-    omp_set_num_threads(threads);
-#endif
+    g_threads = threads;
     /* the sizes: 1e3, 1e4, 1e5 (steps, steps/2, steps/10), and with --big 1e6 (steps/20: with
      * the default 2000 steps, 100, so that each size takes its share of the rebuilds every 1 ms,
      * which at 1e6 take ~1.5 s each; until §P37, 40 steps without --same, which held one rebuild

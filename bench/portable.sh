@@ -79,7 +79,7 @@ if [ -d "$dir/tests" ]; then
         OMP_NUM_THREADS=1 OMP_WAIT_POLICY=passive "$t" >"$out/$n.log" 2>&1 &
         pids+=($!) names+=("$n")
     done
-    OMP_NUM_THREADS=1 OMP_WAIT_POLICY=passive SD_NO_AVX512=1 "$dir/tests/test_neighbor" >"$out/test_neighbor_scalar.log" 2>&1 &
+    OMP_NUM_THREADS=1 OMP_WAIT_POLICY=passive "$dir/tests/test_neighbor" scalar >"$out/test_neighbor_scalar.log" 2>&1 &
     pids+=($!) names+=(test_neighbor_scalar)
     bad=0
     for k in "${!pids[@]}"; do

@@ -56,15 +56,38 @@ typedef struct {
     double cohesion; /* c in the Mohr–Coulomb limit, N */
 } sd_contact_def;
 
+/* How the engine runs, never what it computes: every setting gives the same bits. The library
+ * reads no environment; sd_tuning_from_env is the one place that does, for programs that want
+ * the environment to choose (the sabodem CLI does). */
+/* (zero is AUTO: a zeroed sd_tuning is the default one) */
+enum { SD_SIMD_AUTO = 0, SD_SIMD_SCALAR = 1, SD_SIMD_AVX2 = 2, SD_SIMD_AVX512 = 3 };
+enum { SD_PREFETCH_AUTO = 0, SD_PREFETCH_OFF = 1, SD_PREFETCH_ON = 2 };
+typedef struct {
+    int simd;       /* SD_SIMD_*: the hand-written kernels' width; AUTO: the CPU's best, but AVX2
+                     * on AMD CPUs (their AVX-512 gathers are slower); capped at the CPU's */
+    int prefetch;   /* SD_PREFETCH_*: the body pass's prefetch of the bodies it reaches first;
+                     * AUTO: tried on and off during the run, the faster kept */
+    long llc_bytes; /* last-level cache per core, bytes: the prefetch's guess before its first
+                     * trial; 0: unknown (32 MiB assumed) */
+} sd_tuning;
+
+sd_tuning sd_tuning_default(void);
+/* t from the process's environment: SD_SIMD (scalar, avx2, avx512), SD_NO_AVX512 (1: scalar),
+ * SD_PREFETCH (on, off, auto) and the last-level cache's size from the operating system.
+ * Returns SD_ERR_ARG for a value it does not know, naming it in msg (t is filled either way,
+ * with that value left at its default). */
+sd_status sd_tuning_from_env(sd_tuning *t, char *msg, size_t msg_len);
+
 typedef struct {
     sd_vec3 gravity;      /* m/s^2 */
     double dt;            /* time step, s */
     double margin;        /* candidate margin r_dam, m */
     double t_reset;       /* candidate list rebuild interval, s */
     sd_contact_def contact;
-    int threads;          /* OpenMP threads, 0 = runtime default */
+    int threads;          /* OpenMP threads of this world, 0 = the runtime's default when created */
     int parallel_min;     /* loops shorter than this run on one thread (start-up costs more) */
     int check_dt;         /* 1: refuse a dt that is unstable for k_n and the smallest mass */
+    sd_tuning tuning;
 } sd_world_def;
 
 sd_world_def sd_world_def_default(void);
@@ -141,6 +164,18 @@ double sd_world_spring_energy(const sd_world *w);
 double sd_world_potential_energy(const sd_world *w);
 /* Set an external force (fluid) on a body for the next steps, N. */
 sd_status sd_world_set_external_force(sd_world *w, int gid, sd_vec3 f);
+/* The threads this world's steps use from now on (>= 1); the same bits for any count. */
+sd_status sd_world_set_threads(sd_world *w, int threads);
+int sd_world_threads(const sd_world *w);
+/* The SIMD level (SD_SIMD_SCALAR, _AVX2, _AVX512) the world's kernels run at, and a new one
+ * (capped at the CPU's; returns the level it took). The same bits at every level. */
+int sd_world_simd_level(const sd_world *w);
+int sd_world_set_simd_level(sd_world *w, int level);
+/* The whole tuning replaced (a world read from a checkpoint gets the defaults: the file keeps
+ * what the world is, not how it ran). */
+sd_status sd_world_set_tuning(sd_world *w, const sd_tuning *t);
+/* The best SIMD level this CPU has. */
+int sd_cpu_simd_level(void);
 /* Force candidate lists to be rebuilt at every step (for tests). */
 void sd_world_set_rebuild_every_step(sd_world *w, int on);
 /* Hash of the full dynamic state (positions, velocities, attitudes, history). */

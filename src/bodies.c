@@ -185,7 +185,7 @@ static int block_end(const int32_t *perm, int n, int i0)
     return i + 1;
 }
 
-sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n)
+sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n, int threads)
 {
     field_list f = {.n = 0};
     sd_bodies_for_each_field(b, list_field, &f);
@@ -210,7 +210,9 @@ sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n)
     if (nblk == 0) return SD_OK;
     int T = 1;
 #ifdef _OPENMP
-    T = moved > 2000 ? omp_get_max_threads() : 1;
+    T = moved > 2000 ? threads : 1;
+#else
+    (void)threads;
 #endif
     /* the blocks (start, end), and one scratch per thread as wide as the widest block and field
      * (a quaternion) */

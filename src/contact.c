@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <threads.h>
 #include <unistd.h>
 
 #include "contact_law.h"
@@ -468,9 +469,6 @@ static inline int log_pair_apart(const sd_bodies *b, const sd_pair *p)
     return 0;
 }
 
-static int sc_lanes_on = 1; /* sphere-log pairs through the law in lanes (sd_sc_lanes_set) */
-static int sc_geom_on = 1;  /* their geometry in AVX2 lanes, sc_geom256 (sd_sc_geom_set) */
-
 /* The touch filter's step for a log's pair (entry i of the chunk): apart, it gets what the
  * manifold path gives for no contact (empty slots, no force); else it goes on to the manifold
  * path, listed in gen. */
@@ -665,15 +663,6 @@ static inline void pair_soa_set(sd_pair_soa *s, int j, const sd_pair *p, const s
     s->act[j] = (uint8_t)(hist[p->off].feature >= 0);
 }
 
-static int slot_sqm_on = 1; /* (sd_slot_sqm_set) */
-
-int sd_slot_sqm_set(int on)
-{
-    const int was = slot_sqm_on;
-    slot_sqm_on = on != 0;
-    return was;
-}
-
 /* A list's own spring slot (soa_view.lsq): sqrt_m_eff in the feature's 8 bytes (the feature
  * and its padding), the spring where bb.hist has it. */
 _Static_assert(sizeof(sd_hist) == 32 && offsetof(sd_hist, shear) == 8, "a list's slot: sqm in the first 8 bytes");
@@ -766,81 +755,6 @@ static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m
     }
 }
 
-/* Which hand-written SIMD kernels run: SD_SIMD_SCALAR (none), SD_SIMD_AVX2 (contact.c's touch
- * filter, gather and sums and run.c's fluid forces in 4 lanes) or SD_SIMD_AVX512 (the filter,
- * gather and fluid forces in 8 lanes, the sums in 4, neighbor.c's cell scan). By default the
- * best the CPU has, except on AMD: there the AVX2 kernels, whose bodies' rows are loaded and
- * transposed, beat the AVX-512 ones, which gather them lane by lane (on a Zen 5 VM the paper's
- * run took 177-205 s with them and 140-158 s without, docs/performance-log.md §P36). The environment sets it: SD_SIMD =
- * scalar, avx2 or avx512 (the last one the AVX-512 kernels on any CPU that has them); SD_NO_AVX512=1 keeps the scalar
- * loops, as it always has. Decided once at load, before any thread; every level gives the same bits (the tests run them
- * all). */
-static int simd_level;
-
-static int simd_cpu_level(void)
-{
-#ifdef SD_FILTER512
-    __builtin_cpu_init(); /* (called from constructors) */
-    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")) return SD_SIMD_AVX512;
-    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt")) return SD_SIMD_AVX2;
-#endif
-    return SD_SIMD_SCALAR;
-}
-
-/* An SD_SIMD value as a level; -1 when unset or not one of the names */
-static int simd_env_level(const char *s)
-{
-    if (!s) return -1;
-    if (!strcmp(s, "scalar") || !strcmp(s, "0")) return SD_SIMD_SCALAR;
-    if (!strcmp(s, "avx2") || !strcmp(s, "1")) return SD_SIMD_AVX2;
-    if (!strcmp(s, "avx512")) return SD_SIMD_AVX512;
-    return -1;
-}
-
-int sd_simd_choose(int cpu, int amd, const char *sd_simd, const char *no_avx512)
-{
-    const int ask = simd_env_level(sd_simd);
-    int level = cpu == SD_SIMD_AVX512 && amd ? SD_SIMD_AVX2 : cpu; /* (see above) */
-    if (ask == SD_SIMD_AVX512) level = cpu;
-    if (no_avx512 && *no_avx512 && strcmp(no_avx512, "0") != 0) level = SD_SIMD_SCALAR;
-    if (ask == SD_SIMD_SCALAR) level = SD_SIMD_SCALAR;
-    if (ask == SD_SIMD_AVX2 && level > SD_SIMD_AVX2) level = SD_SIMD_AVX2;
-    return level;
-}
-
-/* Whether the CPU is an AMD one (for the SIMD level and the L3's size; from constructors) */
-static int cpu_is_amd(void)
-{
-#if defined(__x86_64__) && defined(__GNUC__)
-    __builtin_cpu_init(); /* (a constructor may run before libgcc's own) */
-    return __builtin_cpu_is("amd") != 0;
-#else
-    return 0;
-#endif
-}
-
-__attribute__((constructor)) static void simd_level_init(void)
-{
-    const char *e = getenv("SD_SIMD");
-    if (e && simd_env_level(e) < 0)
-        fprintf(stderr, "warning: SD_SIMD=%s is not one of scalar, avx2, avx512: ignored\n", e);
-    simd_level = sd_simd_choose(simd_cpu_level(), cpu_is_amd(), e, getenv("SD_NO_AVX512"));
-}
-
-int sd_simd_level(void) { return simd_level; }
-
-int sd_simd_level_set(int level)
-{
-    const int was = simd_level, cpu = simd_cpu_level();
-    simd_level = level < SD_SIMD_SCALAR ? SD_SIMD_SCALAR : (level > cpu ? cpu : level);
-    return was;
-}
-
-int sd_simd512_on(void) { return simd_level >= SD_SIMD_AVX512; }
-
-int sd_simd_cpu_level(void) { return simd_cpu_level(); }
-
-int sd_simd512_set(int on) { return sd_simd_level_set(on ? SD_SIMD_AVX512 : SD_SIMD_AVX2) == SD_SIMD_AVX512; }
 
 #ifdef SD_FILTER512
 /* Step 1 of bb_chunk (the touch filter) for 8 pairs at a time, in AVX-512: the pair records
@@ -915,7 +829,7 @@ __attribute__((target("avx512f,avx512vl,popcnt"))) static int ss_filter512(const
         /* the log pairs and cross entries of the group, as the scalar loop takes them, but a
          * sphere-log pair's apart test left to sc_geom256's lanes, as ss_filter256 leaves it
          * (its kind from the view: the pair store's line is read only for the other log pairs) */
-        const int defer = sc_lanes_on && sc_geom_on;
+        const int defer = w->sw[SD_SW_SC_LANES] && w->sw[SD_SW_SC_GEOM];
         for (__mmask8 o = other; o; o &= (__mmask8)(o - 1))
             filter_other(w, ks, v, i + __builtin_ctz(o), defer, used, gen, &ng);
     }
@@ -975,13 +889,15 @@ __attribute__((target("avx2"))) static inline void diff_lanes(const double *p, c
 
 /* Lane compress for AVX2, indexed by a 4-bit mask of kept lanes: the kept lanes moved down in
  * order. perm_pd: _mm256_permutevar8x32 indices for 4 doubles; shuf_i32: _mm_shuffle_epi8
- * bytes for 4 int32. Filled once (simd_tables_init, at load). */
+ * bytes for 4 int32. Filled once, by the first world's first contact pass (call_once). */
 static int32_t perm_pd[16][8];
 static uint8_t shuf_i32[16][16];
 static int32_t bit_i32[16][4]; /* lane k: bit k of the mask, 0 or 1 */
 static uint32_t bit_u8[16];     /* byte k: bit k of the mask, 0 or 1 */
 
-__attribute__((constructor)) static void simd_tables_init(void)
+static once_flag simd_tables_once = ONCE_FLAG_INIT;
+
+static void simd_tables_init(void)
 {
     for (int mask = 0; mask < 16; mask++) {
         int n = 0;
@@ -1223,7 +1139,6 @@ __attribute__((target("avx2"))) static int ss_sums256(ss_batch *q, int j, sd_bod
 #endif
 
 #ifdef SD_FILTER512
-static int ss_law256_on = 1; /* (sd_ss_law256_set) */
 /* the calling thread's groups run in lanes, and of them those that skipped the limit (tests) */
 static _Thread_local long ss_law256_groups, ss_law256_skips;
 
@@ -1231,13 +1146,6 @@ long sd_ss_law256_count(long *skipped)
 {
     if (skipped) *skipped = ss_law256_skips;
     return ss_law256_groups;
-}
-
-int sd_ss_law256_set(int on)
-{
-    const int was = ss_law256_on;
-    ss_law256_on = on != 0;
-    return was;
 }
 
 /* ss_law_spring in AVX2 for the lanes 0 .. m & ~3, four at a time: law_lane's operations in
@@ -1355,20 +1263,7 @@ static long sc_geom_run;
 
 long sd_sc_geom_count(void) { return __atomic_load_n(&sc_geom_run, __ATOMIC_RELAXED); }
 
-int sd_sc_geom_set(int on)
-{
-    const int was = sc_geom_on;
-    sc_geom_on = on != 0;
-    return was;
-}
 static long sc_lanes_run, sc_lanes_redo;
-
-int sd_sc_lanes_set(int on)
-{
-    const int was = sc_lanes_on;
-    sc_lanes_on = on != 0;
-    return was;
-}
 
 long sd_sc_lanes_count(long *redo)
 {
@@ -1397,7 +1292,7 @@ static __attribute__((noinline)) int pair_general(const sd_world *w, const sd_la
         return 0;
     }
     narrow_bb(&w->b, p, &m);
-    if (p->kind == SD_PAIR_SC && m.n == 1 && p->cap == 1 && sc_lanes_on) {
+    if (p->kind == SD_PAIR_SC && m.n == 1 && p->cap == 1 && w->sw[SD_SW_SC_LANES]) {
         sc_lane_fill(w, p, &m, h, i, q, msc);
         return 1;
     }
@@ -1761,9 +1656,9 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
          * in the scalar loop) */
         int i = 0;
 #ifdef SD_FILTER512
-        if (simd_level == SD_SIMD_AVX512)
+        if (w->simd == SD_SIMD_AVX512)
             i = ss_filter512(w, ks, v, 0, n, used, q, &m, gen, &ng);
-        else if (simd_level == SD_SIMD_AVX2)
+        else if (w->simd == SD_SIMD_AVX2)
             i = ss_filter256(w, v, 0, n, used, q, &m, gen, &ng);
 #endif
         ss_filter_range(w, ks, v, i, n, used, q, &m, gen, &ng);
@@ -1772,7 +1667,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
     {
         int msc = 0;
 #ifdef SD_FILTER512
-        if (simd_level >= SD_SIMD_AVX2 && sc_lanes_on && sc_geom_on) {
+        if (w->simd >= SD_SIMD_AVX2 && w->sw[SD_SW_SC_LANES] && w->sw[SD_SW_SC_GEOM]) {
             /* the sphere-log pairs in lanes (sc_geom256), the others first, one by one: each
              * pair's result is its own, whatever the order (same bits) */
             int sg[SS_CHUNK], nsg = 0;
@@ -1798,10 +1693,10 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
     {
         int j = 0;
 #ifdef SD_FILTER512
-        if (simd_level == SD_SIMD_AVX512) {
+        if (w->simd == SD_SIMD_AVX512) {
             ss_gather512(w, q, m);
             j = m;
-        } else if (simd_level == SD_SIMD_AVX2)
+        } else if (w->simd == SD_SIMD_AVX2)
             j = ss_gather256(w, q, m);
 #endif
         ss_gather_range(w, q, j, m);
@@ -1811,7 +1706,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
         ss_law_normal(q, m);
         int j = 0;
 #ifdef SD_FILTER512
-        if (simd_level == SD_SIMD_AVX2 && ss_law256_on) j = ss_law_spring256(law, w->def.dt, q, m);
+        if (w->simd == SD_SIMD_AVX2 && w->sw[SD_SW_SS_LAW256]) j = ss_law_spring256(law, w->def.dt, q, m);
 #endif
         ss_law_spring(law, w->def.dt, q, j, m);
     }
@@ -1836,7 +1731,7 @@ static void bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, co
 #ifdef SD_FILTER512
             /* four lanes at once where no other shape's pair comes between them and none is
              * to be redone (nearly always) */
-            if (simd_level >= SD_SIMD_AVX2 && j + 4 <= m && (g == ng || gen[g] > q->sel[j + 3]) &&
+            if (w->simd >= SD_SIMD_AVX2 && j + 4 <= m && (g == ng || gen[g] > q->sel[j + 3]) &&
                 ss_sums256(q, j, acc)) {
                 j += 3;
                 continue;
@@ -2037,8 +1932,6 @@ static inline void pf_body(const sd_bodies *b, int j)
 
 /* Body–triangle pairs of the bodies i0 .. i1-1: narrow phase, mesh dedup, law, into each
  * pair's slot (gathered per body in pair order by sd_contact_gather). */
-static int wall_near_on = 1; /* sd_wall_near_set */
-
 static long bt_range(sd_world *w, const sd_law *law, const int32_t *list, int nl, bt_batch *q)
 {
     sd_bodies *b = &w->b;
@@ -2180,16 +2073,10 @@ static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, 
     uint8_t *restrict keep = w->near_mark + w->bb.n + 1 + k0; /* (near_mark's second half) */
     int k = k0;
 #ifdef SD_FILTER512
-    if (simd_level >= SD_SIMD_AVX2) k = near_test256(w, skin, k0, k1, keep, nf);
+    if (w->simd >= SD_SIMD_AVX2) k = near_test256(w, skin, k0, k1, keep, nf);
 #endif
     for (; k < k1; k++)
         keep[k - k0] = (uint8_t)near_test(w, skin, &pairs[k], nf);
-    /* every candidate of a body marked fast (near_fast_make) */
-    if (w->nfast_k > 0) {
-        const uint8_t *restrict fast = w->nfast;
-        for (int j = k0; j < k1; j++)
-            keep[j - k0] |= fast[pairs[j].a] | fast[pairs[j].b];
-    }
     uint8_t *restrict mark = w->near_mark;
     sd_hist *restrict hist = w->bb.hist;
     for (int j = k0; j < k1; j++) {
@@ -2202,73 +2089,6 @@ static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, 
         mark[j] = (uint8_t)kp;
     }
     return keep;
-}
-
-/* The fastest moving bodies, marked for the near pairs about to be made (w->nfast): every
- * candidate of a marked body is near, its gaps not tested, and its moves do not count in the
- * near pairs' drift (sd_world_after_moves), which the others' then set. In the paper's capture
- * a few bodies washing out past the dam at ~1 m/s, among thousands at rest, set that drift and
- * remade the near pairs every ~15 steps. Marked: the bodies in the top octaves of the squared
- * surface speed (|v|, plus a log's tilt at its bounding radius, |omega x a| r_b) that together
- * hold at most one moving body in SD_NEAR_FAST_SHARE; their few extra pairs are tested at each
- * step. Which bodies are marked does not change the bits. Returns how many.
- * Off by default since the near pairs are remade in blocks (owned_update): a remake then cost
- * ~0.14 ms on two threads, and the marks' own costs (the speeds' histogram, ~35 us a remake,
- * and every candidate of a marked body tested at each step) came to more than the remakes they
- * save: with them off, an A/B in one process (blocks of 500 steps alternated) ran the capture
- * 3.4-5.7 % faster, the flow 1.6 % and the packing 1.2 % (docs/performance-log.md). */
-#define SD_NEAR_FAST_SHARE 32
-static int near_fast_on = 0;
-
-int sd_near_fast_set(int on)
-{
-    const int was = near_fast_on;
-    near_fast_on = on != 0;
-    return was;
-}
-
-static int near_fast_make(sd_world *w)
-{
-    const sd_bodies *b = &w->b;
-    w->nfast_k = 0;
-    if (!near_fast_on) { /* none marked, and no marks for the moves to read (nfast_n) */
-        w->nfast_n = -1;
-        return 0;
-    }
-    if (sd_grow((void **)&w->nfast, &w->nfast_cap, b->n + 1, 1)) return -1;
-    memset(w->nfast, 0, (size_t)b->n + 1);
-    w->nfast_n = b->n;
-    const int nm = w->mov_n, k = nm / SD_NEAR_FAST_SHARE;
-    if (k < 1 || w->mov_bn != b->n) return 0;
-    /* the squared surface speeds by octave (their exponent), then the lowest octave at which
-     * the marked ones stay within k */
-    enum { NB = 64, E0 = 1023 - 40 }; /* octaves of 2^-40 .. 2^23 (m/s)^2 */
-    int cnt[NB] = {0};
-    uint8_t *bin = w->nfast; /* (each body's octave, for now) */
-#pragma omp parallel for schedule(static) reduction(+ : cnt[:NB]) if (nm > w->def.parallel_min)
-    for (int q = 0; q < nm; q++) {
-        const int i = w->mov[q];
-        double s = sqrt(v3_norm2(b->vel[i]));
-        if (b->shape[i] != SD_SHAPE_SPHERE) /* a log's tilt at its bounding radius */
-            s += 1.01 * b->bound_r[i] * sqrt(v3_norm2(v3_cross(b->omega[i], b->axis[i])));
-        uint64_t bits;
-        const double s2 = s * s;
-        memcpy(&bits, &s2, sizeof bits);
-        const int e = (int)(bits >> 52 & 0x7ff) - E0;
-        bin[i] = (uint8_t)(e < 0 ? 0 : (e >= NB ? NB - 1 : e));
-        cnt[bin[i]]++;
-    }
-    int top = NB, m = 0;
-    while (top > 1 && m + cnt[top - 1] <= k)
-        m += cnt[--top];
-    /* bins top .. NB-1 are marked (m bodies): none when the fastest octave alone is too many */
-#pragma omp parallel for schedule(static) if (nm > w->def.parallel_min)
-    for (int q = 0; q < nm; q++) {
-        const int i = w->mov[q];
-        w->nfast[i] = (uint8_t)(bin[i] >= top);
-    }
-    w->nfast_k = m;
-    return m;
 }
 
 /* near_mark sized for the candidates (its second half: the answers' scratch, keep[] of
@@ -2329,19 +2149,12 @@ static int near_filter(sd_world *w, double skin, int fresh, int32_t *out, sd_pai
     return m;
 }
 
-int sd_wall_near_set(int on)
-{
-    const int was = wall_near_on;
-    wall_near_on = on != 0;
-    return was;
-}
-
 /* The bodies among i0 .. i1-1 with wall pairs that are near touching one, into list
  * (ascending; returns how many; *skip: how many were left out): near when the centre's distance
  * to a triangle's plane (no nearer than that to the triangle) less the radius, or a log's
  * extent along the plane's normal, is below half the skin. A body
  * farther from every plane cannot reach one before the near pairs are remade (walls do not
- * move; a triangle switched on forces a rebuild). All of them when sd_wall_near_set(0). */
+ * move; a triangle switched on forces a rebuild). All of them when switch SD_SW_WALL_NEAR is off. */
 static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *list, long *skip)
 {
     const sd_bodies *b = &w->b;
@@ -2356,7 +2169,7 @@ static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *li
         /* half the skin: a wall does not move, only the body closes the gap, by less than half
          * the skin before the near pairs are remade */
         const double hs = 0.5 * skin, reach = b->radius[i] + hs;
-        int near = !wall_near_on || (w->nfast_k > 0 && w->nfast[i]);
+        int near = !w->sw[SD_SW_WALL_NEAR];
         for (int k = from; k < to; k++) {
             const sd_tri *t = &wl->tri[p[k].b];
             /* a log reaches hl |a.n| + r sqrt(1 - (a.n)^2) along the plane's normal, its
@@ -2390,8 +2203,6 @@ static int wall_near_range(sd_world *w, double skin, int i0, int i1, int32_t *li
  * list is remade or anything reads bb.hist. Below: entries k0 .. k1 of a list (candidate
  * indices, an owner's cross entry negative) whose records s are of a sphere pair (ck kind 0;
  * the others keep their slots in bb.hist). */
-static int springs_list_on = 1; /* (sd_springs_list_set; SD_SPRINGS=slots at load, llc_init) */
-
 static void springs_out_range(sd_world *w, sd_pair_soa *s, sd_hist *h, int k0, int k1)
 {
     for (int k = k0; k < k1; k++)
@@ -2428,13 +2239,6 @@ void sd_contact_springs_home(sd_world *w)
     w->springs_out = 0;
 }
 
-int sd_springs_list_set(int on)
-{
-    const int was = springs_list_on;
-    springs_list_on = on != 0;
-    return was;
-}
-
 /* The sphere pairs' slots of the list whose springs are out as `out`, else bb.hist. */
 static inline sd_hist *springs_of(const sd_world *w, int out, sd_hist *h)
 {
@@ -2447,10 +2251,10 @@ static inline sd_hist *springs_of(const sd_world *w, int out, sd_hist *h)
  * (owned_update has made them current). Only put back when the switch is off. */
 static sd_status springs_to(sd_world *w, int out)
 {
-    if (w->springs_out == out && springs_list_on && w->springs_lsq == slot_sqm_on) return SD_OK;
+    if (w->springs_out == out && w->sw[SD_SW_SPRINGS_LIST] && w->springs_lsq == w->sw[SD_SW_SLOT_SQM]) return SD_OK;
     sd_contact_springs_home(w);
-    if (!springs_list_on) return SD_OK;
-    w->springs_lsq = slot_sqm_on;
+    if (!w->sw[SD_SW_SPRINGS_LIST]) return SD_OK;
+    w->springs_lsq = w->sw[SD_SW_SLOT_SQM];
     if (out == 1) {
         if (sd_grow((void **)&w->near_hist, &w->near_hist_cap, w->near_n + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
         springs_out_range(w, &w->near_soa, w->near_hist, 0, w->near_n);
@@ -2502,17 +2306,16 @@ static sd_status near_update(sd_world *w)
     sd_contact_springs_home(w); /* (from the list about to go) */
     const double skin = SD_NEAR_SKIN * w->def.margin;
     if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    if (near_fast_make(w) < 0) return SD_ERR_NOMEM;
     const int fresh = near_mark_ready(w);
     if (fresh < 0 || pair_soa_reserve(&w->near_soa, nbb + 1) ||
         sd_grow((void **)&w->wall_list, &w->wall_list_cap, w->b.n + 1, sizeof(int32_t)))
         return SD_ERR_NOMEM;
     /* the springs out as the list is made (springs_out 1), when the switch is on */
-    if (springs_list_on && sd_grow((void **)&w->near_hist, &w->near_hist_cap, nbb + 1, sizeof(sd_hist)))
+    if (w->sw[SD_SW_SPRINGS_LIST] && sd_grow((void **)&w->near_hist, &w->near_hist_cap, nbb + 1, sizeof(sd_hist)))
         return SD_ERR_NOMEM;
-    w->springs_lsq = slot_sqm_on;
-    w->near_n = near_filter(w, skin, fresh, w->near, &w->near_soa, springs_list_on ? w->near_hist : NULL);
-    w->springs_out = springs_list_on ? 1 : 0;
+    w->springs_lsq = w->sw[SD_SW_SLOT_SQM];
+    w->near_n = near_filter(w, skin, fresh, w->near, &w->near_soa, w->sw[SD_SW_SPRINGS_LIST] ? w->near_hist : NULL);
+    w->springs_out = w->sw[SD_SW_SPRINGS_LIST] ? 1 : 0;
     w->wall_n = wall_near_range(w, skin, 0, w->b.n, w->wall_list, &w->wall_skip);
     w->near_nbb = nbb;
     near_made(w, skin);
@@ -2538,58 +2341,14 @@ static sd_status near_update(sd_world *w)
 #define PF_CHUNKS 2
 #define PF_BYTES_PER_BODY 512 /* about what one step reads and writes per sphere (bodies, pairs) */
 #define PF_LLC_SHARE 4        /* the data may take 1 / PF_LLC_SHARE of the last-level cache */
-static int front_prefetch_mode = SD_PREFETCH_AUTO;
-
-int sd_front_prefetch_set(int mode)
-{
-    const int old = front_prefetch_mode;
-    front_prefetch_mode = mode < 0 ? SD_PREFETCH_AUTO : mode > 0;
-    return old;
-}
-
-/* The last-level cache's size: Linux's sysfs (cpuid through sysconf gave 256 MiB for the 32 MiB
- * L3 of our AMD VM), else sysconf, else 32 MiB. On AMD a core reaches the L3 of its own complex
- * only, 32 MiB on Zen 2 to 5, where sysconf may give the whole package's (508 MiB on the Zen 5
- * VM, which has no cache sizes in sysfs: the prefetch stayed off at 1e5 spheres, where it makes
- * one thread's step 8-22 % faster and two threads' no slower, docs/performance-log.md §P36): so
- * there a figure from sysconf above 32 MiB counts as 32 MiB. Read once at load, before any thread. */
-static long llc_size;
-
-__attribute__((constructor)) static void llc_init(void)
-{
-    long v = -1;
-    FILE *f = fopen("/sys/devices/system/cpu/cpu0/cache/index3/size", "r");
-    if (f) {
-        char unit = 0;
-        long n = 0;
-        if (fscanf(f, "%ld%c", &n, &unit) >= 1 && n > 0) v = unit == 'K' ? n << 10 : unit == 'M' ? n << 20 : n;
-        fclose(f);
-    }
-#ifdef _SC_LEVEL3_CACHE_SIZE
-    if (v <= 0) {
-        v = sysconf(_SC_LEVEL3_CACHE_SIZE);
-        if (v > 32L << 20 && cpu_is_amd()) v = 32L << 20;
-    }
-#endif
-    llc_size = v > 0 ? v : 32L << 20;
-    /* SD_PREFETCH = on, off or auto (the default) */
-    const char *e = getenv("SD_PREFETCH");
-    if (e && !strcmp(e, "on")) front_prefetch_mode = SD_PREFETCH_ON;
-    if (e && !strcmp(e, "off")) front_prefetch_mode = SD_PREFETCH_OFF;
-    /* SD_SPRINGS = slots: the sphere pairs' springs left in their slots (sd_springs_list_set) */
-    e = getenv("SD_SPRINGS");
-    if (e && !strcmp(e, "slots")) springs_list_on = 0;
-}
-
-int sd_front_prefetch_mode(void) { return front_prefetch_mode; }
-
 int sd_front_prefetch_on(const sd_world *w)
 {
     static const int order[4] = {0, 1, 1, 0}; /* a trial's blocks: off on on off */
-    if (front_prefetch_mode != SD_PREFETCH_AUTO) return front_prefetch_mode;
+    const int mode = w->sw[SD_SW_PREFETCH];
+    if (mode != SD_PREFETCH_AUTO) return mode == SD_PREFETCH_ON;
     if (w->pf.blk >= 0) return order[w->pf.blk & 3];
     if (w->pf.verdict >= 0) return w->pf.verdict;
-    return (long)w->b.n * PF_BYTES_PER_BODY * PF_LLC_SHARE > llc_size;
+    return (long)w->b.n * PF_BYTES_PER_BODY * PF_LLC_SHARE > w->llc_bytes;
 }
 
 int sd_front_prefetch_verdict(const sd_world *w, double *ratio)
@@ -2843,11 +2602,10 @@ static sd_status owned_update(sd_world *w, int T)
         pair_soa_reserve(&o->xsoa, nbb + 1) || sd_grow((void **)&w->wall_list, &w->wall_list_cap, n + 1, sizeof(int32_t)))
         return SD_ERR_NOMEM;
     const double skin = SD_NEAR_SKIN * w->def.margin;
-    if (near_fast_make(w) < 0) return SD_ERR_NOMEM;
     const int fresh = near_mark_ready(w);
     if (fresh < 0) return SD_ERR_NOMEM;
     /* the springs out as the lists are made (springs_out 2), when the switch is on */
-    const int take = springs_list_on, lsq = slot_sqm_on;
+    const int take = w->sw[SD_SW_SPRINGS_LIST], lsq = w->sw[SD_SW_SLOT_SQM];
     w->springs_lsq = lsq;
     if (take && sd_grow((void **)&o->hist, &o->hist_cap, nbb + 1, sizeof(sd_hist))) return SD_ERR_NOMEM;
 #pragma omp parallel num_threads(T)
@@ -3026,7 +2784,7 @@ static long bb_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scr
 static int bb_owners(const sd_world *w)
 {
 #ifdef _OPENMP
-    int T = omp_get_max_threads();
+    int T = w->nthreads;
     if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
     if (T > 1 && w->bb.n > w->def.parallel_min && w->b.n >= 4 * T) return T;
 #endif
@@ -3049,6 +2807,9 @@ static void sc_lanes_fold(void *scratch, int T)
 
 sd_status sd_contact_near_remake(sd_world *w)
 {
+#ifdef SD_FILTER512
+    call_once(&simd_tables_once, simd_tables_init);
+#endif
     w->near_drift = w->near_skin; /* as a drift past half the skin would */
 #ifdef _OPENMP
     const int T = bb_owners(w);
@@ -3059,6 +2820,9 @@ sd_status sd_contact_near_remake(sd_world *w)
 
 sd_status sd_contact_compute(sd_world *w, int *integrated)
 {
+#ifdef SD_FILTER512
+    call_once(&simd_tables_once, simd_tables_init);
+#endif
     sd_law law = sd_law_make(&w->def.contact);
     long count = 0;
     const int T = bb_owners(w);

@@ -17,45 +17,14 @@
 #include <omp.h>
 #endif
 
-/* The logs moved in batches (cyl_steps), or one by one (cyl_step; sd_cyl_batch_set). */
-static int cyl_batch_on = 1;
-
-/* The spheres moved four at a time in AVX2 lanes where the CPU has them (move_block256), or
- * one by one (sd_move_lanes_set(0)): the same bits. */
-static int move_lanes_on = 1;
-static _Thread_local long move_lanes_groups; /* the groups of four moved in lanes, by this thread */
+/* the groups of four spheres moved in lanes (move_block256), by this thread (tests) */
+static _Thread_local long move_lanes_groups;
 
 long sd_move_lanes_count(void) { return move_lanes_groups; }
 
-int sd_move_lanes_set(int on)
-{
-    const int was = move_lanes_on;
-    move_lanes_on = on != 0;
-    return was;
-}
-
-/* The store's external forces not read while none was ever set (w->ext_any): the moves add
- * a zero constant instead, the same bits (sd_ext_skip_set(0) reads them anyway). */
-static int ext_skip_on = 1;
-
-int sd_ext_skip_set(int on)
-{
-    const int was = ext_skip_on;
-    ext_skip_on = on != 0;
-    return was;
-}
-
-int sd_cyl_batch_set(int on)
-{
-    const int was = cyl_batch_on;
-    cyl_batch_on = on != 0;
-    return was;
-}
-
 /* A log's rotation and its rebuild bounds (out of line, so that the sphere loop keeps its
  * running maxima in registers): returns the x of its downstream end. */
-static __attribute__((noinline)) double cyl_step(sd_bodies *b, int i, double dt, double lim2, int *moved, double *dc,
-                                                  double *dcs, int fast)
+static __attribute__((noinline)) double cyl_step(sd_bodies *b, int i, double dt, double lim2, int *moved, double *dc)
 {
     sd_vec3 L = v3_madd(b->angmom[i], b->torque[i], dt);
     b->angmom[i] = L;
@@ -77,7 +46,6 @@ static __attribute__((noinline)) double cyl_step(sd_bodies *b, int i, double dt,
      * moves no surface */
     const double step = sqrt(v3_norm2(b->vel[i])) * dt + 1.01 * b->bound_r[i] * sqrt(v3_norm2(v3_sub(a, a_old)));
     *dc = step > *dc ? step : *dc;
-    if (!fast) *dcs = step > *dcs ? step : *dcs;
     return b->pos[i].x + sd_body_x_extent(b, i);
 }
 
@@ -162,9 +130,8 @@ static void cyl_batch_turn(cyl_batch *restrict c, int n, double dt)
 }
 
 /* cyl_step for the logs lg[0 .. n) (body indices; their centres already moved), in batches;
- * returns the largest x of their downstream ends. nf: the near list's fast marks (or NULL). */
-static double cyl_steps(sd_bodies *b, const int32_t *lg, int n, double dt, double lim2, int *moved, double *dc,
-                        double *dcs, const uint8_t *nf)
+ * returns the largest x of their downstream ends. */
+static double cyl_steps(sd_bodies *b, const int32_t *lg, int n, double dt, double lim2, int *moved, double *dc)
 {
     cyl_batch c;
     double xf = -INFINITY;
@@ -196,7 +163,6 @@ static double cyl_steps(sd_bodies *b, const int32_t *lg, int n, double dt, doubl
             b->omega[i] = v3(c.ox[j], c.oy[j], c.oz[j]);
             *moved |= c.d2[j] > lim2;
             *dc = c.step[j] > *dc ? c.step[j] : *dc;
-            if (!(nf && nf[i])) *dcs = c.step[j] > *dcs ? c.step[j] : *dcs;
             const double x = b->pos[i].x + sd_body_x_extent(b, i);
             xf = x > xf ? x : xf;
         }
@@ -213,9 +179,8 @@ static inline __attribute__((always_inline)) void move_one(int i, sd_vec3 e, dou
                                                            const sd_vec3 *restrict torque,
                                                            const double *restrict inv_i_ax,
                                                            const double *restrict radius,
-                                                           const uint8_t *restrict shape, const uint8_t *restrict nf,
-                                                           double *vm, double *vs, double *xf, int32_t *restrict lg,
-                                                           int *nlg)
+                                                           const uint8_t *restrict shape, double *vm, double *xf,
+                                                           int32_t *restrict lg, int *nlg)
 {
     const sd_vec3 f = v3_add(force[i], e);
     const sd_vec3 acc = v3_madd(g, f, inv_mass[i]);
@@ -234,9 +199,6 @@ static inline __attribute__((always_inline)) void move_one(int i, sd_vec3 e, dou
          * margin) */
         const double v2 = v3_norm2(vn);
         *vm = v2 > *vm ? v2 : *vm;
-        /* the near list's drift: the spheres not marked fast (nfast), whose pairs are all near */
-        const double v2s = nf && nf[i] ? 0.0 : v2;
-        *vs = v2s > *vs ? v2s : *vs;
         const double x = pn.x + radius[i];
         *xf = x > *xf ? x : *xf;
     } else {
@@ -253,19 +215,18 @@ static inline int move_block(const int32_t *restrict mov, int kb, int ke, double
                              const double *restrict inv_mass, sd_vec3 *restrict vel, sd_vec3 *restrict pos,
                              sd_vec3 *restrict omega, const sd_vec3 *restrict torque,
                              const double *restrict inv_i_ax, const double *restrict radius,
-                             const uint8_t *restrict shape, const uint8_t *restrict nf, double *vmax,
-                             double *vslow, double *xfront, int32_t *restrict lg, int nlg, const int ext_blk)
+                             const uint8_t *restrict shape, double *vmax, double *xfront, int32_t *restrict lg,
+                             int nlg, const int ext_blk)
 {
-    double vm = *vmax, vs = *vslow, xf = *xfront;
+    double vm = *vmax, xf = *xfront;
     for (int k = kb; k < ke; k++) {
         const int i = mov[k];
         /* the external force from the block's buffer (ext_blk: ext[k - kb]), the store's, or
          * none set (ext NULL: a zero, added all the same) */
         move_one(i, ext ? ext[ext_blk ? k - kb : i] : v3(0.0, 0.0, 0.0), dt, g, force, inv_mass, vel, pos, omega,
-                 torque, inv_i_ax, radius, shape, nf, &vm, &vs, &xf, lg, &nlg);
+                 torque, inv_i_ax, radius, shape, &vm, &xf, lg, &nlg);
     }
     *vmax = vm;
-    *vslow = vs;
     *xfront = xf;
     return nlg;
 }
@@ -277,8 +238,7 @@ static inline int move_block(const int32_t *restrict mov, int kb, int ke, double
  * per-body factors 1/m and Δt/I spread to the elements by permutes); |v|^2 and the front take
  * the rows apart into x, y, z lanes. The same bits as move_one: the same IEEE operations in
  * the same order, nothing contracted, and maxima taken in any order give the same maximum.
- * Any other body (a log, a fixed body between, a block's last 1-3) goes through move_one.
- * Not used with the fast marks (nf), which keep their own drift. */
+ * Any other body (a log, a fixed body between, a block's last 1-3) goes through move_one. */
 __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict mov, int kb, int ke, double dt,
                                                          sd_vec3 g, const sd_vec3 *restrict force,
                                                          const sd_vec3 *restrict ext, const double *restrict inv_mass,
@@ -286,10 +246,10 @@ __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict
                                                          sd_vec3 *restrict omega, const sd_vec3 *restrict torque,
                                                          const double *restrict inv_i_ax,
                                                          const double *restrict radius, const uint8_t *restrict shape,
-                                                         double *vmax, double *vslow, double *xfront,
-                                                         int32_t *restrict lg, int nlg, const int ext_blk)
+                                                         double *vmax, double *xfront, int32_t *restrict lg,
+                                                         int nlg, const int ext_blk)
 {
-    double vm = *vmax, vs = *vslow, xf = *xfront;
+    double vm = *vmax, xf = *xfront;
     const __m256d vdt = _mm256_set1_pd(dt), zero = _mm256_setzero_pd();
     /* g spread over the rows' elements: x y z x | y z x y | z x y z */
     const __m256d g0 = _mm256_setr_pd(g.x, g.y, g.z, g.x), g1 = _mm256_setr_pd(g.y, g.z, g.x, g.y),
@@ -310,7 +270,7 @@ __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict
         }
         if (!group) {
             move_one(i, ext ? ext[ext_blk ? k - kb : i] : v3(0.0, 0.0, 0.0), dt, g, force, inv_mass, vel, pos, omega,
-                     torque, inv_i_ax, radius, shape, NULL, &vm, &vs, &xf, lg, &nlg);
+                     torque, inv_i_ax, radius, shape, &vm, &xf, lg, &nlg);
             ones++;
             continue;
         }
@@ -353,11 +313,9 @@ __attribute__((target("avx2"))) static int move_block256(const int32_t *restrict
     _mm256_storeu_pd(l + 4, xf4);
     for (int j = 0; j < 4; j++) {
         vm = l[j] > vm ? l[j] : vm;
-        vs = l[j] > vs ? l[j] : vs; /* (no fast marks: each sphere's v2s is its v2) */
         xf = l[4 + j] > xf ? l[4 + j] : xf;
     }
     *vmax = vm;
-    *vslow = vs;
     *xfront = xf;
     return nlg;
 }
@@ -370,19 +328,17 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves 
     const sd_vec3 g = w->def.gravity;
     const double lim2 = 0.25 * w->def.margin * w->def.margin;
     int moved = 0;
-    double vm = mm->v2, vs = mm->v2s, dc = mm->dc, dcs = mm->dcs, xf = mm->xf;
-    /* the near list's fast marks, when made for this store */
-    const uint8_t *nf = w->nfast_n == b->n ? w->nfast : NULL;
+    double vm = mm->v2, dc = mm->dc, xf = mm->xf;
     /* the logs, turned in batches once a batch has gathered (each body's move is its own) */
     int32_t lg[CYL_BATCH + SD_EXT_BLOCK];
     sd_vec3 ext[SD_EXT_BLOCK]; /* a block's external forces (ext_fn) */
     /* the external forces: the block's buffer from ext_fn (ext[k - kb]), else the store's, or
      * none (NULL) while none was ever set */
     const int blk = w->ext_fn != NULL;
-    const sd_vec3 *const ex = blk ? ext : (w->ext_any || !ext_skip_on) ? b->ext_force : NULL;
+    const sd_vec3 *const ex = blk ? ext : (w->ext_any || !w->sw[SD_SW_EXT_SKIP]) ? b->ext_force : NULL;
     int nlg = 0;
 #ifdef SD_MOVE256
-    const int lanes = move_lanes_on && !nf && sd_simd_level() >= SD_SIMD_AVX2;
+    const int lanes = w->sw[SD_SW_MOVE_LANES] && w->simd >= SD_SIMD_AVX2;
 #endif
     for (int kb = k0; kb < k1; kb += SD_EXT_BLOCK) {
         const int ke = k1 - kb < SD_EXT_BLOCK ? k1 : kb + SD_EXT_BLOCK;
@@ -391,28 +347,28 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves 
 #ifdef SD_MOVE256
         if (lanes)
             nlg = move_block256(mov, kb, ke, dt, g, b->force, ex, b->inv_mass, b->vel, b->pos, b->omega, b->torque,
-                                b->inv_i_ax, b->radius, b->shape, &vm, &vs, &xf, lg, nlg, blk);
+                                b->inv_i_ax, b->radius, b->shape, &vm, &xf, lg, nlg, blk);
         else
 #endif
             nlg = move_block(mov, kb, ke, dt, g, b->force, ex, b->inv_mass, b->vel, b->pos, b->omega, b->torque,
-                             b->inv_i_ax, b->radius, b->shape, nf, &vm, &vs, &xf, lg, nlg, blk);
-        if (!cyl_batch_on) {
+                             b->inv_i_ax, b->radius, b->shape, &vm, &xf, lg, nlg, blk);
+        if (!w->sw[SD_SW_CYL_BATCH]) {
             for (int q = 0; q < nlg; q++) {
-                const double x = cyl_step(b, lg[q], dt, lim2, &moved, &dc, &dcs, nf && nf[lg[q]]);
+                const double x = cyl_step(b, lg[q], dt, lim2, &moved, &dc);
                 xf = x > xf ? x : xf;
             }
             nlg = 0;
         } else if (nlg >= CYL_BATCH) {
-            const double x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc, &dcs, nf);
+            const double x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc);
             xf = x > xf ? x : xf;
             nlg = 0;
         }
     }
     if (nlg > 0) {
-        const double x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc, &dcs, nf);
+        const double x = cyl_steps(b, lg, nlg, dt, lim2, &moved, &dc);
         xf = x > xf ? x : xf;
     }
-    *mm = (sd_moves){vm, vs, dc, dcs, xf};
+    *mm = (sd_moves){vm, dc, xf};
     return moved;
 }
 
@@ -424,7 +380,7 @@ void sd_integrate(sd_world *w)
     int moved = 0;
     sd_moves mm = SD_MOVES_NONE;
 #ifdef _OPENMP
-#pragma omp parallel reduction(| : moved) reduction(moves_max : mm) if (nm > w->def.parallel_min)
+#pragma omp parallel num_threads(w->nthreads) reduction(| : moved) reduction(moves_max : mm) if (nm > w->def.parallel_min)
     {
         int k0, k1;
         sd_mov_share(w, omp_get_thread_num(), omp_get_num_threads(), &k0, &k1);

@@ -19,8 +19,8 @@
  * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
-_Static_assert(sizeof(struct sd_world) == 1704, "struct sd_world changed: update io_checkpoint.c");
-_Static_assert(sizeof(sd_world_def) == 104, "sd_world_def changed: update io_checkpoint.c");
+_Static_assert(sizeof(struct sd_world) == 1768, "struct sd_world changed: update io_checkpoint.c");
+_Static_assert(sizeof(sd_world_def) == 120, "sd_world_def changed: update io_checkpoint.c (its tuning is not saved)");
 /* sd_walls: its edge ids, seams and edge lines are derived (sd_walls_weld, again on load) */
 _Static_assert(sizeof(sd_walls) == 96, "sd_walls changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_pairlist) == 56, "sd_pairlist changed: update io_checkpoint.c");

@@ -4,6 +4,7 @@
  * only in the lowest cell its two boxes share, so each pair is found once. Cost O(N). */
 #include <stdlib.h>
 #include <string.h>
+#include <threads.h>
 
 #include "world_internal.h"
 
@@ -22,7 +23,7 @@ static int rebuild_threads(const sd_world *w, int n)
 {
     int T = 1;
 #ifdef _OPENMP
-    T = omp_get_max_threads();
+    T = w->nthreads;
     if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
     if (n <= w->def.parallel_min) T = 1;
 #else
@@ -109,10 +110,10 @@ __attribute__((target("avx2"))) static void cell_range256(const sd_grid *g, sd_v
 }
 #endif
 
-static void cell_range(const sd_grid *g, sd_vec3 lo, sd_vec3 hi, int32_t r[6])
+static void cell_range(const sd_grid *g, sd_vec3 lo, sd_vec3 hi, int32_t r[6], int simd)
 {
 #ifdef SD_SCAN512
-    if (sd_simd_level() >= SD_SIMD_AVX2) {
+    if (simd >= SD_SIMD_AVX2) {
         cell_range256(g, lo, hi, r);
         return;
     }
@@ -495,7 +496,7 @@ static sd_status old_ranges(sd_world *w, int by_index)
     if (by_index) {
         const int32_t *perm = w->rb_perm, *st = w->old_start;
         const int pm = w->rb_perm_m;
-#pragma omp parallel for schedule(static) if (n > w->def.parallel_min)
+#pragma omp parallel for num_threads(w->nthreads) schedule(static) if (n > w->def.parallel_min)
         for (int i = 0; i < n; i++) {
             const int j = i < pm ? perm[i] : i;
             rng[i][0] = st[j];
@@ -536,7 +537,7 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l)
     }
     const int32_t(*rng)[2] = (const int32_t(*)[2])w->old_rng;
     /* each pair fills its own slots */
-#pragma omp parallel for schedule(static) if (l->n > w->def.parallel_min)
+#pragma omp parallel for num_threads(w->nthreads) schedule(static) if (l->n > w->def.parallel_min)
     for (int k = 0; k < l->n; k++) {
         const sd_pair *p = &l->p[k];
         for (int s = 0; s < p->cap; s++)
@@ -562,7 +563,7 @@ static sd_status restore_history(sd_world *w, sd_pairlist *l)
 static void set_effective_masses(sd_world *w)
 {
     const sd_bodies *b = &w->b;
-#pragma omp parallel for schedule(static) if (w->bb.n > w->def.parallel_min)
+#pragma omp parallel for num_threads(w->nthreads) schedule(static) if (w->bb.n > w->def.parallel_min)
     for (int k = 0; k < w->bb.n; k++) {
         sd_pair *p = &w->bb.p[k];
         double ma = b->mass[p->a], mb = b->mass[p->b], m;
@@ -614,7 +615,7 @@ static sd_status rebuild_triangle_grid(sd_world *w, double cell)
     for (int t = 0; t < wl->n; t++) {
         sd_vec3 l, h;
         tri_box(&wl->tri[t], hm, &l, &h);
-        cell_range(&w->tgrid, l, h, w->trange[t]);
+        cell_range(&w->tgrid, l, h, w->trange[t], w->simd);
     }
     uint8_t *skip = malloc((size_t)(wl->n + 1));
     if (!skip) return SD_ERR_NOMEM;
@@ -648,11 +649,11 @@ static sd_status sort_bodies_by_cell(sd_world *w, int n)
     }
     int32_t *const perm = w->rb_perm;
     int unsorted = 0;
-#pragma omp parallel for schedule(static) reduction(| : unsorted) if (n > w->def.parallel_min)
+#pragma omp parallel for num_threads(w->nthreads) schedule(static) reduction(| : unsorted) if (n > w->def.parallel_min)
     for (int i = 0; i < n; i++) {
         sd_vec3 c = b->pos[i];
         int r[6];
-        cell_range(g, c, c, r);
+        cell_range(g, c, c, r, w->simd);
         /* x slowest: a contiguous index range is a slab across the flume (the thread ranges of
          * contact.c), whatever order the grid's own cells use */
         cell[i] = (r[0] * g->ny + r[1]) * g->nz + r[2];
@@ -695,7 +696,7 @@ static sd_status sort_bodies_by_cell(sd_world *w, int n)
     int m = n;
     while (m > 0 && perm[m - 1] == m - 1)
         m--;
-    st = sd_bodies_permute(b, perm, m);
+    st = sd_bodies_permute(b, perm, m, w->nthreads);
     if (st) goto done;
     w->rb_perm_m = m; /* (for restore_history) */
     for (int i = 0; i < m; i++)
@@ -759,15 +760,6 @@ typedef struct {
     int32_t *start, *items;
     uint8_t *flags; /* the entries' gflag */
 } moving_index;
-
-static int moving_index_min = 64; /* made for more fixed bodies than this (sd_moving_index_set) */
-
-int sd_moving_index_set(int min_fixed)
-{
-    const int was = moving_index_min;
-    moving_index_min = min_fixed;
-    return was;
-}
 
 static int moving_index_make(const sd_world *w, moving_index *mi)
 {
@@ -878,15 +870,6 @@ __attribute__((target("avx512f,avx512vl"))) static int scan_cell512(const sd_wor
 }
 #endif
 
-static int scan_pre_on = 1; /* the scan's float prefilter (sd_scan_pre_set) */
-
-int sd_scan_pre_set(int on)
-{
-    const int was = scan_pre_on;
-    scan_pre_on = on != 0;
-    return was;
-}
-
 #define SD_SCAN_JS 512 /* bb_scan's entries gathered before the reach test (at least 64 more than it flushes at) */
 
 /* The body grid's entries' centres and bounding radii as floats (w->gq), after the grid is
@@ -908,7 +891,7 @@ static sd_status grid_coords(sd_world *w)
     const int32_t *restrict it = g->items;
     const sd_vec3 *restrict pos = w->b.pos;
     const double *restrict br = w->b.bound_r;
-#pragma omp parallel for schedule(static) if (all > w->def.parallel_min)
+#pragma omp parallel for num_threads(w->nthreads) schedule(static) if (all > w->def.parallel_min)
     for (int a = 0; a < all; a++) {
         const int j = it[a];
         x[a] = (float)pos[j].x, y[a] = (float)pos[j].y, z[a] = (float)pos[j].z, r[a] = (float)br[j];
@@ -929,12 +912,13 @@ static sd_status grid_coords(sd_world *w)
 }
 
 /* compress_lut[m]: byte l is the lane of the l-th set bit of m (8 lanes), for a permute that
- * packs the set lanes first; made when the program loads (a constructor: no first use shared
- * by threads). A 16-entry table for each half, combined at each use, ran no faster (the
+ * packs the set lanes first; made once, by the first rebuild (call_once). A 16-entry table for each half, combined at each use, ran no faster (the
  * scan's median 1.79 against 1.72 ms, six alternations). */
 static uint64_t compress_lut[256];
 
-__attribute__((constructor)) static void compress_lut_make(void)
+static once_flag compress_lut_once = ONCE_FLAG_INIT;
+
+static void compress_lut_make(void)
 {
     for (int m = 0; m < 256; m++) {
         uint64_t v = 0;
@@ -1027,11 +1011,11 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
 #ifdef SD_SCAN512
     /* a moving body's entries 8 at a time where the CPU has AVX-512 (an AVX2 form, 4 at a
      * time, was measured and dropped: docs/performance-log.md §P11) */
-    const int vec = !fixed_i && sd_simd512_on();
+    const int vec = !fixed_i && w->simd >= SD_SIMD_AVX512;
     const double bri = b->bound_r[i];
     const sd_vec3 pi = b->pos[i];
     /* a moving body's entries through the float prefilter where the CPU has AVX2 */
-    const int pre = !fixed_i && !vec && scan_pre_on && w->gq_stride > 0 && sd_simd_level() >= SD_SIMD_AVX2;
+    const int pre = !fixed_i && !vec && w->sw[SD_SW_SCAN_PRE] && w->gq_stride > 0 && w->simd >= SD_SIMD_AVX2;
     const float pc[4] = {(float)pi.x, (float)pi.y, (float)pi.z, (float)(bri + w->def.margin)};
 #endif
     int e = w->reg0[i]; /* i's entries, in the order of the loops below (grid_fill) */
@@ -1116,7 +1100,7 @@ static int bt_scan(const sd_world *w, int i, double hm, cand_buf *out)
     const sd_vec3 thi = v3_add(tg->lo, v3(tg->nx * tg->cell, tg->ny * tg->cell, tg->nz * tg->cell));
     if (h.x < tlo.x || h.y < tlo.y || h.z < tlo.z || l.x > thi.x || l.y > thi.y || l.z > thi.z) return 0;
     int32_t ri[6];
-    cell_range(tg, l, h, ri);
+    cell_range(tg, l, h, ri, w->simd);
     for (int z = ri[2]; z <= ri[5]; z++)
         for (int y = ri[1]; y <= ri[4]; y++)
             for (int x = ri[0]; x <= ri[3]; x++) {
@@ -1140,15 +1124,6 @@ static int bt_scan(const sd_world *w, int i, double hm, cand_buf *out)
                 }
             }
     return 0;
-}
-
-static int bed_cache_on = 1;
-
-int sd_bed_cache_set(int on)
-{
-    const int was = bed_cache_on;
-    bed_cache_on = on != 0;
-    return was;
 }
 
 /* The bed's cache still holds for the grid just laid out: the same origin, cells and columns
@@ -1331,6 +1306,9 @@ const char *sd_neighbor_stage_name(int k)
 
 sd_status sd_neighbor_rebuild(sd_world *w)
 {
+#ifdef SD_SCAN512
+    call_once(&compress_lut_once, compress_lut_make);
+#endif
     sd_bodies *b = &w->b;
     double rb_t = sd_now();
     const int fresh = !w->keys_collected; /* the collect is this rebuild's own */
@@ -1343,13 +1321,13 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     /* the bed as the last full rebuild left it, while no body came or went: its boxes, ranges
      * and grid entries are taken from there if the grid keeps its layout (same bits) */
     const sd_bed_cache *bc = &w->bed;
-    const int bed0 = bed_cache_on && bc->made && bc->version == w->body_version && bc->n == b->n;
+    const int bed0 = w->sw[SD_SW_BED_CACHE] && bc->made && bc->version == w->body_version && bc->n == b->n;
     const int nb = bed0 ? bc->nb0 : b->n;
 
     /* cell size: the largest sphere diameter plus the margin; cylinders span several cells */
     double dmax = 0.0;
     const int par = b->n > w->def.parallel_min;
-#pragma omp parallel for schedule(static) reduction(max : dmax) if (par)
+#pragma omp parallel for num_threads(w->nthreads) schedule(static) reduction(max : dmax) if (par)
     for (int i = 0; i < b->n; i++)
         dmax = 2.0 * b->radius[i] > dmax ? 2.0 * b->radius[i] : dmax;
     if (dmax <= 0.0) dmax = 0.01;
@@ -1370,7 +1348,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         hx = bc->bhi.x, hy = bc->bhi.y, hz = bc->bhi.z;
         nbed = b->n - bc->nb0;
     }
-#pragma omp parallel for schedule(static) reduction(min : lx, ly, lz, ax, ay, az) reduction(max : hx, hy, hz) \
+#pragma omp parallel for num_threads(w->nthreads) schedule(static) reduction(min : lx, ly, lz, ax, ay, az) reduction(max : hx, hy, hz) \
     reduction(+ : nbed) if (par)
     for (int i = 0; i < nb; i++) {
         sd_vec3 l, h;
@@ -1400,13 +1378,13 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     if (sd_grow((void **)&w->range, &w->range_cap, b->n + 1, sizeof(*w->range)) ||
         sd_grow((void **)&w->box, &w->box_cap, 2 * b->n + 2, sizeof(sd_vec3)))
         return SD_ERR_NOMEM;
-#pragma omp parallel for schedule(static) if (nr > w->def.parallel_min)
+#pragma omp parallel for num_threads(w->nthreads) schedule(static) if (nr > w->def.parallel_min)
     for (int i = 0; i < nr; i++) {
         sd_vec3 l, h;
         body_box(b, i, hm, &l, &h);
         w->box[2 * i] = l;
         w->box[2 * i + 1] = h;
-        cell_range(&w->grid, l, h, w->range[i]);
+        cell_range(&w->grid, l, h, w->range[i], w->simd);
     }
     w->box_n = nr;
     RB_STAGE(SD_RB_RANGES);
@@ -1431,7 +1409,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     /* the prefilter's floats, where bb_scan will read them (AVX2, not AVX-512) */
     w->gq_stride = 0;
 #ifdef SD_SCAN512
-    if (scan_pre_on && !sd_simd512_on() && sd_simd_level() >= SD_SIMD_AVX2) {
+    if (w->sw[SD_SW_SCAN_PRE] && w->simd == SD_SIMD_AVX2) {
         if ((st = grid_coords(w))) return st;
     }
 #endif
@@ -1460,7 +1438,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         /* the moving bodies of each cell, for the fixed bodies' scans: worth making when there
          * are many (the bed, sorted last, has none to scan; the dam's pipes are a few) */
         moving_index mi = {NULL, NULL, NULL};
-        if (!buf || (nfixed > moving_index_min && moving_index_make(w, &mi))) {
+        if (!buf || (nfixed > w->sw[SD_SW_MOVING_INDEX_MIN] && moving_index_make(w, &mi))) {
             free(mi.start);
             free(mi.items);
             free(mi.flags);
@@ -1512,7 +1490,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
 
     /* the references of the moves (a bed taken from its cache was not reordered and has not
      * moved: its references still hold) */
-#pragma omp parallel for schedule(static) if (nr > w->def.parallel_min)
+#pragma omp parallel for num_threads(w->nthreads) schedule(static) if (nr > w->def.parallel_min)
     for (int i = 0; i < nr; i++) {
         b->pos_ref[i] = b->pos[i];
         b->axis_ref[i] = b->axis[i];

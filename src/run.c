@@ -391,10 +391,10 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
     int nlogs = 0;
     int32_t *lp = k1 - k0 <= SD_FLUID_LOGS ? logs : NULL;
 #ifdef SD_FLUID512
-    if (sd_simd_level() == SD_SIMD_AVX512) {
+    if (sd_world_simd_level(w) == SD_SIMD_AVX512) {
         fluid_spheres512(fc, w, mov, k0, k1, lp, &nlogs, out);
         kv = k1;
-    } else if (sd_simd_level() == SD_SIMD_AVX2)
+    } else if (sd_world_simd_level(w) == SD_SIMD_AVX2)
         kv = fluid_spheres256(fc, w, mov, k0, k1, lp, &nlogs, out);
 #else
     lp = NULL;
@@ -712,14 +712,14 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
             sd_now() - c->wall0);
     fprintf(f, "  \"state_hash\": \"%016llx\",\n", (unsigned long long)sd_world_state_hash(c->w));
     /* the hand-written kernels this run used (the same bits at every level: for the speed) */
-    static const char *const simd_names[] = {"scalar", "avx2", "avx512"};
-    fprintf(f, "  \"simd_kernels\": \"%s\",\n", simd_names[sd_simd_level()]);
+    static const char *const simd_names[] = {"auto", "scalar", "avx2", "avx512"};
+    fprintf(f, "  \"simd_kernels\": \"%s\",\n", simd_names[sd_world_simd_level(c->w)]);
     /* the front prefetch (a hint: the same bits either way) and, in auto mode, the last trial's
      * verdict and its time on over off */
     double pf_ratio = 0.0;
-    const int pf_verdict = sd_front_prefetch_verdict(c->w, &pf_ratio), pf_mode = sd_front_prefetch_mode();
+    const int pf_verdict = sd_front_prefetch_verdict(c->w, &pf_ratio), pf_mode = c->w->sw[SD_SW_PREFETCH];
     if (pf_mode != SD_PREFETCH_AUTO)
-        fprintf(f, "  \"front_prefetch\": \"%s (set)\",\n", pf_mode ? "on" : "off");
+        fprintf(f, "  \"front_prefetch\": \"%s (set)\",\n", pf_mode == SD_PREFETCH_ON ? "on" : "off");
     else if (pf_verdict < 0)
         fprintf(f, "  \"front_prefetch\": \"%s (no trial)\",\n", sd_front_prefetch_on(c->w) ? "on" : "off");
     else
@@ -1236,9 +1236,8 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         }
         /* the thread count is the caller's (the bits do not depend on it) */
         c.w->def.threads = s->world.threads;
-#ifdef _OPENMP
-        if (s->world.threads > 0) omp_set_num_threads(s->world.threads);
-#endif
+        if (s->world.threads > 0) sd_world_set_threads(c.w, s->world.threads);
+        sd_world_set_tuning(c.w, &s->world.tuning); /* (and how it runs, too) */
         c.restarted_from = o->restart;
         c.flow_wall = rs.wall_before;
     } else {

@@ -39,6 +39,7 @@ typedef struct {
     int n_set;
     char set[MAX_SETS][256];
     int parallel;
+    sd_tuning tuning; /* the caller's (sd_sweep_opts), for every run */
 } sweep_def;
 
 static int load_sweep(const char *path, sweep_def *d, FILE *err)
@@ -178,7 +179,9 @@ static int load_run_scenario(const sweep_def *d, const run_item *r, sd_scenario 
     char buf[MAX_SETS + MAX_VARY + 4][256];
     const char *ptr[MAX_SETS + MAX_VARY + 4];
     int n = run_overrides(d, r, buf, ptr);
-    return sd_scenario_load(s, d->base, ptr, n, err);
+    if (sd_scenario_load(s, d->base, ptr, n, err)) return 1;
+    s->world.tuning = d->tuning;
+    return 0;
 }
 
 static int file_exists(const char *p)
@@ -326,6 +329,7 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
 {
     sweep_def d;
     if (load_sweep(sweep_file, &d, err)) return 2;
+    d.tuning = so->tuning;
     int ncase = 1;
     for (int v = 0; v < d.n_vary; v++)
         ncase *= d.n_val[v];

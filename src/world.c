@@ -1,6 +1,8 @@
 /* The world owns every store; sd_world_step() is a short list of timed phases. */
 #include <string.h>
 
+#include "core/cpu.h"
+#include "tuning.h"
 #include "world_internal.h"
 
 #ifdef _OPENMP
@@ -23,6 +25,7 @@ sd_world_def sd_world_def_default(void)
     d.threads = 0;
     d.parallel_min = 2048;
     d.check_dt = 1;
+    d.tuning = sd_tuning_default();
     return d;
 }
 
@@ -64,9 +67,17 @@ sd_status sd_world_create(const sd_world_def *def, sd_world **out)
     w->near_mark_rb = -1;
     w->pf.verdict = -1;
     w->pf.blk = -1;
+    w->nthreads = 1;
 #ifdef _OPENMP
-    if (def->threads > 0) omp_set_num_threads(def->threads);
+    w->nthreads = def->threads > 0 ? def->threads : omp_get_max_threads();
 #endif
+    static const int sw_default[SD_SWITCH_COUNT] = {
+#define SD_X_SWITCH(name, def, doc) def,
+        SD_SWITCH_TABLE(SD_X_SWITCH)
+#undef SD_X_SWITCH
+    };
+    memcpy(w->sw, sw_default, sizeof w->sw);
+    sd_world_set_tuning(w, &def->tuning);
     *out = w;
     return SD_OK;
 }
@@ -115,7 +126,6 @@ void sd_world_destroy(sd_world *w)
     free(w->near);
     free(w->near_hist);
     free(w->near_mark);
-    free(w->nfast);
     free(w->wall_list);
     sd_pair_soa_free(&w->near_soa);
     free(w);
@@ -300,9 +310,9 @@ sd_status sd_world_moving_update(sd_world *w)
 
 void sd_world_after_moves(sd_world *w, const sd_moves *m)
 {
-    const double step = sqrt(m->v2) * w->def.dt, slow = sqrt(m->v2s) * w->def.dt;
-    /* the near pairs: the bodies not marked fast (all of a fast body's candidates are near) */
-    w->near_drift += slow > m->dcs ? slow : m->dcs;
+    const double step = sqrt(m->v2) * w->def.dt;
+    /* the near pairs: the farthest any surface went, a sphere's or a log's */
+    w->near_drift += step > m->dc ? step : m->dc;
     /* no sphere can have moved more than ref_drift since the rebuild: the exact test of
      * each against half the margin (what the cylinders get every step) only once that bound
      * is near it, with the same outcome */
@@ -312,7 +322,7 @@ void sd_world_after_moves(sd_world *w, const sd_moves *m)
         const double lim2 = 0.25 * w->def.margin * w->def.margin;
         const int nm = w->mov_n;
         int moved = 0;
-#pragma omp parallel for schedule(static) reduction(| : moved) if (nm > w->def.parallel_min)
+#pragma omp parallel for num_threads(w->nthreads) schedule(static) reduction(| : moved) if (nm > w->def.parallel_min)
         for (int k = 0; k < nm; k++) {
             const int i = w->mov[k];
             moved |= b->shape[i] == SD_SHAPE_SPHERE && v3_norm2(v3_sub(b->pos[i], b->pos_ref[i])) > lim2;
@@ -340,7 +350,7 @@ void sd_pf_trial_before(sd_world *w)
 {
     sd_pf_trial *p = &w->pf;
     const int n = w->b.n;
-    if (sd_front_prefetch_mode() != SD_PREFETCH_AUTO) {
+    if (w->sw[SD_SW_PREFETCH] != SD_PREFETCH_AUTO) {
         p->blk = -1; /* (a trial under a forced setting would time one mode against itself) */
         return;
     }
@@ -591,4 +601,64 @@ uint64_t sd_world_state_hash(const sd_world *w)
         if (w->bt.hist[k].feature >= 0) SD_HASH_BYTES(&w->bt.hist[k].shear, sizeof(sd_vec3));
 #undef SD_HASH_BYTES
     return h;
+}
+
+sd_status sd_world_set_threads(sd_world *w, int threads)
+{
+    if (!w || threads < 1) return SD_ERR_ARG;
+#ifdef _OPENMP
+    w->nthreads = threads;
+#endif
+    return SD_OK;
+}
+
+int sd_world_threads(const sd_world *w) { return w->nthreads; }
+
+int sd_world_simd_level(const sd_world *w) { return w->simd; }
+
+int sd_world_set_simd_level(sd_world *w, int level)
+{
+    w->simd = sd_tuning_simd_level(level, sd_cpu_simd_level(), sd_cpu_is_amd());
+    return w->simd;
+}
+
+sd_status sd_world_set_tuning(sd_world *w, const sd_tuning *t)
+{
+    if (!w || !t) return SD_ERR_ARG;
+    sd_world_set_simd_level(w, t->simd);
+    w->llc_bytes = t->llc_bytes > 0 ? t->llc_bytes : 32L << 20;
+    sd_world_switch(w, SD_SW_PREFETCH, t->prefetch);
+    w->def.tuning = *t;
+    return SD_OK;
+}
+
+static const char *const switch_names[SD_SWITCH_COUNT] = {
+#define SD_X_SWITCH(name, def, doc) #name,
+    SD_SWITCH_TABLE(SD_X_SWITCH)
+#undef SD_X_SWITCH
+};
+
+int sd_world_switch(sd_world *w, sd_switch which, int value)
+{
+    if ((int)which < 0 || which >= SD_SWITCH_COUNT) return -1;
+    const int was = w->sw[which];
+    if (which == SD_SW_PREFETCH) {
+        if (value != SD_PREFETCH_OFF && value != SD_PREFETCH_ON) value = SD_PREFETCH_AUTO;
+    } else if (which != SD_SW_MOVING_INDEX_MIN)
+        value = value != 0;
+    w->sw[which] = value;
+    return was;
+}
+
+const char *sd_switch_name(sd_switch which) { return (int)which >= 0 && which < SD_SWITCH_COUNT ? switch_names[which] : "?"; }
+
+int sd_switch_by_name(const char *name)
+{
+    for (int k = 0; k < SD_SWITCH_COUNT; k++) {
+        const char *a = switch_names[k], *b = name;
+        while (*a && *b && (*a | 0x20) == (*b | 0x20))
+            a++, b++;
+        if (!*a && !*b) return k;
+    }
+    return -1;
 }

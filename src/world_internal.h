@@ -217,8 +217,44 @@ typedef struct {
     double ratio; /* the last verdict's median of (on) / (off) */
 } sd_pf_trial;
 
+/* The engine's optimizations that tests and benchmarks switch for A/B runs: every setting
+ * gives the same bits (the tests prove it). Each world has its own (sd_world_switch); a new
+ * world has every one at its default. X(name, default, what it does when on). */
+#define SD_SWITCH_TABLE(X)                                                                          \
+    X(SC_LANES, 1, "sphere-log pairs touching at one point go through the law in lanes")          \
+    X(SC_GEOM, 1, "their geometry in AVX2 lanes")                                                  \
+    X(SS_LAW256, 1, "the sphere law's spring loop in AVX2 lanes (AVX2 level)")                     \
+    X(SLOT_SQM, 1, "a sphere pair's sqrt_m_eff kept in its spring's slot")                         \
+    X(SPRINGS_LIST, 1, "the sphere pairs' springs kept in the near list's order")                  \
+    X(WALL_NEAR, 1, "the wall pass visits only bodies with a wall pair near touching")             \
+    X(PREFETCH, SD_PREFETCH_AUTO, "the body pass's front prefetch: SD_PREFETCH_AUTO, _OFF, _ON")  \
+    X(MOVE_LANES, 1, "the spheres moved in AVX2 lanes")                                            \
+    X(CYL_BATCH, 1, "the logs moved in batches of lanes")                                          \
+    X(EXT_SKIP, 1, "the store's external forces not read while none was set")                      \
+    X(SCAN_PRE, 1, "the rebuild scan's float prefilter")                                           \
+    X(BED_CACHE, 1, "rebuilds take the bed roughness from its cache")                              \
+    X(MOVING_INDEX_MIN, 64, "fixed bodies scan the moving bodies' lists when more than this many")
+
+typedef enum {
+#define SD_X_SWITCH(name, def, doc) SD_SW_##name,
+    SD_SWITCH_TABLE(SD_X_SWITCH)
+#undef SD_X_SWITCH
+        SD_SWITCH_COUNT
+} sd_switch;
+
+/* Sets switch `which` of w to value (from the next step) and returns its value before. The
+ * prefetch takes SD_PREFETCH_*; the others 0 or 1 but MOVING_INDEX_MIN, a count. */
+int sd_world_switch(sd_world *w, sd_switch which, int value);
+/* The switch called `name` (its table name in lower case: "springs_list"), -1 if none. */
+int sd_switch_by_name(const char *name);
+const char *sd_switch_name(sd_switch which);
+
 struct sd_world {
     sd_world_def def;
+    int nthreads;             /* this world's OpenMP threads (def.threads, or the runtime's default) */
+    int simd;                 /* the SIMD level its kernels run at (SD_SIMD_*, resolved) */
+    long llc_bytes;           /* the last-level cache the prefetch's guess assumes */
+    int sw[SD_SWITCH_COUNT];  /* sd_world_switch */
     sd_ext_force_fn ext_fn; /* NULL: ext_force applies (set by the driver, not saved) */
     void *ext_ctx;
     sd_bodies b;
@@ -322,13 +358,6 @@ struct sd_world {
     int springs_lsq; /* those springs' slots hold the pair's sqrt_m_eff where the feature was (contact.c slot_sqm) */
     long near_stamp, near_version;
     double near_drift, near_skin; /* near_skin: the skin it was made with */
-    /* nfast[i]: body i was among the fastest when the near pairs were last made, so every
-     * candidate of it is near (its gaps not tested) and its moves are left out of near_drift:
-     * a few bodies washing out past the dam at 1 m/s set the drift otherwise, and remade the
-     * near pairs every ~15 steps (contact.c near_fast_make; scratch, not saved, sized nfast_n
-     * = the store's bodies then) */
-    uint8_t *nfast;
-    int nfast_cap, nfast_n, nfast_k; /* nfast_k: how many are marked */
     /* near_mark[k]: candidate k was near when the near pairs were last made (both paths), so
      * only it can hold a spring; valid while near_mark_rb == timers.rebuilds (after a rebuild
      * any candidate can: the carried springs). Its second half, near_mark[bb.n + 1 + k], is
@@ -364,8 +393,9 @@ sd_status sd_bodies_reserve(sd_bodies *b, int cap);
 void sd_bodies_free(sd_bodies *b);
 void sd_bodies_swap_remove(sd_bodies *b, int i);
 /* Reorder every field: new index i takes old index perm[i]. */
-/* a[i] <- a[perm[i]] in every field, for the first n bodies (perm maps 0..n-1 onto itself) */
-sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n);
+/* a[i] <- a[perm[i]] in every field, for the first n bodies (perm maps 0..n-1 onto itself), on
+ * up to `threads` threads */
+sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n, int threads);
 /* Iterate over the field table: calls fn(ptr, elem_size, ctx) for each field array. */
 typedef void (*sd_field_fn)(void *array, size_t elem_size, const char *name, void *ctx);
 void sd_bodies_for_each_field(sd_bodies *b, sd_field_fn fn, void *ctx);
@@ -405,13 +435,6 @@ sd_status sd_neighbor_collect_history(sd_world *w);
 void sd_grid_free(sd_grid *g);
 void sd_bed_cache_free(sd_bed_cache *c);
 void sd_scan_bufs_free(sd_world *w);
-/* Whether rebuilds take the bed from its cache (default on; off: every rebuild places it
- * afresh, the same bits, for the tests); returns the previous setting. */
-int sd_bed_cache_set(int on);
-/* The fixed bodies scan the moving bodies' lists of each cell when there are more of them
- * (not bed) than min_fixed (default 64), else the grid's own lists: the same candidates. For
- * the tests; returns the previous setting. */
-int sd_moving_index_set(int min_fixed);
 
 /* contact_law.c */
 typedef struct {
@@ -459,77 +482,24 @@ void sd_pairlist_free(sd_pairlist *l);
  * the bodies have drifted past half the near skin. */
 sd_status sd_contact_near_remake(sd_world *w);
 void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to);
-/* The hand-written SIMD kernels: none (the scalar loops), AVX2 (contact.c's touch filter, gather
- * and sums, run.c's fluid forces, 4 lanes) or AVX-512 (the filter, gather and fluid forces in 8
- * lanes, the sums in 4, neighbor.c's cell scan).
- * The best the CPU has by default, but AVX2 on AMD; the environment's SD_SIMD (scalar, avx2,
- * avx512) sets it, SD_NO_AVX512=1 keeps the scalar loops. The same bits at every level. */
-enum { SD_SIMD_SCALAR = 0, SD_SIMD_AVX2 = 1, SD_SIMD_AVX512 = 2 };
-int sd_simd_level(void);
-/* The level picked at load from the CPU's (cpu), whether it is an AMD one (amd: AVX2 by default
- * where it has AVX-512, which is slower there) and the environment's SD_SIMD and SD_NO_AVX512
- * (NULL when unset). */
-int sd_simd_choose(int cpu, int amd, const char *sd_simd, const char *no_avx512);
-/* For tests; not to be called while a world steps: asks for a level (capped at what the CPU
- * has) and returns the previous one. */
-int sd_simd_level_set(int level);
-/* Whether the AVX-512 kernels run now (sd_simd_level() is SD_SIMD_AVX512). */
-int sd_simd512_on(void);
-/* The best level the CPU has (what sd_simd_level_set can reach). */
-int sd_simd_cpu_level(void);
-/* For A/B runs, like the other switches: the AVX-512 kernels (on) or the AVX2 ones (off); returns
- * whether the AVX-512 ones ran before. Where the CPU has no AVX-512 both are AVX2. */
-int sd_simd512_set(int on);
-/* The sphere-log pairs touching at one point through the law in lanes (contact.c) or all of
- * them through apply_manifold: the same bits either way. For tests, like sd_simd_level_set;
- * returns the previous setting. sd_sc_lanes_count: the lanes run so far, and of them the ones
- * sent back to the scalar law (*redo). */
-int sd_sc_lanes_set(int on);
-/* The sphere-log contacts' geometry in AVX2 lanes where the CPU has it (1, the default) or
- * pair by pair (0); the same bits either way. Returns the previous setting. */
-int sd_sc_geom_set(int on);
-/* The sphere law's spring loop in AVX2 lanes where the CPU has AVX2 but not AVX-512 (1, the
- * default) or as the compiler vectorized it (0); the same bits either way. Returns the previous
- * setting. */
-int sd_ss_law256_set(int on);
-/* The groups of four the calling thread ran through that loop so far, and of them those where
- * no lane slid or passed the limit (*skipped). */
+/* The hand-written SIMD kernels run at w->simd: SD_SIMD_SCALAR (the scalar loops), _AVX2
+ * (contact.c's touch filter, gather and sums, run.c's fluid forces, 4 lanes) or _AVX512 (the
+ * filter, gather and fluid forces in 8 lanes, the sums in 4, neighbor.c's cell scan). The same
+ * bits at every level. */
+/* The groups of four the calling thread ran through the sphere law's AVX2 spring loop so far,
+ * and of them those where no lane slid or passed the limit (*skipped). */
 long sd_ss_law256_count(long *skipped);
-/* The wall pass over the bodies with a wall pair near touching only (1, the default) or over
- * all with wall pairs (0); the same bits either way. Returns the previous setting. */
-int sd_wall_near_set(int on);
-/* Whether the near pairs mark the fastest bodies (w->nfast; default off, contact.c): any
- * setting gives the same bits. Returns the previous setting. */
-int sd_near_fast_set(int on);
-/* The sphere pairs' springs kept in the near list's order while it lives (1, the default) or
- * left in their candidates' slots (0); the same bits either way (contact.c springs_out).
- * Returns the previous setting. */
-int sd_springs_list_set(int on);
-/* With the springs in a near list's order, each sphere pair's sqrt_m_eff kept in its spring's
- * slot (1, the default: the touch filter then does not stream it for every entry) or in the
- * records only (0); the same bits either way, from the next contact pass (contact.c slot_sqm).
- * Returns the previous setting. */
-int sd_slot_sqm_set(int on);
-/* The logs' moves in batches of SIMD lanes (1, the default) or one by one (0); returns the
- * setting before. Either gives the same bits (integrate.c). */
-int sd_cyl_batch_set(int on);
-int sd_scan_pre_set(int on);   /* neighbor.c: the rebuild scan's float prefilter (on by default; the same candidates) */
-int sd_ext_skip_set(int on);   /* integrate.c: the store's external forces skipped while none was set (on) */
-int sd_move_lanes_set(int on); /* integrate.c: the spheres moved in AVX2 lanes (on by default) */
 long sd_move_lanes_count(void); /* the groups of four spheres the calling thread moved in lanes */
 /* Sphere-log lanes filled by the AVX2 geometry since the start (for the tests). */
 long sd_sc_geom_count(void);
+/* the sphere-log lanes run so far, and of them the ones sent back to the scalar law (*redo) */
 long sd_sc_lanes_count(long *redo);
-/* The body-body pass's prefetch of the bodies it is about to reach for the first time (contact.c):
- * SD_PREFETCH_AUTO (the default: tried on and off during the run, sd_pf_trial; before the first
- * verdict, and below SD_PF_MIN_BODIES, on when the step's data outgrow a quarter of the last-level
- * cache), _OFF or _ON. A hint to the memory system only: the same bits either way. For tests and
- * benchmarks, like sd_simd_level_set; returns the previous setting. sd_front_prefetch_on: whether
- * it runs for w now. sd_front_prefetch_mode: the setting. sd_front_prefetch_verdict: the last
- * trial's verdict for w (-1 none yet) and its ratio (on / off). */
-enum { SD_PREFETCH_AUTO = -1, SD_PREFETCH_OFF = 0, SD_PREFETCH_ON = 1 };
-int sd_front_prefetch_set(int mode);
-int sd_front_prefetch_mode(void);
+/* The body-body pass's prefetch of the bodies it is about to reach for the first time (contact.c),
+ * as switch SD_SW_PREFETCH says: SD_PREFETCH_AUTO (the default: tried on and off during the run,
+ * sd_pf_trial; before the first verdict, and below SD_PF_MIN_BODIES, on when the step's data
+ * outgrow a quarter of the last-level cache), _OFF or _ON. A hint to the memory system only: the
+ * same bits either way. sd_front_prefetch_on: whether it runs for w now.
+ * sd_front_prefetch_verdict: the last trial's verdict for w (-1 none yet) and its ratio (on / off). */
 int sd_front_prefetch_on(const sd_world *w);
 int sd_front_prefetch_verdict(const sd_world *w, double *ratio);
 /* world.c: the trial's bookkeeping around one step's pass (pass_s: its time) */
@@ -622,19 +592,16 @@ static inline sd_cyl sd_body_cyl(const sd_bodies *b, int i)
 /* integrate.c */
 void sd_integrate(sd_world *w);
 /* The largest moves of a step (sd_integrate_list): |v|² of a sphere, the move of a log's
- * surface, each over all moving bodies and over those not marked fast (nfast: the near
- * list's drift), and the farthest downstream point. */
+ * surface, and the farthest downstream point. */
 typedef struct {
-    double v2, v2s, dc, dcs, xf;
+    double v2, dc, xf;
 } sd_moves;
-#define SD_MOVES_NONE ((sd_moves){0.0, 0.0, 0.0, 0.0, -INFINITY})
+#define SD_MOVES_NONE ((sd_moves){0.0, 0.0, -INFINITY})
 /* *a raised to b, field by field */
 static inline void sd_moves_max(sd_moves *a, const sd_moves *b)
 {
     a->v2 = b->v2 > a->v2 ? b->v2 : a->v2;
-    a->v2s = b->v2s > a->v2s ? b->v2s : a->v2s;
     a->dc = b->dc > a->dc ? b->dc : a->dc;
-    a->dcs = b->dcs > a->dcs ? b->dcs : a->dcs;
     a->xf = b->xf > a->xf ? b->xf : a->xf;
 }
 #ifdef _OPENMP

@@ -9,7 +9,7 @@
 #include "check.h"
 #include "core/vmath.h"
 #include "sabodem.h"
-#include "world_internal.h" /* (sd_ext_skip_set) */
+#include "world_internal.h" /* (sd_world_switch) */
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -102,16 +102,12 @@ static result run(int threads, int rebuild_every_step, long steps)
  * always read, body gid 5 given fx along x when fx is not 0 */
 static uint64_t run_ext(int skip, double fx, long steps)
 {
-#ifdef _OPENMP
-    omp_set_num_threads(1);
-#endif
-    const int was = sd_ext_skip_set(skip);
     sd_world *w = make_pile(1, 0);
+    sd_world_switch(w, SD_SW_EXT_SKIP, skip);
     if (fx != 0.0) CHECK(sd_world_set_external_force(w, 5, v3(fx, 0.0, 0.0)) == SD_OK);
     CHECK(sd_world_run(w, steps) == SD_OK);
     const uint64_t h = sd_world_state_hash(w);
     sd_world_destroy(w);
-    sd_ext_skip_set(was);
     return h;
 }
 

@@ -727,11 +727,8 @@ static void test_cyl_cyl_gjk(void)
             a.c = v3_scale(dir, side ? lo - d : hi + d);
             sd_manifold m_on, m_off;
             sd_vec3 s_on = v3(0, 0, 0), s_off = v3(0, 0, 0);
-            const int was = sd_geom_cc_gjk_set(0);
-            const int n_off = sd_geom_cyl_cyl_sep(&a, &b, &m_off, &s_off);
-            sd_geom_cc_gjk_set(1);
+            const int n_off = sd_geom_cyl_cyl_sep_nogjk(&a, &b, &m_off, &s_off);
             const int n_on = sd_geom_cyl_cyl_sep(&a, &b, &m_on, &s_on);
-            sd_geom_cc_gjk_set(was);
             const int has_on = s_on.x != 0.0 || s_on.y != 0.0 || s_on.z != 0.0;
             const int has_off = s_off.x != 0.0 || s_off.y != 0.0 || s_off.z != 0.0;
             if (has_on) {

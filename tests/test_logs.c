@@ -474,8 +474,9 @@ typedef struct {
 
 static heap_end heap_run(int batch, long steps, int lanes, int logs_only)
 {
-    const int was = sd_cyl_batch_set(batch), was_lanes = sd_move_lanes_set(lanes);
     sd_world *w = make_world(v3(0, 0, -G), 1e-5, 0.404);
+    sd_world_switch(w, SD_SW_CYL_BATCH, batch);
+    sd_world_switch(w, SD_SW_MOVE_LANES, lanes);
     add_floor(w, -0.3, 0.3, -0.3, 0.3, 6, 6);
     int n = 0;
     for (int k = 0; k < 90; k++) {
@@ -515,8 +516,6 @@ static heap_end heap_run(int batch, long steps, int lanes, int logs_only)
     CHECK(sd_world_run(w, steps) == SD_OK);
     const heap_end e = {sd_world_state_hash(w), w->near_drift, w->front, w->timers.rebuilds};
     sd_world_destroy(w);
-    sd_cyl_batch_set(was);
-    sd_move_lanes_set(was_lanes);
     return e;
 }
 
@@ -558,7 +557,7 @@ static void test_sphere_lanes(void)
            off.near_drift, off.front, off.rebuilds);
     check_same_end(&on, &off);
     CHECK(g2 == g1); /* none with the lanes off */
-    if (sd_simd_level() >= SD_SIMD_AVX2) CHECK(g1 - g0 >= 4000L * 10); /* 80 spheres: at least 10 groups a step */
+    if (sd_cpu_simd_level() >= SD_SIMD_AVX2) CHECK(g1 - g0 >= 4000L * 10); /* 80 spheres: at least 10 groups a step */
 }
 
 int main(void)

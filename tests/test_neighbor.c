@@ -21,9 +21,15 @@ static double urand(void)
     return (double)((rng_state * 2685821657736338717ULL) >> 11) / 9007199254740992.0;
 }
 
+/* the SIMD level of every world here: the CPU's default, or the scalar loops with the argument
+ * "scalar" (ctest's test_neighbor_scalar), so that the scalar and the SIMD cell scans both meet
+ * the all-pairs truth */
+static int g_simd = SD_SIMD_AUTO;
+
 static sd_world *new_world(void)
 {
     sd_world_def def = sd_world_def_default();
+    def.tuning.simd = g_simd;
     def.check_dt = 0;
     def.parallel_min = 64; /* these scenes are small: the threads' paths too (the owners' near lists) */
     sd_world *w = NULL;
@@ -349,55 +355,6 @@ static void test_near_slow(void)
     sd_world_destroy(w);
 }
 
-/* The fastest bodies marked (near_fast_make): the six logs thrown onto the lattice outrun
- * every sphere, so they are marked, all their candidates near, and the near pairs' drift is the
- * spheres' alone: the near pairs are remade less than half as often (the serial pass), no
- * touching pair is ever left out, and the state is the same, bit for bit, as with no body
- * marked (the serial pass and two owners). */
-static void test_near_fast(void)
-{
-    const uint64_t rng0 = rng_state;
-    for (int threads = 1; threads <= 2; threads++) {
-        uint64_t hash[2];
-        long remade[2], missing[2], checked[2], marked[2];
-        for (int on = 0; on < 2; on++) {
-            const int was = sd_near_fast_set(on);
-#ifdef _OPENMP
-            omp_set_num_threads(threads);
-#endif
-            rng_state = 0x9E3779B97F4A7C15ULL; /* the same scene each time */
-            sd_world *w = settling_world();
-            long shorter = 0;
-            missing[on] = checked[on] = marked[on] = 0;
-            const long v0 = w->near_version;
-            for (int st = 0; st < 3000; st++) {
-                CHECK(sd_world_step(w) == SD_OK);
-                near_check(w, &checked[on], &shorter, &missing[on]);
-                marked[on] += w->nfast_k;
-            }
-            remade[on] = w->near_version - v0;
-            hash[on] = sd_world_state_hash(w);
-            sd_world_destroy(w);
-            sd_near_fast_set(was);
-        }
-#ifdef _OPENMP
-        omp_set_num_threads(1);
-#endif
-        printf("near pairs with the fastest bodies marked, %d thread(s): remade %ld times (%ld unmarked), "
-               "%ld body-marks summed over the steps, touching pairs missing %ld / %ld, hashes %016llx / %016llx\n",
-               threads, remade[1], remade[0], marked[1], missing[1], missing[0], (unsigned long long)hash[1],
-               (unsigned long long)hash[0]);
-        CHECK(hash[0] == hash[1]);
-        CHECK(missing[0] == 0 && missing[1] == 0);
-        CHECK(checked[1] > 1000);
-        CHECK(marked[0] == 0 && marked[1] > 3000); /* the logs, while they fall */
-        /* (on two owners the remakes also follow their measured times, so the count is the
-         * serial pass's) */
-        if (threads == 1) CHECK(2 * remade[1] < remade[0]);
-    }
-    rng_state = rng0;
-}
-
 /* A heap of spinning logs (log-log pairs near by their axis segments' distance, whatever they
  * turn): no touching pair is ever left out of the near list. */
 static void test_near_logs(void)
@@ -527,6 +484,7 @@ static sd_world *history_world(int rebuild_every_step, int *gid_bt, int *gid_bb)
     sd_world_def def = sd_world_def_default();
     def.gravity = v3(0, 0, -9.81);
     def.contact.tan_phi = 0.1;
+    def.tuning.simd = g_simd;
     sd_world *w = NULL;
     CHECK(sd_world_create(&def, &w) == SD_OK);
     sd_world_set_rebuild_every_step(w, rebuild_every_step);
@@ -752,14 +710,14 @@ static sd_world *bed_world_logs(void)
 static void test_bed_cache(void)
 {
     sd_world *w[2];
-    const int was = sd_bed_cache_set(1);
-    for (int c = 0; c < 2; c++)
+    for (int c = 0; c < 2; c++) {
         w[c] = bed_world();
+        sd_world_switch(w[c], SD_SW_BED_CACHE, c == 0);
+    }
     long checks = 0, differ = 0, strict = 0;
     int gone = -1;
     for (int st = 1; st <= 1500; st++) {
         for (int c = 0; c < 2; c++) {
-            sd_bed_cache_set(c == 0);
             if (st == 400) CHECK(sd_world_remove_body(w[c], w[c]->b.gid[w[c]->b.n / 3]) == SD_OK);
             if (st == 700) {
                 sd_sphere_def s = sd_sphere_def_default();
@@ -780,10 +738,8 @@ static void test_bed_cache(void)
             differ += sd_world_state_hash(w[0]) != sd_world_state_hash(w[1]);
         }
         if (st % 300 == 0) { /* a rebuild now, in both worlds, then the exact candidates */
-            for (int c = 0; c < 2; c++) {
-                sd_bed_cache_set(c == 0);
+            for (int c = 0; c < 2; c++)
                 CHECK(sd_neighbor_rebuild(w[c]) == SD_OK);
-            }
             check_candidates(w[0], 1, "bed cache, after a rebuild");
             strict++;
             /* the store in cell order, x slowest, the bed last (the rebuild's sort) */
@@ -801,7 +757,6 @@ static void test_bed_cache(void)
             CHECK(unsorted == 0);
         }
     }
-    sd_bed_cache_set(was);
     sd_body_state bs;
     CHECK(sd_world_body(w[0], gone, &bs) == SD_OK);
     const long rb = sd_world_get_timers(w[0]).rebuilds;
@@ -864,9 +819,8 @@ static void test_wall_near(void)
         long differ = 0, touching = 0, log_touching = 0;
         for (int st = 1; st <= 3000; st++) {
             for (int c = 0; c < 2; c++) {
-                const int was = sd_wall_near_set(c == 0);
+                sd_world_switch(w[c], SD_SW_WALL_NEAR, c == 0);
                 CHECK(sd_world_step(w[c]) == SD_OK);
-                sd_wall_near_set(was);
             }
             for (int k = 0; k < w[0]->bt.n; k++) {
                 touching += w[0]->bt.active[k];
@@ -921,9 +875,8 @@ static void test_moving_index(void)
     long differ = 0, contacts = 0;
     for (int st = 1; st <= 2000; st++) {
         for (int c = 0; c < 2; c++) {
-            const int was = sd_moving_index_set(c == 0 ? 64 : 1 << 30);
+            sd_world_switch(w[c], SD_SW_MOVING_INDEX_MIN, c == 0 ? 64 : 1 << 30);
             CHECK(sd_world_step(w[c]) == SD_OK);
-            sd_moving_index_set(was);
         }
         contacts += sd_world_contact_count(w[0]);
         if (st % 100 == 0) differ += sd_world_state_hash(w[0]) != sd_world_state_hash(w[1]);
@@ -942,11 +895,10 @@ static void test_moving_index(void)
 static void test_rebuild_threads(void)
 {
 #ifdef _OPENMP
-    const int T0 = omp_get_max_threads();
     sd_world *w = bed_world_logs();
     long compared = 0, entries = 0, differ = 0;
     for (int round = 0; round < 6; round++) {
-        omp_set_num_threads(2);
+        sd_world_set_threads(w, 2);
         for (int st = 0; st < 150; st++)
             CHECK(sd_world_step(w) == SD_OK);
         /* the same store for both: rebuilt once (sorted), then on 1 thread and on 3 */
@@ -955,7 +907,7 @@ static void test_rebuild_threads(void)
         int32_t *snap[2] = {NULL, NULL};
         size_t len[2] = {0, 0};
         for (int v = 0; v < 2; v++) {
-            omp_set_num_threads(v == 0 ? 1 : 3);
+            sd_world_set_threads(w, v == 0 ? 1 : 3);
             CHECK(sd_neighbor_rebuild(w) == SD_OK);
             const int ncell = g->nx * g->ny * g->nz, nitems = g->cell_start[ncell], n = w->b.n;
             const int nslot = w->reg0[n];
@@ -995,7 +947,6 @@ static void test_rebuild_threads(void)
     CHECK(compared == 6 && entries > 10000);
     CHECK(w->bed.used > 10);
     sd_world_destroy(w);
-    omp_set_num_threads(T0);
 #endif
 }
 
@@ -1072,14 +1023,13 @@ static int32_t *bb_words(const sd_world *w, int *len)
 static void prefilter_snaps(sd_world *w, int32_t *snap[2], int len[2])
 {
     for (int v = 0; v < 2; v++) {
-        const int was = sd_scan_pre_set(v);
+        sd_world_switch(w, SD_SW_SCAN_PRE, v);
         CHECK(sd_neighbor_rebuild(w) == SD_OK);
-        sd_scan_pre_set(was);
         snap[v] = bb_words(w, &len[v]);
     }
 }
 
-/* The scan's float prefilter (sd_scan_pre_set) leaves the candidates as they were, pair for
+/* The scan's float prefilter (switch SD_SW_SCAN_PRE) leaves the candidates as they were, pair for
  * pair and in order: on a bed under falling spheres and logs at several moments, and on pairs
  * of spheres set at their reach (r_a + r_b + margin) less and more 2e-9 of it, 1 m, 100 m and
  * 10 km from the origin, where a float's rounding is far larger than that: each pair just
@@ -1212,7 +1162,7 @@ static void test_permute(void)
             gid0[i] = b->gid[i], tag0[i] = b->tag[i], pos0[i] = b->pos[i], vel0[i] = b->vel[i];
             q0[i] = b->quat[i], r0[i] = b->radius[i], sh0[i] = b->shape[i];
         }
-        CHECK(sd_bodies_permute(b, perm, N) == SD_OK);
+        CHECK(sd_bodies_permute(b, perm, N, 2) == SD_OK);
         int wrong = 0;
         for (int i = 0; i < N; i++) {
             const int o = perm[i];
@@ -1229,13 +1179,13 @@ static void test_permute(void)
     sd_world_destroy(w);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    if (argc > 1 && !strcmp(argv[1], "scalar")) g_simd = SD_SIMD_SCALAR;
     test_static(1);
     test_static(0);
     test_dynamic();
     test_near_slow();
-    test_near_fast();
     test_history();
     test_history_sorted();
     test_bed_cache();

@@ -20,11 +20,7 @@
 #include "core/vmath.h"
 #include "sabodem.h"
 #include "scenario.h"
-#include "world_internal.h" /* sd_simd_level_set: the SIMD level (until it is a world setting) */
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 typedef struct {
     int gid;
@@ -55,9 +51,14 @@ static void add_quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d, in
     CHECK(sd_world_add_triangle(w, a, c, d, group) >= 0);
 }
 
+/* the threads and the SIMD level of the scenes' worlds (run_scene) */
+static int scene_threads = 1, scene_simd = SD_SIMD_AUTO;
+
 static sd_world *world_new(sd_world_def *def)
 {
     def->parallel_min = 0; /* every loop parallel, even in these small scenes */
+    def->threads = scene_threads;
+    def->tuning.simd = scene_simd;
     sd_world *w = NULL;
     CHECK(sd_world_create(def, &w) == SD_OK);
     return w;
@@ -203,13 +204,10 @@ enum { SCENE_BED, SCENE_FLUME, SCENE_CAPTURE, SCENES };
 static const char *const scene_name[SCENES] = {"bed", "flume", "capture"};
 static const long scene_steps[SCENES] = {10000, 8000, 5000};
 
-static result run_scene(int scene, int threads)
+static result run_scene(int scene, int threads, int simd)
 {
-#ifdef _OPENMP
-    omp_set_num_threads(threads);
-#else
-    (void)threads;
-#endif
+    scene_threads = threads;
+    scene_simd = simd;
     result r;
     if (scene == SCENE_FLUME) {
         sd_scenario s;
@@ -314,7 +312,7 @@ int main(int argc, char **argv)
     const int sanitized = san && *san && strcmp(san, "0");
     result first[SCENES];
     for (int s = 0; s < SCENES; s++) {
-        first[s] = run_scene(s, 1);
+        first[s] = run_scene(s, 1, SD_SIMD_AUTO);
         CHECK(first[s].steps == scene_steps[s]);
         CHECK(first[s].contacts > 0);
     }
@@ -341,23 +339,20 @@ int main(int argc, char **argv)
             continue;
         }
         compare(s, "1 thread", &ref, &first[s]);
-        const int was = sd_simd_level_set(SD_SIMD_SCALAR);
         for (int level = SD_SIMD_SCALAR; level <= SD_SIMD_AVX512; level++) {
             /* under the sanitizers (make asan), which run ~10x slower, 2 threads at the level
              * the CPU runs by default only: the full matrix runs in the plain build */
-            if (sanitized && level != was) continue;
-            sd_simd_level_set(level);
-            if (sd_simd_level() != level) continue; /* not on this CPU */
+            if (sanitized && level != SD_SIMD_AUTO) continue;
+            if (level > sd_cpu_simd_level()) continue; /* not on this CPU */
             for (int threads = sanitized ? 2 : 1; threads <= (sanitized ? 2 : 3); threads++) {
                 char variant[48];
-                snprintf(variant, sizeof variant, "%s, %d thr", level == 0 ? "scalar" : level == 1 ? "avx2" : "avx512",
-                         threads);
-                result r = run_scene(s, threads);
+                snprintf(variant, sizeof variant, "%s, %d thr",
+                         level == SD_SIMD_SCALAR ? "scalar" : level == SD_SIMD_AVX2 ? "avx2" : "avx512", threads);
+                result r = run_scene(s, threads, level);
                 compare(s, variant, &ref, &r);
                 free(r.load);
             }
         }
-        sd_simd_level_set(was);
         free(ref.load);
     }
     for (int s = 0; s < SCENES; s++)

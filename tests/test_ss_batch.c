@@ -11,6 +11,7 @@
 #include "check.h"
 #include "contact_law.h"
 #include "core/rng.h"
+#include "tuning.h"
 #include "world_internal.h"
 
 #ifdef _OPENMP
@@ -101,15 +102,12 @@ static long mismatches(const sd_world *w, const sd_vec3 *F, const sd_vec3 *T, co
     return bad;
 }
 
-static void run(int threads, cases *c, long *bad)
+static void run(int threads, int simd, cases *c, long *bad)
 {
-#ifdef _OPENMP
-    omp_set_num_threads(threads);
-#else
-    (void)threads;
-#endif
     sd_world_def d = sd_world_def_default();
     d.parallel_min = 0; /* the owned parallel pass even for this scene */
+    d.threads = threads;
+    d.tuning.simd = simd;
     sd_world *w;
     CHECK(sd_world_create(&d, &w) == SD_OK);
     sd_rng rng = {20261123};
@@ -180,26 +178,48 @@ static void run(int threads, cases *c, long *bad)
     sd_world_destroy(w);
 }
 
-/* The level picked at load (sd_simd_choose): the CPU's best, AVX2 on an AMD CPU with AVX-512
- * (slower there, docs/performance-log.md §P36), and what SD_SIMD and SD_NO_AVX512 ask for. */
+/* The level a world runs at (tuning.c): the CPU's best, AVX2 on an AMD CPU with AVX-512 (its
+ * gathers are slower there), what was asked for capped at the CPU's; and what the environment's
+ * SD_SIMD and SD_NO_AVX512 ask for (sd_tuning_from_env, the one reader of the environment). */
 static void simd_choice(void)
 {
-    enum { S = SD_SIMD_SCALAR, A2 = SD_SIMD_AVX2, A5 = SD_SIMD_AVX512 };
-    CHECK(sd_simd_choose(A5, 0, NULL, NULL) == A5); /* Intel with AVX-512 */
-    CHECK(sd_simd_choose(A5, 1, NULL, NULL) == A2); /* AMD with AVX-512 */
-    CHECK(sd_simd_choose(A2, 1, NULL, NULL) == A2); /* AMD without (the Zen 3 VM) */
-    CHECK(sd_simd_choose(S, 0, NULL, NULL) == S);
-    CHECK(sd_simd_choose(A5, 1, "avx512", NULL) == A5); /* asked for */
-    CHECK(sd_simd_choose(A2, 1, "avx512", NULL) == A2); /* not there: the CPU's */
-    CHECK(sd_simd_choose(A5, 0, "avx2", NULL) == A2);
-    CHECK(sd_simd_choose(A5, 0, "1", NULL) == A2);
-    CHECK(sd_simd_choose(A5, 0, "scalar", NULL) == S);
-    CHECK(sd_simd_choose(A5, 1, "0", NULL) == S);
-    CHECK(sd_simd_choose(A5, 0, NULL, "1") == S);
-    CHECK(sd_simd_choose(A5, 0, "avx512", "1") == S); /* SD_NO_AVX512 keeps the scalar loops */
-    CHECK(sd_simd_choose(A5, 0, NULL, "0") == A5);
-    CHECK(sd_simd_choose(A5, 0, NULL, "") == A5);
-    CHECK(sd_simd_choose(A5, 0, "bogus", NULL) == A5); /* an unknown value changes nothing */
+    enum { S = SD_SIMD_SCALAR, A2 = SD_SIMD_AVX2, A5 = SD_SIMD_AVX512, AU = SD_SIMD_AUTO };
+    CHECK(sd_tuning_simd_level(AU, A5, 0) == A5); /* Intel with AVX-512 */
+    CHECK(sd_tuning_simd_level(AU, A5, 1) == A2); /* AMD with AVX-512 */
+    CHECK(sd_tuning_simd_level(AU, A2, 1) == A2); /* AMD without (the Zen 3 VM) */
+    CHECK(sd_tuning_simd_level(AU, S, 0) == S);
+    CHECK(sd_tuning_simd_level(A5, A5, 1) == A5); /* asked for */
+    CHECK(sd_tuning_simd_level(A5, A2, 1) == A2); /* not there: the CPU's */
+    CHECK(sd_tuning_simd_level(A2, A5, 0) == A2);
+    CHECK(sd_tuning_simd_level(S, A5, 1) == S);
+    CHECK(sd_tuning_simd_level(99, A5, 0) == A5); /* out of range: as auto */
+    static const struct {
+        const char *simd, *no512;
+        int level, status;
+    } env[] = {
+        {NULL, NULL, AU, SD_OK},        {"avx2", NULL, A2, SD_OK},   {"1", NULL, A2, SD_OK},
+        {"scalar", NULL, S, SD_OK},     {"0", NULL, S, SD_OK},       {"avx512", NULL, A5, SD_OK},
+        {"auto", NULL, AU, SD_OK},      {NULL, "1", S, SD_OK},       {"avx512", "1", S, SD_OK},
+        {NULL, "0", AU, SD_OK},         {NULL, "", AU, SD_OK},       {"bogus", NULL, AU, SD_ERR_ARG},
+    };
+    for (size_t k = 0; k < sizeof env / sizeof env[0]; k++) {
+        if (env[k].simd) setenv("SD_SIMD", env[k].simd, 1); else unsetenv("SD_SIMD");
+        if (env[k].no512) setenv("SD_NO_AVX512", env[k].no512, 1); else unsetenv("SD_NO_AVX512");
+        sd_tuning t;
+        char msg[160];
+        const sd_status st = sd_tuning_from_env(&t, msg, sizeof msg);
+        CHECK(st == (sd_status)env[k].status);
+        CHECK(t.simd == env[k].level);
+        if (st) CHECK(strstr(msg, "SD_SIMD=bogus") != NULL);
+    }
+    unsetenv("SD_SIMD");
+    unsetenv("SD_NO_AVX512");
+    setenv("SD_PREFETCH", "on", 1);
+    sd_tuning t;
+    CHECK(sd_tuning_from_env(&t, NULL, 0) == SD_OK && t.prefetch == SD_PREFETCH_ON);
+    setenv("SD_PREFETCH", "sometimes", 1);
+    CHECK(sd_tuning_from_env(&t, NULL, 0) == SD_ERR_ARG && t.prefetch == SD_PREFETCH_AUTO);
+    unsetenv("SD_PREFETCH");
 }
 
 int main(void)
@@ -209,13 +229,12 @@ int main(void)
      * the scalar loops, 4 AVX2 lanes, 8 AVX-512 lanes), each on 1 and 2 threads */
     int levels = 0;
     for (int level = SD_SIMD_SCALAR; level <= SD_SIMD_AVX512; level++) {
-        sd_simd_level_set(level);
-        if (sd_simd_level() != level) continue; /* not on this CPU */
+        if (level > sd_cpu_simd_level()) continue; /* not on this CPU */
         levels++;
         for (int threads = 1; threads <= 2; threads++) {
             cases c = {0};
             long bad = 0;
-            run(threads, &c, &bad);
+            run(threads, level, &c, &bad);
             printf("SIMD level %d, threads %d: %ld pair evaluations, %ld touching (%ld new, %ld held: %ld small tilt, "
                    "%ld large tilt), %ld sliding, %ld dashpot clipped; %ld values differ from the reference\n",
                    level, threads, c.pairs, c.touching, c.fresh, c.held, c.tilt_small, c.tilt_large, c.sliding,

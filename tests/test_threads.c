@@ -8,26 +8,48 @@
 #include "build.h"
 #include "check.h"
 #include "run.h"
+#include "core/cpu.h"
+#include "tuning.h"
 #include "world_internal.h"
 
 #ifdef _OPENMP
 #include <omp.h>
 #endif
 
+/* The switches (world_internal.h sd_switch) and the SIMD level the next worlds of this test
+ * get: set before a run, applied to each world it makes (cfg_apply). */
+static int cfg[SD_SWITCH_COUNT] = {
+#define SD_X_SWITCH(name, def, doc) def,
+    SD_SWITCH_TABLE(SD_X_SWITCH)
+#undef SD_X_SWITCH
+};
+static int cfg_simd = SD_SIMD_AUTO;
+
+static int cfg_set(sd_switch k, int v)
+{
+    const int was = cfg[k];
+    cfg[k] = v;
+    return was;
+}
+
+static void cfg_apply(sd_world *w)
+{
+    for (int k = 0; k < SD_SWITCH_COUNT; k++)
+        sd_world_switch(w, (sd_switch)k, cfg[k]);
+    sd_world_set_simd_level(w, cfg_simd);
+}
+
 static uint64_t run(int threads, long *contacts)
 {
-#ifdef _OPENMP
-    omp_set_num_threads(threads);
-#else
-    (void)threads;
-#endif
     sd_scenario s;
     /* a coarser step so that the spheres land on the bed and pile at the gate within the test */
     const char *sets[] = {"solver.dt=4e-5"};
     if (sd_scenario_load(&s, "examples/flume_small.yaml", sets, 1, stderr)) return 0;
     s.world.parallel_min = 0; /* parallel even for this small scene */
+    s.world.threads = threads;
     sd_world *w;
     if (sd_world_create(&s.world, &w)) return 0;
+    cfg_apply(w);
     sd_build_info info;
     if (sd_build_scene(w, &s, &info, stderr)) return 0;
     CHECK(sd_world_run(w, 6000) == SD_OK);
@@ -52,17 +74,15 @@ static uint64_t run_mixed(long seg, long *contacts)
     s.world.parallel_min = 0;
     sd_world *w;
     if (sd_world_create(&s.world, &w)) return 0;
+    cfg_apply(w);
     sd_build_info info;
     if (sd_build_scene(w, &s, &info, stderr)) return 0;
     int outs[3] = {0, 0, 0}, lsqs[2] = {0, 0};
     /* (and each pair's sqrt_m_eff in its spring's slot or not, in turn every two segments:
-     * sd_slot_sqm_set, from the next pass) */
-    const int sq_was = sd_slot_sqm_set(1);
+     * switch SD_SW_SLOT_SQM, from the next pass) */
     for (long done = 0, k = 0; done < 8000; done += seg, k++) {
-#ifdef _OPENMP
-        omp_set_num_threads(1 + (int)(k & 1));
-#endif
-        sd_slot_sqm_set((int)(k >> 1 & 1));
+        sd_world_set_threads(w, 1 + (int)(k & 1));
+        sd_world_switch(w, SD_SW_SLOT_SQM, (int)(k >> 1 & 1));
         if (done == 6000) sd_world_set_group_active(w, SD_GROUP_GATE, 0);
         CHECK(sd_world_run(w, seg) == SD_OK);
         outs[w->springs_out]++;
@@ -71,7 +91,6 @@ static uint64_t run_mixed(long seg, long *contacts)
         CHECK(w->springs_out == 0);
         CHECK(isfinite(sd_world_spring_energy(w)));
     }
-    sd_slot_sqm_set(sq_was);
 #ifdef _OPENMP
     CHECK(outs[1] > 0 && outs[2] > 0); /* both lists held the springs */
 #endif
@@ -88,17 +107,14 @@ static uint64_t run_mixed(long seg, long *contacts)
  * every loop forced parallel. */
 static sd_run_result run_driver(int threads)
 {
-#ifdef _OPENMP
-    omp_set_num_threads(threads);
-#else
-    (void)threads;
-#endif
     sd_run_result r;
     memset(&r, 0, sizeof r);
     sd_scenario s;
     const char *sets[] = {"output.vtk=false", "output.png=false", "phases.capture_limit=0.1"};
     if (sd_scenario_load(&s, "examples/flume_small.yaml", sets, 3, stderr)) return r;
     s.world.parallel_min = 0;
+    s.world.threads = threads;
+    s.world.tuning.simd = cfg_simd;
     char dir[] = "/tmp/sabodem_threads_XXXXXX";
     if (!mkdtemp(dir)) return r;
     sd_run_opts o = {.outdir = dir, .err = stderr};
@@ -118,16 +134,13 @@ static double bed_ratio; /* and its ratio, on / off */
  * owned ranges with cross pairs between them. */
 static uint64_t run_bed(int threads, long steps, long *contacts, int *pairs, int *cross)
 {
-#ifdef _OPENMP
-    omp_set_num_threads(threads);
-#else
-    (void)threads;
-#endif
     sd_world_def d = sd_world_def_default();
     d.gravity = v3(0, 0, -9.81);
     d.parallel_min = 0;
+    d.threads = threads;
     sd_world *w;
     if (sd_world_create(&d, &w)) return 0;
+    cfg_apply(w);
     const double pitch = 0.0100, L = 15 * pitch + 0.002;
     uint64_t st = 7;
     for (int k = 0; k < 14; k++)
@@ -167,9 +180,6 @@ static uint64_t run_bed(int threads, long steps, long *contacts, int *pairs, int
  * contact feature held at the end (1 << feature). */
 static uint64_t run_sc_cases(int steps, int *seen)
 {
-#ifdef _OPENMP
-    omp_set_num_threads(1);
-#endif
     static const double at[10][3] = {
         {0.0, 0.0, 0.0095},      /* side (feature 0) */
         {-0.0545, 0.001, 0.0},   /* end face at -hl (1) */
@@ -184,8 +194,10 @@ static uint64_t run_sc_cases(int steps, int *seen)
     };
     sd_world_def d = sd_world_def_default();
     d.gravity = v3(0, 0, 0);
+    d.threads = 1;
     sd_world *w;
     if (sd_world_create(&d, &w)) return 0;
+    cfg_apply(w);
     for (int c = 0; c < 10; c++) {
         const double y0 = 0.3 * c;
         sd_cylinder_def cy = sd_cylinder_def_default();
@@ -233,7 +245,7 @@ static void check_pf_trial(double t_on, double t_off)
         s.pos = v3(0.01 * (i % 50), 0.01 * (i / 50), 0.0);
         sd_world_add_sphere(w, &s);
     }
-    const int was = sd_front_prefetch_set(SD_PREFETCH_AUTO);
+    CHECK(w->sw[SD_SW_PREFETCH] == SD_PREFETCH_AUTO); /* (a new world's) */
     CHECK(sd_front_prefetch_verdict(w, NULL) == -1);
     int steps = 0, bad = 0;
     while (sd_front_prefetch_verdict(w, NULL) < 0 && steps < 10000) {
@@ -272,14 +284,13 @@ static void check_pf_trial(double t_on, double t_off)
     CHECK(w->pf.blk == 0);
     /* a setting other than auto runs no trial, and ends one that was running */
     CHECK(w->pf.blk == 0);
-    sd_front_prefetch_set(SD_PREFETCH_OFF);
+    sd_world_switch(w, SD_SW_PREFETCH, SD_PREFETCH_OFF);
     sd_pf_trial_before(w);
     CHECK(w->pf.blk == -1);
     w->pf.n = 1;
     sd_pf_trial_before(w);
     CHECK(w->pf.blk == -1);
     CHECK(sd_front_prefetch_on(w) == 0);
-    sd_front_prefetch_set(was);
     sd_world_destroy(w);
 }
 
@@ -322,19 +333,19 @@ int main(void)
         printf("1 and 2 threads in turn every 500 steps, hashed between: hash %016llx, %ld contacts\n",
                (unsigned long long)hm, cm);
         CHECK(hm == h1 && cm == c1);
-        /* and with the springs left in their slots (sd_springs_list_set) */
-        const int was = sd_springs_list_set(0);
+        /* and with the springs left in their slots (switch SD_SW_SPRINGS_LIST) */
+        const int was = cfg_set(SD_SW_SPRINGS_LIST, 0);
         long cs = 0;
         const uint64_t hs = run(2, &cs);
-        sd_springs_list_set(was);
+        cfg_set(SD_SW_SPRINGS_LIST, was);
         printf("springs in their slots: hash %016llx, %ld contacts\n", (unsigned long long)hs, cs);
         CHECK(hs == h1 && cs == c1);
-        /* and in the list's order without the pairs' sqrt_m_eff in their slots (sd_slot_sqm_set),
-         * on 1 and 2 threads */
-        const int sq = sd_slot_sqm_set(0);
+        /* and in the list's order without the pairs' sqrt_m_eff in their slots (switch
+         * SD_SW_SLOT_SQM), on 1 and 2 threads */
+        const int sq = cfg_set(SD_SW_SLOT_SQM, 0);
         long cq1 = 0, cq2 = 0;
         const uint64_t hq1 = run(1, &cq1), hq2 = run(2, &cq2);
-        sd_slot_sqm_set(sq);
+        cfg_set(SD_SW_SLOT_SQM, sq);
         printf("sqrt_m_eff with the records only: hash %016llx / %016llx, %ld contacts\n", (unsigned long long)hq1,
                (unsigned long long)hq2, cq1);
         CHECK(hq1 == h1 && hq2 == h1 && cq1 == c1 && cq2 == c1);
@@ -344,37 +355,36 @@ int main(void)
          * and sums; AVX-512 filter, gather, sums and cell scan), on the same scene: log pairs sit
          * among the sphere pairs of a chunk, where the SIMD filters hand them to the scalar
          * path and the sums take the lanes between them */
-        const int was = sd_simd_level_set(SD_SIMD_SCALAR);
         for (int level = SD_SIMD_SCALAR; level <= SD_SIMD_AVX512; level++) {
-            sd_simd_level_set(level);
-            if (sd_simd_level() != level) continue; /* not on this CPU */
+            if (level > sd_cpu_simd_level()) continue; /* not on this CPU */
+            cfg_simd = level;
             long cl = 0;
             const uint64_t hl = run(1, &cl);
-            printf("SIMD kernels at level %d (0 scalar, 1 AVX2, 2 AVX-512): hash %016llx, %ld contacts\n", level,
+            printf("SIMD kernels at level %d (1 scalar, 2 AVX2, 3 AVX-512): hash %016llx, %ld contacts\n", level,
                    (unsigned long long)hl, cl);
             CHECK(hl == h1);
             CHECK(cl == c1);
         }
-        sd_simd_level_set(was);
+        cfg_simd = SD_SIMD_AUTO;
     }
     {
         /* the body-body pass's prefetch of the bodies' front forced on, forced off, and auto
          * (tried on and off in blocks during the run, sd_pf_trial): a hint, the same bits on 1 and
          * 2 threads, on the log flume and on the dense bed */
-        const int was = sd_front_prefetch_set(SD_PREFETCH_ON);
+        const int was = cfg_set(SD_SW_PREFETCH, SD_PREFETCH_ON);
         long cp1 = 0, cp2 = 0, cb = 0;
         int npb = 0, ncb = 0;
         const uint64_t hp1 = run(1, &cp1), hp2 = run(2, &cp2), hb = run_bed(2, 3400, &cb, &npb, &ncb);
         const int v_on = bed_verdict;
-        sd_front_prefetch_set(SD_PREFETCH_OFF);
+        cfg_set(SD_SW_PREFETCH, SD_PREFETCH_OFF);
         long cbf = 0;
         const uint64_t hbf = run_bed(2, 3400, &cbf, &npb, &ncb);
         const int v_off = bed_verdict;
-        sd_front_prefetch_set(SD_PREFETCH_AUTO);
+        cfg_set(SD_SW_PREFETCH, SD_PREFETCH_AUTO);
         long cb0 = 0;
         int npb0 = 0, ncb0 = 0;
         const uint64_t hb0 = run_bed(2, 3400, &cb0, &npb0, &ncb0);
-        sd_front_prefetch_set(was);
+        cfg_set(SD_SW_PREFETCH, was);
         /* auto: the 3150 spheres are tried off and on in their first 3,200 steps (32 blocks of 100) */
         printf("front prefetch forced off: bed hash %016llx; auto: trial verdict %d, on / off %.3f\n",
                (unsigned long long)hbf, bed_verdict, bed_ratio);
@@ -392,11 +402,11 @@ int main(void)
          * apply_manifold: the log flume above, the same bits */
         long redo0 = 0, redo1 = 0;
         const long lanes0 = sd_sc_lanes_count(&redo0);
-        const int was = sd_sc_lanes_set(0);
+        const int was = cfg_set(SD_SW_SC_LANES, 0);
         long cg = 0;
         const uint64_t hg = run(1, &cg);
         const long lanes1 = sd_sc_lanes_count(&redo1);
-        sd_sc_lanes_set(was);
+        cfg_set(SD_SW_SC_LANES, was);
         printf("sphere-log lanes: %ld run (%ld sent back to the scalar law) in the runs above; all through "
                "apply_manifold: hash %016llx\n",
                lanes0, redo0, (unsigned long long)hg);
@@ -412,12 +422,12 @@ int main(void)
         int seen_on = 0, seen_off = 0;
         const uint64_t hc_on = run_sc_cases(40, &seen_on);
         const long g1 = sd_sc_geom_count();
-        const int was = sd_sc_geom_set(0);
+        const int was = cfg_set(SD_SW_SC_GEOM, 0);
         const uint64_t hc_off = run_sc_cases(40, &seen_off);
         long cg = 0;
         const uint64_t hg = run(1, &cg);
         const long g2 = sd_sc_geom_count();
-        sd_sc_geom_set(was);
+        cfg_set(SD_SW_SC_GEOM, was);
         printf("sphere-log geometry in lanes: %ld lanes in the runs above, %ld on the cases (features held "
                "0x%x); pair by pair: cases hash %016llx against %016llx, log flume %016llx\n",
                g0, g1 - g0, seen_on, (unsigned long long)hc_off, (unsigned long long)hc_on, (unsigned long long)hg);
@@ -425,7 +435,7 @@ int main(void)
         CHECK(seen_on == 0x1f && seen_off == 0x1f); /* side, both end faces, both rims */
         CHECK(hg == h1 && cg == c1);
         CHECK(g2 == g1); /* none with the lanes' geometry off */
-        if (sd_simd_level() >= SD_SIMD_AVX2) {
+        if (sd_tuning_simd_level(SD_SIMD_AUTO, sd_cpu_simd_level(), sd_cpu_is_amd()) >= SD_SIMD_AVX2) {
             CHECK(g0 > 1000);          /* the lanes' geometry ran on the log flume */
             CHECK(g1 - g0 >= 5 * 40); /* and on the five touching cases, every step */
         }
@@ -436,17 +446,17 @@ int main(void)
          * compiler's loop: the log flume above, the same bits */
         long sk = 0;
         const long g = sd_ss_law256_count(&sk);
-        const int was = sd_ss_law256_set(0);
+        const int was = cfg_set(SD_SW_SS_LAW256, 0);
         long cg = 0;
         const uint64_t hg = run(1, &cg);
         const long g2 = sd_ss_law256_count(NULL);
-        sd_ss_law256_set(was);
+        cfg_set(SD_SW_SS_LAW256, was);
         printf("sphere law's spring loop in lanes: %ld groups on this thread above, %ld without the limit; "
                "the compiler's loop: log flume %016llx\n",
                g, sk, (unsigned long long)hg);
         CHECK(hg == h1 && cg == c1);
         CHECK(g2 == g); /* none with it off */
-        if (sd_simd_level() == SD_SIMD_AVX2) {
+        if (sd_tuning_simd_level(SD_SIMD_AUTO, sd_cpu_simd_level(), sd_cpu_is_amd()) == SD_SIMD_AVX2) {
             CHECK(g > 1000);         /* it ran */
             CHECK(sk > 0 && sk < g); /* both kinds of group */
         }
@@ -463,9 +473,9 @@ int main(void)
         CHECK(a.p_v == b.p_v && a.steps == b.steps);
         /* the fluid forces' AVX-512 form (run.c) against the batch's scalar one, with the
          * other kernels (those the CPU has), on the whole driver: flow and capture profiles, wet and dry */
-        const int was = sd_simd_level_set(SD_SIMD_SCALAR);
+        cfg_simd = SD_SIMD_SCALAR;
         sd_run_result c = run_driver(2);
-        sd_simd_level_set(was);
+        cfg_simd = SD_SIMD_AUTO;
         printf("driver with the SIMD kernels off: hash %016llx P_V %.6f\n", (unsigned long long)c.state_hash, c.p_v);
         CHECK(c.state_hash == a.state_hash);
         CHECK(c.p_v == a.p_v && c.steps == a.steps);

@@ -315,15 +315,6 @@ static int gjk_closest(gjk_vert *s, int *n, sd_vec3 *v, sd_vec3 *x)
     return 1;
 }
 
-static int cc_gjk_on = 1;
-
-int sd_geom_cc_gjk_set(int on)
-{
-    const int was = cc_gjk_on;
-    cc_gjk_on = on != 0;
-    return was;
-}
-
 /* GJK on A - B: v, the point of the current simplex nearest the origin, tends to the nearest
  * point of A - B, whose direction separates the two when they are apart. Returns 1 with the
  * unit axis once it shows them apart by more than 4 tol (the test of a carried axis); 2 with a
@@ -399,7 +390,19 @@ static void cc_min_overlap(const sd_cyl *a, const sd_cyl *b, sd_vec3 dc, sd_vec3
 
 int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m) { return sd_geom_cyl_cyl_sep(a, b, m, NULL); }
 
+static int cc_contact(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 *sep, int use_gjk);
+
 int sd_geom_cyl_cyl_sep(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 *sep)
+{
+    return cc_contact(a, b, m, sep, 1);
+}
+
+int sd_geom_cyl_cyl_sep_nogjk(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 *sep)
+{
+    return cc_contact(a, b, m, sep, 0);
+}
+
+static int cc_contact(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 *sep, int use_gjk)
 {
     m->n = 0;
     sd_vec3 dc = v3_sub(a->c, b->c);
@@ -500,7 +503,7 @@ int sd_geom_cyl_cyl_sep(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec
          * and find none (docs/physics.md) */
         int g = 0;
         sd_vec3 gx = v3(0.0, 0.0, 0.0);
-        if (cc_gjk_on) {
+        if (use_gjk) {
             sd_vec3 u;
             g = cc_gjk(a, b, dc, tol, &u, &gx);
             if (g == 1) {

@@ -140,10 +140,10 @@ int sd_geom_cyl_cyl(const sd_cyl *a, const sd_cyl *b, sd_manifold *m);
  * The answer is that of sd_geom_cyl_cyl bit for bit: the kept axis must show them apart by
  * more than 4e-9 of their summed sizes, where no feature pair can be accepted. */
 int sd_geom_cyl_cyl_sep(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 *sep);
-/* Whether sd_geom_cyl_cyl's last resort runs GJK first (default on; for the tests, which compare
- * it with the older search alone: the same answers wherever that one finds a contact or an axis,
- * and contacts where it missed two rims crossing); returns the previous setting. */
-int sd_geom_cc_gjk_set(int on);
+/* sd_geom_cyl_cyl_sep without GJK before its last resort's older search, for the tests, which
+ * compare the two: the same answers wherever the older search finds a contact or an axis, and
+ * contacts where it missed two rims crossing. */
+int sd_geom_cyl_cyl_sep_nogjk(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 *sep);
 /* feature = (cylinder feature << SD_TRI_FEATURE_BITS) | triangle feature code. */
 int sd_geom_cyl_tri(const sd_cyl *a, const sd_tri *t, sd_manifold *m);
 
