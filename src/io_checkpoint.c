@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/hash.h"
 #include "world_internal.h"
 
 /* The file stores these structures field by field or as arrays of doubles; a new field in any
@@ -45,16 +46,6 @@ static long long fail_after = -1;
 
 void sd_checkpoint_test_fail_after(long long nbytes) { fail_after = nbytes < 0 ? -1 : nbytes; }
 
-static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
-{
-    const unsigned char *q = p;
-    for (size_t k = 0; k < n; k++) {
-        h ^= q[k];
-        h *= 1099511628211ULL;
-    }
-    return h;
-}
-#define FNV_OFFSET 1469598103934665603ULL
 
 /* ---------------------------------------------------------------- writing ---- */
 
@@ -83,7 +74,7 @@ static void put(writer *wr, const void *p, size_t n)
         wr->err = errno ? errno : EIO;
         return;
     }
-    wr->hash = fnv1a(wr->hash, p, n);
+    wr->hash = sd_hash_bytes(wr->hash, p, n);
     wr->len += n;
 }
 
@@ -339,7 +330,7 @@ sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *e
         errno = e;
         return SD_ERR_IO;
     }
-    writer wr = {f, FNV_OFFSET, 0, 0};
+    writer wr = {f, sd_hash_init(), 0, 0};
     unsigned char hdr[HEADER_SIZE];
     make_header(hdr, 0, 0); /* placeholder: length and checksum filled in at the end */
     if (fail_after >= 0 && fail_after < HEADER_SIZE)
@@ -1008,7 +999,7 @@ sd_status sd_checkpoint_read(const char *path, sd_world **out, void **extra, siz
         } else if (plen < size - HEADER_SIZE) {
             st = fail(&r, "%zu bytes after the announced end of the checkpoint (corrupted)",
                       size - HEADER_SIZE - (size_t)plen);
-        } else if (fnv1a(FNV_OFFSET, data + HEADER_SIZE, (size_t)plen) != hash) {
+        } else if (sd_hash(data + HEADER_SIZE, (size_t)plen) != hash) {
             st = fail(&r, "checksum mismatch (corrupted file)");
         }
         if (st) goto done;
