@@ -47,7 +47,6 @@ static long long fail_after = -1;
 
 void sd_checkpoint_test_fail_after(long long nbytes) { fail_after = nbytes < 0 ? -1 : nbytes; }
 
-
 /* ---------------------------------------------------------------- writing ---- */
 
 /* The payload goes through an sd_bin writer whose sink writes to the file and keeps the running
