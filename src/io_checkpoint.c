@@ -12,6 +12,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/binio.h"
+#include "core/hash.h"
 #include "world_internal.h"
 
 /* The file stores these structures field by field or as arrays of doubles; a new field in any
@@ -45,89 +47,77 @@ static long long fail_after = -1;
 
 void sd_checkpoint_test_fail_after(long long nbytes) { fail_after = nbytes < 0 ? -1 : nbytes; }
 
-static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
-{
-    const unsigned char *q = p;
-    for (size_t k = 0; k < n; k++) {
-        h ^= q[k];
-        h *= 1099511628211ULL;
-    }
-    return h;
-}
-#define FNV_OFFSET 1469598103934665603ULL
-
 /* ---------------------------------------------------------------- writing ---- */
 
+/* The payload goes through an sd_bin writer whose sink writes to the file and keeps the running
+ * checksum; the sections are streamed, not assembled in memory, so a checkpoint costs no
+ * second copy of the state. */
 typedef struct {
-    FILE *f;       /* NULL: only count (sizing a section) */
-    uint64_t hash; /* FNV-1a of the payload so far */
+    FILE *f;
+    uint64_t hash; /* of the payload so far */
     uint64_t len;  /* payload bytes so far */
-    int err;       /* errno of the first failure */
-} writer;
+} file_sink;
 
-static void put(writer *wr, const void *p, size_t n)
+static int to_file(void *ctx, const void *p, size_t n)
 {
-    if (wr->err || n == 0) return;
-    if (!wr->f) {
-        wr->len += n;
-        return;
-    }
-    if (fail_after >= 0 && (unsigned long long)HEADER_SIZE + wr->len + n > (unsigned long long)fail_after) {
+    file_sink *fs = ctx;
+    if (fail_after >= 0 && (unsigned long long)HEADER_SIZE + fs->len + n > (unsigned long long)fail_after) {
         /* injected failure: write what fits, then fail as a full disk does */
-        long long room = fail_after - HEADER_SIZE - (long long)wr->len;
-        if (room > 0) (void)fwrite(p, 1, (size_t)room, wr->f);
-        wr->err = ENOSPC;
-        return;
+        long long room = fail_after - HEADER_SIZE - (long long)fs->len;
+        if (room > 0) (void)fwrite(p, 1, (size_t)room, fs->f);
+        return ENOSPC;
     }
-    if (fwrite(p, 1, n, wr->f) != n) {
-        wr->err = errno ? errno : EIO;
-        return;
-    }
-    wr->hash = fnv1a(wr->hash, p, n);
-    wr->len += n;
+    if (fwrite(p, 1, n, fs->f) != n) return errno ? errno : EIO;
+    fs->hash = sd_hash_bytes(fs->hash, p, n);
+    fs->len += n;
+    return 0;
 }
 
-static void put_i32(writer *wr, int32_t v) { put(wr, &v, sizeof(v)); }
-static void put_i64(writer *wr, int64_t v) { put(wr, &v, sizeof(v)); }
-static void put_u64(writer *wr, uint64_t v) { put(wr, &v, sizeof(v)); }
-static void put_f64(writer *wr, double v) { put(wr, &v, sizeof(v)); }
-static void put_vec3(writer *wr, sd_vec3 v) { put(wr, &v, sizeof(v)); }
+/* sizing a section: its bytes are only counted */
+static int to_nothing(void *ctx, const void *p, size_t n)
+{
+    (void)ctx;
+    (void)p;
+    (void)n;
+    return 0;
+}
 
-typedef void (*section_fn)(writer *wr, const sd_world *w, const void *ctx);
+typedef void (*section_fn)(sd_bin_writer *wr, const sd_world *w, const void *ctx);
 
 /* A section: tag, zero, content length (found by a counting pass), content. */
-static void section(writer *wr, const char tag[4], section_fn fn, const sd_world *w, const void *ctx)
+static void section(sd_bin_writer *wr, const char tag[4], section_fn fn, const sd_world *w, const void *ctx)
 {
-    writer cnt = {NULL, 0, 0, 0};
+    sd_bin_writer cnt;
+    sd_bin_writer_init_sink(&cnt, to_nothing, NULL);
     fn(&cnt, w, ctx);
-    put(wr, tag, 4);
-    put_i32(wr, 0);
-    put_u64(wr, cnt.len);
-    uint64_t before = wr->len;
+    sd_bin_put(wr, tag, 4);
+    sd_bin_put_i32(wr, 0);
+    sd_bin_put_u64(wr, (uint64_t)cnt.n);
+    size_t before = wr->n;
     fn(wr, w, ctx);
-    if (!wr->err && wr->len - before != cnt.len) wr->err = EIO; /* cannot happen: same function */
+    if (!wr->err && wr->n - before != cnt.n) wr->err = EIO; /* cannot happen: same function */
 }
 
-static void sec_def(writer *wr, const sd_world *w, const void *ctx)
+static void sec_def(sd_bin_writer *wr, const sd_world *w, const void *ctx)
 {
     (void)ctx;
     const sd_world_def *d = &w->def;
-    put_vec3(wr, d->gravity);
-    put_f64(wr, d->dt);
-    put_f64(wr, d->margin);
-    put_f64(wr, d->t_reset);
-    put_f64(wr, d->contact.k_n);
-    put_f64(wr, d->contact.k_s);
-    put_f64(wr, d->contact.damping);
-    put_f64(wr, d->contact.tan_phi);
-    put_f64(wr, d->contact.cohesion);
-    put_i32(wr, d->threads);
-    put_i32(wr, d->parallel_min);
-    put_i32(wr, d->check_dt);
+    sd_bin_put_vec3(wr, d->gravity);
+    sd_bin_put_f64(wr, d->dt);
+    sd_bin_put_f64(wr, d->margin);
+    sd_bin_put_f64(wr, d->t_reset);
+    sd_bin_put_f64(wr, d->contact.k_n);
+    sd_bin_put_f64(wr, d->contact.k_s);
+    sd_bin_put_f64(wr, d->contact.damping);
+    sd_bin_put_f64(wr, d->contact.tan_phi);
+    sd_bin_put_f64(wr, d->contact.cohesion);
+    sd_bin_put_i32(wr, d->threads);
+    sd_bin_put_i32(wr, d->parallel_min);
+    sd_bin_put_i32(wr, d->check_dt);
 }
 
 typedef struct {
-    writer *wr;
+    sd_bin_writer *wr;
     int n;
     int count;
 } field_wctx;
@@ -145,118 +135,118 @@ static void write_field(void *array, size_t elem, const char *name, void *ctx)
     field_wctx *fc = ctx;
     size_t len = strlen(name);
     uint8_t l8 = (uint8_t)len;
-    put(fc->wr, &l8, 1);
-    put(fc->wr, name, len);
-    put_i32(fc->wr, (int32_t)elem);
-    if (fc->n > 0) put(fc->wr, *(void **)array, (size_t)fc->n * elem);
+    sd_bin_put(fc->wr, &l8, 1);
+    sd_bin_put(fc->wr, name, len);
+    sd_bin_put_i32(fc->wr, (int32_t)elem);
+    if (fc->n > 0) sd_bin_put(fc->wr, *(void **)array, (size_t)fc->n * elem);
 }
 
-static void sec_body(writer *wr, const sd_world *w, const void *ctx)
+static void sec_body(sd_bin_writer *wr, const sd_world *w, const void *ctx)
 {
     (void)ctx;
     sd_bodies *b = (sd_bodies *)&w->b; /* the field table hands out the arrays; only read here */
     field_wctx fc = {wr, b->n, 0};
     sd_bodies_for_each_field(b, count_field, &fc);
-    put_i32(wr, b->n);
-    put_i32(wr, fc.count);
+    sd_bin_put_i32(wr, b->n);
+    sd_bin_put_i32(wr, fc.count);
     sd_bodies_for_each_field(b, write_field, &fc);
 }
 
-static void sec_gids(writer *wr, const sd_world *w, const void *ctx)
+static void sec_gids(sd_bin_writer *wr, const sd_world *w, const void *ctx)
 {
     (void)ctx;
-    put_i32(wr, w->next_gid);
-    if (w->next_gid > 0) put(wr, w->gid_map, (size_t)w->next_gid * sizeof(int32_t));
+    sd_bin_put_i32(wr, w->next_gid);
+    if (w->next_gid > 0) sd_bin_put(wr, w->gid_map, (size_t)w->next_gid * sizeof(int32_t));
 }
 
-static void sec_wall(writer *wr, const sd_world *w, const void *ctx)
+static void sec_wall(sd_bin_writer *wr, const sd_world *w, const void *ctx)
 {
     (void)ctx;
     const sd_walls *wl = &w->w;
-    put_i32(wr, wl->n);
+    sd_bin_put_i32(wr, wl->n);
     if (wl->n > 0) {
-        put(wr, wl->tri, (size_t)wl->n * sizeof(sd_tri));
-        put(wr, wl->group, (size_t)wl->n * sizeof(int32_t));
-        put(wr, wl->active, (size_t)wl->n);
-        put(wr, wl->force, (size_t)wl->n * sizeof(sd_vec3));
+        sd_bin_put(wr, wl->tri, (size_t)wl->n * sizeof(sd_tri));
+        sd_bin_put(wr, wl->group, (size_t)wl->n * sizeof(int32_t));
+        sd_bin_put(wr, wl->active, (size_t)wl->n);
+        sd_bin_put(wr, wl->force, (size_t)wl->n * sizeof(sd_vec3));
     }
-    put_i32(wr, wl->dirty);
+    sd_bin_put_i32(wr, wl->dirty);
 }
 
 /* The triangle grid is current when the walls are not dirty and there are walls; its cell size
  * came from the bodies present when it was built, so it is saved, not recomputed. */
 static int tgrid_current(const sd_world *w) { return !w->w.dirty && w->w.n > 0; }
 
-static void sec_tgrid(writer *wr, const sd_world *w, const void *ctx)
+static void sec_tgrid(sd_bin_writer *wr, const sd_world *w, const void *ctx)
 {
     (void)ctx;
     int present = tgrid_current(w);
-    put_i32(wr, present);
+    sd_bin_put_i32(wr, present);
     if (!present) return;
     const sd_grid *g = &w->tgrid;
     int ncell = g->nx * g->ny * g->nz;
-    put_f64(wr, g->cell);
-    put_i32(wr, g->nx);
-    put_i32(wr, g->ny);
-    put_i32(wr, g->nz);
-    put_vec3(wr, g->lo);
-    put(wr, g->cell_start, (size_t)(ncell + 1) * sizeof(int32_t));
-    put_i32(wr, g->cell_start[ncell]);
-    put(wr, g->items, (size_t)g->cell_start[ncell] * sizeof(int32_t));
-    put(wr, w->trange, (size_t)w->w.n * sizeof(*w->trange));
+    sd_bin_put_f64(wr, g->cell);
+    sd_bin_put_i32(wr, g->nx);
+    sd_bin_put_i32(wr, g->ny);
+    sd_bin_put_i32(wr, g->nz);
+    sd_bin_put_vec3(wr, g->lo);
+    sd_bin_put(wr, g->cell_start, (size_t)(ncell + 1) * sizeof(int32_t));
+    sd_bin_put_i32(wr, g->cell_start[ncell]);
+    sd_bin_put(wr, g->items, (size_t)g->cell_start[ncell] * sizeof(int32_t));
+    sd_bin_put(wr, w->trange, (size_t)w->w.n * sizeof(*w->trange));
 }
 
-static void sec_pairs(writer *wr, const sd_world *w, const void *ctx)
+static void sec_pairs(sd_bin_writer *wr, const sd_world *w, const void *ctx)
 {
     (void)w;
     const sd_pairlist *l = ctx;
-    put_i32(wr, l->n);
-    put_i32(wr, l->nh);
+    sd_bin_put_i32(wr, l->n);
+    sd_bin_put_i32(wr, l->nh);
     for (int k = 0; k < l->n; k++) {
         const sd_pair *p = &l->p[k];
-        put_i32(wr, p->a);
-        put_i32(wr, p->b);
-        put_i32(wr, p->off);
-        put(wr, &p->cap, sizeof(p->cap));
-        put(wr, &p->kind, sizeof(p->kind));
-        put_f64(wr, p->sqrt_m_eff);
+        sd_bin_put_i32(wr, p->a);
+        sd_bin_put_i32(wr, p->b);
+        sd_bin_put_i32(wr, p->off);
+        sd_bin_put(wr, &p->cap, sizeof(p->cap));
+        sd_bin_put(wr, &p->kind, sizeof(p->kind));
+        sd_bin_put_f64(wr, p->sqrt_m_eff);
     }
     for (int k = 0; k < l->nh; k++) {
         /* the shear of an empty slot is never read (and may be uninitialised): write zero */
         /* (a kept separating axis, SD_HIST_SEP_AXIS, is not state: written as an empty slot) */
         int32_t f = l->hist[k].feature;
-        put_i32(wr, f >= 0 ? f : -1);
-        put_vec3(wr, f >= 0 ? l->hist[k].shear : v3(0.0, 0.0, 0.0));
+        sd_bin_put_i32(wr, f >= 0 ? f : -1);
+        sd_bin_put_vec3(wr, f >= 0 ? l->hist[k].shear : v3(0.0, 0.0, 0.0));
     }
 }
 
-static void sec_oldh(writer *wr, const sd_world *w, const void *ctx)
+static void sec_oldh(sd_bin_writer *wr, const sd_world *w, const void *ctx)
 {
     (void)ctx;
-    put_i32(wr, w->keys_collected);
-    put_i32(wr, w->n_old);
-    if (w->n_old > 0) put(wr, w->old_keys, (size_t)w->n_old * sizeof(uint64_t));
+    sd_bin_put_i32(wr, w->keys_collected);
+    sd_bin_put_i32(wr, w->n_old);
+    if (w->n_old > 0) sd_bin_put(wr, w->old_keys, (size_t)w->n_old * sizeof(uint64_t));
     for (int k = 0; k < w->n_old; k++) {
-        put_i32(wr, w->old_hist[k].feature);
-        put_vec3(wr, w->old_hist[k].shear);
+        sd_bin_put_i32(wr, w->old_hist[k].feature);
+        sd_bin_put_vec3(wr, w->old_hist[k].shear);
     }
 }
 
-static void sec_time(writer *wr, const sd_world *w, const void *ctx)
+static void sec_time(sd_bin_writer *wr, const sd_world *w, const void *ctx)
 {
     (void)ctx;
-    put_f64(wr, w->time);
-    put_i64(wr, w->step);
-    put_f64(wr, w->last_rebuild_time);
-    put_i32(wr, w->need_rebuild);
-    put_i32(wr, w->rebuild_every_step);
-    put_i64(wr, w->contacts);
-    put_f64(wr, w->timers.integrate);
-    put_f64(wr, w->timers.neighbor);
-    put_f64(wr, w->timers.contact);
-    put_f64(wr, w->timers.gather);
-    put_f64(wr, w->timers.other);
-    put_i64(wr, w->timers.rebuilds);
+    sd_bin_put_f64(wr, w->time);
+    sd_bin_put_i64(wr, w->step);
+    sd_bin_put_f64(wr, w->last_rebuild_time);
+    sd_bin_put_i32(wr, w->need_rebuild);
+    sd_bin_put_i32(wr, w->rebuild_every_step);
+    sd_bin_put_i64(wr, w->contacts);
+    sd_bin_put_f64(wr, w->timers.integrate);
+    sd_bin_put_f64(wr, w->timers.neighbor);
+    sd_bin_put_f64(wr, w->timers.contact);
+    sd_bin_put_f64(wr, w->timers.gather);
+    sd_bin_put_f64(wr, w->timers.other);
+    sd_bin_put_i64(wr, w->timers.rebuilds);
 }
 
 typedef struct {
@@ -264,12 +254,12 @@ typedef struct {
     size_t n;
 } blob;
 
-static void sec_extra(writer *wr, const sd_world *w, const void *ctx)
+static void sec_extra(sd_bin_writer *wr, const sd_world *w, const void *ctx)
 {
     (void)w;
     const blob *x = ctx;
-    put_u64(wr, (uint64_t)x->n);
-    put(wr, x->p, x->n);
+    sd_bin_put_u64(wr, (uint64_t)x->n);
+    sd_bin_put(wr, x->p, x->n);
 }
 
 static void make_header(unsigned char h[HEADER_SIZE], uint64_t plen, uint64_t hash)
@@ -339,7 +329,9 @@ sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *e
         errno = e;
         return SD_ERR_IO;
     }
-    writer wr = {f, FNV_OFFSET, 0, 0};
+    file_sink fs = {f, sd_hash_init(), 0};
+    sd_bin_writer wr;
+    sd_bin_writer_init_sink(&wr, to_file, &fs);
     unsigned char hdr[HEADER_SIZE];
     make_header(hdr, 0, 0); /* placeholder: length and checksum filled in at the end */
     if (fail_after >= 0 && fail_after < HEADER_SIZE)
@@ -360,7 +352,7 @@ sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *e
     section(&wr, "XTRA", sec_extra, w, &x);
 
     if (!wr.err) {
-        make_header(hdr, wr.len, wr.hash);
+        make_header(hdr, fs.len, fs.hash);
         if (fseek(f, 0, SEEK_SET) != 0 || fwrite(hdr, 1, HEADER_SIZE, f) != HEADER_SIZE) wr.err = errno ? errno : EIO;
     }
     if (!wr.err && fflush(f) != 0) wr.err = errno ? errno : EIO;
@@ -380,70 +372,13 @@ sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *e
 
 /* ---------------------------------------------------------------- reading ---- */
 
-typedef struct {
-    const unsigned char *p;
-    size_t n, pos;
-    int bad;
-} cursor;
-
-static const void *take(cursor *c, size_t n)
-{
-    if (c->bad || n > c->n - c->pos) {
-        c->bad = 1;
-        return NULL;
-    }
-    const void *q = c->p + c->pos;
-    c->pos += n;
-    return q;
-}
-
-static void get(cursor *c, void *dst, size_t n)
-{
-    const void *q = take(c, n);
-    if (q)
-        memcpy(dst, q, n);
-    else
-        memset(dst, 0, n);
-}
-
-static int32_t get_i32(cursor *c)
-{
-    int32_t v;
-    get(c, &v, sizeof(v));
-    return v;
-}
-static int64_t get_i64(cursor *c)
-{
-    int64_t v;
-    get(c, &v, sizeof(v));
-    return v;
-}
-static uint64_t get_u64(cursor *c)
-{
-    uint64_t v;
-    get(c, &v, sizeof(v));
-    return v;
-}
-static double get_f64(cursor *c)
-{
-    double v;
-    get(c, &v, sizeof(v));
-    return v;
-}
-static sd_vec3 get_vec3(cursor *c)
-{
-    sd_vec3 v;
-    get(c, &v, sizeof(v));
-    return v;
-}
-
 static int finite3(sd_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
 
-/* A count of elements of `elem` bytes that must still fit in the cursor. */
-static int get_count(cursor *c, size_t elem)
+/* A count of elements of `elem` bytes that must still fit in what is left to read. */
+static int get_count(sd_bin_reader *c, size_t elem)
 {
-    int32_t v = get_i32(c);
-    if (c->bad || v < 0 || v >= INT_MAX / 8 || (elem > 0 && (size_t)v > (c->n - c->pos) / elem)) {
+    int32_t v = sd_bin_get_i32(c);
+    if (c->bad || v < 0 || v >= INT_MAX / 8 || (elem > 0 && (size_t)v > sd_bin_left(c) / elem)) {
         c->bad = 1;
         return 0;
     }
@@ -475,27 +410,23 @@ fail(const rd_ctx *r, const char *fmt, ...)
 }
 
 /* Open the next section, which must carry `tag`; *sec covers its content. */
-static sd_status open_section(const rd_ctx *r, cursor *c, const char *tag, cursor *sec)
+static sd_status open_section(const rd_ctx *r, sd_bin_reader *c, const char *tag, sd_bin_reader *sec)
 {
     size_t at = c->pos;
-    const unsigned char *t = take(c, 4);
-    int32_t zero = get_i32(c);
-    uint64_t len = get_u64(c);
+    const unsigned char *t = sd_bin_take(c, 4);
+    int32_t zero = sd_bin_get_i32(c);
+    uint64_t len = sd_bin_get_u64(c);
     if (c->bad) return fail(r, "section %s missing at payload offset %zu", tag, at);
     if (memcmp(t, tag, 4) != 0 || zero != 0) return fail(r, "section %s expected at payload offset %zu", tag, at);
-    if (len > c->n - c->pos) return fail(r, "section %s overruns the payload", tag);
-    sec->p = c->p + c->pos;
-    sec->n = (size_t)len;
-    sec->pos = 0;
-    sec->bad = 0;
-    c->pos += (size_t)len;
+    if (len > sd_bin_left(c)) return fail(r, "section %s overruns the payload", tag);
+    sd_bin_reader_init(sec, sd_bin_take(c, (size_t)len), (size_t)len);
     return SD_OK;
 }
 
-static sd_status close_section(const rd_ctx *r, const cursor *sec, const char *tag)
+static sd_status close_section(const rd_ctx *r, const sd_bin_reader *sec, const char *tag)
 {
     if (sec->bad) return fail(r, "section %s is malformed (short or out-of-range counts)", tag);
-    if (sec->pos != sec->n) return fail(r, "section %s has %zu unexpected trailing bytes", tag, sec->n - sec->pos);
+    if (sd_bin_left(sec)) return fail(r, "section %s has %zu unexpected trailing bytes", tag, sd_bin_left(sec));
     return SD_OK;
 }
 
@@ -532,7 +463,7 @@ static void read_field(void *array, size_t elem, const char *name, void *ctx)
     fc->st = fail(fc->r, "body field '%s' is missing (written by an incompatible build)", name);
 }
 
-static sd_status read_bodies(const rd_ctx *r, cursor *c, sd_world *w)
+static sd_status read_bodies(const rd_ctx *r, sd_bin_reader *c, sd_world *w)
 {
     int n = get_count(c, 0);
     int nf = get_count(c, 5);
@@ -541,22 +472,22 @@ static sd_status read_bodies(const rd_ctx *r, cursor *c, sd_world *w)
     if (!ff) return SD_ERR_NOMEM;
     for (int k = 0; k < nf && !c->bad; k++) {
         uint8_t len;
-        get(c, &len, 1);
-        const char *nm = take(c, len);
+        sd_bin_get(c, &len, 1);
+        const char *nm = sd_bin_take(c, len);
         if (!nm) break;
         memcpy(ff[k].name, nm, len);
         ff[k].name[len] = '\0';
-        int32_t elem = get_i32(c);
+        int32_t elem = sd_bin_get_i32(c);
         if (elem <= 0 || elem > 4096) {
             c->bad = 1;
             break;
         }
         ff[k].elem = (uint32_t)elem;
-        if ((size_t)n > (c->n - c->pos) / (size_t)elem) {
+        if ((size_t)n > sd_bin_left(c) / (size_t)elem) {
             c->bad = 1;
             break;
         }
-        ff[k].data = take(c, (size_t)n * (size_t)elem);
+        ff[k].data = sd_bin_take(c, (size_t)n * (size_t)elem);
     }
     if (c->bad) {
         free(ff);
@@ -575,7 +506,7 @@ static sd_status read_bodies(const rd_ctx *r, cursor *c, sd_world *w)
     return fc.st;
 }
 
-static sd_status read_pairs(const rd_ctx *r, cursor *c, sd_world *w, sd_pairlist *l, int bt, const char *tag)
+static sd_status read_pairs(const rd_ctx *r, sd_bin_reader *c, sd_world *w, sd_pairlist *l, int bt, const char *tag)
 {
     int n = get_count(c, 24);
     int nh = get_count(c, 0);
@@ -593,12 +524,12 @@ static sd_status read_pairs(const rd_ctx *r, cursor *c, sd_world *w, sd_pairlist
     int next_off = 0; /* the slots of consecutive pairs follow each other (push_pair) */
     for (int k = 0; k < n; k++) {
         sd_pair *p = &l->p[k];
-        p->a = get_i32(c);
-        p->b = get_i32(c);
-        p->off = get_i32(c);
-        get(c, &p->cap, sizeof(p->cap));
-        get(c, &p->kind, sizeof(p->kind));
-        p->sqrt_m_eff = get_f64(c);
+        p->a = sd_bin_get_i32(c);
+        p->b = sd_bin_get_i32(c);
+        p->off = sd_bin_get_i32(c);
+        sd_bin_get(c, &p->cap, sizeof(p->cap));
+        sd_bin_get(c, &p->kind, sizeof(p->kind));
+        p->sqrt_m_eff = sd_bin_get_f64(c);
         if (c->bad) return SD_OK;
         int ok = p->a >= 0 && p->a < nb && p->cap >= 1 && p->cap <= SD_MANIFOLD_MAX && p->off == next_off &&
                  p->off <= nh - p->cap;
@@ -612,55 +543,55 @@ static sd_status read_pairs(const rd_ctx *r, cursor *c, sd_world *w, sd_pairlist
         if (!ok) return fail(r, "section %s: pair %d is out of range", tag, k);
     }
     if (next_off != nh) return fail(r, "section %s: %d history slots for pairs holding %d", tag, nh, next_off);
-    if ((size_t)nh > (c->n - c->pos) / 28) {
+    if ((size_t)nh > sd_bin_left(c) / 28) {
         c->bad = 1;
         return SD_OK;
     }
     for (int k = 0; k < nh; k++) {
-        l->hist[k].feature = get_i32(c);
-        l->hist[k].shear = get_vec3(c);
+        l->hist[k].feature = sd_bin_get_i32(c);
+        l->hist[k].shear = sd_bin_get_vec3(c);
     }
     l->n = n;
     l->nh = nh;
     return SD_OK;
 }
 
-static sd_status read_tgrid(const rd_ctx *r, cursor *c, sd_world *w)
+static sd_status read_tgrid(const rd_ctx *r, sd_bin_reader *c, sd_world *w)
 {
-    int present = get_i32(c);
+    int present = sd_bin_get_i32(c);
     if (c->bad) return SD_OK;
     if (present != tgrid_current(w))
         return fail(r, "section TGRD: triangle grid %s", present ? "saved for dirty walls" : "missing");
     if (!present) return SD_OK;
     sd_grid *g = &w->tgrid;
-    g->cell = get_f64(c);
-    g->nx = get_i32(c);
-    g->ny = get_i32(c);
-    g->nz = get_i32(c);
-    g->lo = get_vec3(c);
+    g->cell = sd_bin_get_f64(c);
+    g->nx = sd_bin_get_i32(c);
+    g->ny = sd_bin_get_i32(c);
+    g->nz = sd_bin_get_i32(c);
+    g->lo = sd_bin_get_vec3(c);
     if (c->bad) return SD_OK;
     if (!(g->cell > 0.0) || !isfinite(g->cell) || !finite3(g->lo) || g->nx < 1 || g->ny < 1 || g->nz < 1 ||
         (double)g->nx * g->ny * g->nz > (double)(INT_MAX / 8))
         return fail(r, "section TGRD: bad grid dimensions");
     int ncell = g->nx * g->ny * g->nz;
-    if ((size_t)ncell + 1 > (c->n - c->pos) / sizeof(int32_t)) {
+    if ((size_t)ncell + 1 > sd_bin_left(c) / sizeof(int32_t)) {
         c->bad = 1;
         return SD_OK;
     }
     if (sd_grow((void **)&g->cell_start, &g->cap_cells, ncell + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    get(c, g->cell_start, (size_t)(ncell + 1) * sizeof(int32_t));
+    sd_bin_get(c, g->cell_start, (size_t)(ncell + 1) * sizeof(int32_t));
     int nitems = get_count(c, sizeof(int32_t));
     if (c->bad) return SD_OK;
     if (g->cell_start[0] != 0 || g->cell_start[ncell] != nitems) return fail(r, "section TGRD: bad cell table");
     for (int k = 0; k < ncell; k++)
         if (g->cell_start[k + 1] < g->cell_start[k]) return fail(r, "section TGRD: bad cell table");
     if (sd_grow((void **)&g->items, &g->cap_items, nitems + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    get(c, g->items, (size_t)nitems * sizeof(int32_t));
+    sd_bin_get(c, g->items, (size_t)nitems * sizeof(int32_t));
     int nt = w->w.n;
     for (int k = 0; k < nitems; k++)
         if (g->items[k] < 0 || g->items[k] >= nt) return fail(r, "section TGRD: bad triangle index");
     if (sd_grow((void **)&w->trange, &w->trange_cap, nt + 1, sizeof(*w->trange))) return SD_ERR_NOMEM;
-    get(c, w->trange, (size_t)nt * sizeof(*w->trange));
+    sd_bin_get(c, w->trange, (size_t)nt * sizeof(*w->trange));
     if (c->bad) return SD_OK;
     const int dims[3] = {g->nx, g->ny, g->nz};
     for (int t = 0; t < nt; t++)
@@ -704,28 +635,28 @@ static int body_sane(const sd_bodies *b, int i)
            isfinite(b->bound_r[i]) && b->bound_r[i] > 0.0;
 }
 
-static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra, size_t *extra_len)
+static sd_status parse(const rd_ctx *r, sd_bin_reader *pl, sd_world **out, void **extra, size_t *extra_len)
 {
     sd_status st;
-    cursor c;
+    sd_bin_reader c;
     sd_world *w = NULL;
 
     /* world definition */
     if ((st = open_section(r, pl, "DEF ", &c))) return st;
     sd_world_def def;
     memset(&def, 0, sizeof(def));
-    def.gravity = get_vec3(&c);
-    def.dt = get_f64(&c);
-    def.margin = get_f64(&c);
-    def.t_reset = get_f64(&c);
-    def.contact.k_n = get_f64(&c);
-    def.contact.k_s = get_f64(&c);
-    def.contact.damping = get_f64(&c);
-    def.contact.tan_phi = get_f64(&c);
-    def.contact.cohesion = get_f64(&c);
-    def.threads = get_i32(&c);
-    def.parallel_min = get_i32(&c);
-    def.check_dt = get_i32(&c);
+    def.gravity = sd_bin_get_vec3(&c);
+    def.dt = sd_bin_get_f64(&c);
+    def.margin = sd_bin_get_f64(&c);
+    def.t_reset = sd_bin_get_f64(&c);
+    def.contact.k_n = sd_bin_get_f64(&c);
+    def.contact.k_s = sd_bin_get_f64(&c);
+    def.contact.damping = sd_bin_get_f64(&c);
+    def.contact.tan_phi = sd_bin_get_f64(&c);
+    def.contact.cohesion = sd_bin_get_f64(&c);
+    def.threads = sd_bin_get_i32(&c);
+    def.parallel_min = sd_bin_get_i32(&c);
+    def.check_dt = sd_bin_get_i32(&c);
     if ((st = close_section(r, &c, "DEF "))) return st;
     if (!isfinite(def.dt) || !isfinite(def.margin) || !isfinite(def.t_reset))
         return fail(r, "section DEF : invalid world definition");
@@ -745,7 +676,7 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
             st = SD_ERR_NOMEM;
             goto out;
         }
-        get(&c, w->gid_map, (size_t)ng * sizeof(int32_t));
+        sd_bin_get(&c, w->gid_map, (size_t)ng * sizeof(int32_t));
         w->next_gid = ng;
     }
     if ((st = close_section(r, &c, "GIDS"))) goto out;
@@ -785,12 +716,12 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
             }
             wl->n = nt;
             if (nt > 0) {
-                get(&c, wl->tri, (size_t)nt * sizeof(sd_tri));
-                get(&c, wl->group, (size_t)nt * sizeof(int32_t));
-                get(&c, wl->active, (size_t)nt);
-                get(&c, wl->force, (size_t)nt * sizeof(sd_vec3));
+                sd_bin_get(&c, wl->tri, (size_t)nt * sizeof(sd_tri));
+                sd_bin_get(&c, wl->group, (size_t)nt * sizeof(int32_t));
+                sd_bin_get(&c, wl->active, (size_t)nt);
+                sd_bin_get(&c, wl->force, (size_t)nt * sizeof(sd_vec3));
             }
-            wl->dirty = get_i32(&c);
+            wl->dirty = sd_bin_get_i32(&c);
         }
         if ((st = close_section(r, &c, "WALL"))) goto out;
         for (int t = 0; t < nt; t++)
@@ -816,7 +747,7 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
 
     /* history carried to the next rebuild */
     if ((st = open_section(r, pl, "OLDH", &c))) goto out;
-    w->keys_collected = get_i32(&c);
+    w->keys_collected = sd_bin_get_i32(&c);
     {
         int m = get_count(&c, sizeof(uint64_t) + 28);
         if (!c.bad) {
@@ -825,10 +756,10 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
                 st = SD_ERR_NOMEM;
                 goto out;
             }
-            get(&c, w->old_keys, (size_t)m * sizeof(uint64_t));
+            sd_bin_get(&c, w->old_keys, (size_t)m * sizeof(uint64_t));
             for (int k = 0; k < m; k++) {
-                w->old_hist[k].feature = get_i32(&c);
-                w->old_hist[k].shear = get_vec3(&c);
+                w->old_hist[k].feature = sd_bin_get_i32(&c);
+                w->old_hist[k].shear = sd_bin_get_vec3(&c);
             }
             w->n_old = m;
         }
@@ -857,18 +788,18 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
 
     /* clock and flags */
     if ((st = open_section(r, pl, "TIME", &c))) goto out;
-    w->time = get_f64(&c);
-    w->step = (long)get_i64(&c);
-    w->last_rebuild_time = get_f64(&c);
-    w->need_rebuild = get_i32(&c);
-    w->rebuild_every_step = get_i32(&c);
-    w->contacts = (long)get_i64(&c);
-    w->timers.integrate = get_f64(&c);
-    w->timers.neighbor = get_f64(&c);
-    w->timers.contact = get_f64(&c);
-    w->timers.gather = get_f64(&c);
-    w->timers.other = get_f64(&c);
-    w->timers.rebuilds = (long)get_i64(&c);
+    w->time = sd_bin_get_f64(&c);
+    w->step = (long)sd_bin_get_i64(&c);
+    w->last_rebuild_time = sd_bin_get_f64(&c);
+    w->need_rebuild = sd_bin_get_i32(&c);
+    w->rebuild_every_step = sd_bin_get_i32(&c);
+    w->contacts = (long)sd_bin_get_i64(&c);
+    w->timers.integrate = sd_bin_get_f64(&c);
+    w->timers.neighbor = sd_bin_get_f64(&c);
+    w->timers.contact = sd_bin_get_f64(&c);
+    w->timers.gather = sd_bin_get_f64(&c);
+    w->timers.other = sd_bin_get_f64(&c);
+    w->timers.rebuilds = (long)sd_bin_get_i64(&c);
     if ((st = close_section(r, &c, "TIME"))) goto out;
     if (!isfinite(w->time) || !isfinite(w->last_rebuild_time) || w->step < 0) {
         st = fail(r, "section TIME: bad clock");
@@ -882,15 +813,15 @@ static sd_status parse(const rd_ctx *r, cursor *pl, sd_world **out, void **extra
     /* the driver's blob */
     if ((st = open_section(r, pl, "XTRA", &c))) goto out;
     {
-        uint64_t len = get_u64(&c);
+        uint64_t len = sd_bin_get_u64(&c);
         const void *data = NULL;
-        if (!c.bad && len <= c.n - c.pos)
-            data = take(&c, (size_t)len);
+        if (!c.bad && len <= sd_bin_left(&c))
+            data = sd_bin_take(&c, (size_t)len);
         else
             c.bad = 1;
         if ((st = close_section(r, &c, "XTRA"))) goto out;
-        if (pl->pos != pl->n) {
-            st = fail(r, "%zu unexpected bytes after the last section", pl->n - pl->pos);
+        if (sd_bin_left(pl)) {
+            st = fail(r, "%zu unexpected bytes after the last section", sd_bin_left(pl));
             goto out;
         }
         if ((st = derive(w))) goto out;
@@ -1008,11 +939,12 @@ sd_status sd_checkpoint_read(const char *path, sd_world **out, void **extra, siz
         } else if (plen < size - HEADER_SIZE) {
             st = fail(&r, "%zu bytes after the announced end of the checkpoint (corrupted)",
                       size - HEADER_SIZE - (size_t)plen);
-        } else if (fnv1a(FNV_OFFSET, data + HEADER_SIZE, (size_t)plen) != hash) {
+        } else if (sd_hash(data + HEADER_SIZE, (size_t)plen) != hash) {
             st = fail(&r, "checksum mismatch (corrupted file)");
         }
         if (st) goto done;
-        cursor pl = {data + HEADER_SIZE, (size_t)plen, 0, 0};
+        sd_bin_reader pl;
+        sd_bin_reader_init(&pl, data + HEADER_SIZE, (size_t)plen);
         st = parse(&r, &pl, out, extra, extra_len);
     }
 done:

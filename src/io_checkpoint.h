@@ -29,7 +29,7 @@
  *     16 u8[8]    sizes: double, sd_vec3, sd_quat, int32, int64, sd_tri, 0, 0
  *     24 f64      -1.5 (IEEE-754 binary64 check)
  *     32 u64      payload length in bytes (the file is exactly 64 + that long)
- *     40 u64      FNV-1a 64 of the payload
+ *     40 u64      FNV-1a 64 of the payload, from sabodem's basis (sd_hash, core/hash.h)
  *     48 u64[2]   zero (reserved)
  *   payload: sections in a fixed order, each u32 tag (4 ASCII chars), u32 0, u64 length,
  *   then the content: DEF, BODY (n, field count, then per field: name, element size, the n

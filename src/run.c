@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "build.h"
+#include "core/binio.h"
 #include "core/simd.h"
 #include "fluid.h"
 #include "io_checkpoint.h"
@@ -836,128 +837,58 @@ static sd_status capture_start(run_ctx *c)
  * none later, so there is no rng state to carry. */
 #define BLOB_MAGIC "SDRUNv1"
 
-typedef struct {
-    unsigned char *p;
-    size_t n, cap;
-    int err;
-} bbuf;
-
-static void bput(bbuf *b, const void *p, size_t n)
-{
-    if (b->err) return;
-    if (b->n + n > b->cap) {
-        size_t cap = b->cap ? 2 * b->cap : 1024;
-        while (cap < b->n + n)
-            cap *= 2;
-        unsigned char *q = realloc(b->p, cap);
-        if (!q) {
-            b->err = 1;
-            return;
-        }
-        b->p = q;
-        b->cap = cap;
-    }
-    memcpy(b->p + b->n, p, n);
-    b->n += n;
-}
-static void bput_i32(bbuf *b, int32_t v) { bput(b, &v, sizeof v); }
-static void bput_i64(bbuf *b, int64_t v) { bput(b, &v, sizeof v); }
-static void bput_u64(bbuf *b, uint64_t v) { bput(b, &v, sizeof v); }
-static void bput_f64(bbuf *b, double v) { bput(b, &v, sizeof v); }
-
-typedef struct {
-    const unsigned char *p;
-    size_t n, pos;
-    int bad;
-} bcur;
-
-static void bget(bcur *c, void *dst, size_t n)
-{
-    if (c->bad || n > c->n - c->pos) {
-        c->bad = 1;
-        memset(dst, 0, n);
-        return;
-    }
-    memcpy(dst, c->p + c->pos, n);
-    c->pos += n;
-}
-static int32_t bget_i32(bcur *c)
-{
-    int32_t v;
-    bget(c, &v, sizeof v);
-    return v;
-}
-static int64_t bget_i64(bcur *c)
-{
-    int64_t v;
-    bget(c, &v, sizeof v);
-    return v;
-}
-static uint64_t bget_u64(bcur *c)
-{
-    uint64_t v;
-    bget(c, &v, sizeof v);
-    return v;
-}
-static double bget_f64(bcur *c)
-{
-    double v;
-    bget(c, &v, sizeof v);
-    return v;
-}
-
 static long file_len(FILE *f)
 {
     if (!f || fflush(f)) return -1;
     return ftell(f);
 }
 
-static void state_pack(const run_ctx *c, bbuf *b, long series_len, long traj_len)
+static void state_pack(const run_ctx *c, sd_bin_writer *b, long series_len, long traj_len)
 {
-    bput(b, BLOB_MAGIC, 8);
-    bput_u64(b, sd_scenario_branch_hash(c->s));
-    bput_i32(b, c->phase);
-    bput_i32(b, c->flow_ended);
-    bput_i32(b, c->dam_built);
-    bput_i32(b, c->n_passed);
-    bput_i32(b, c->flow_len_done);
-    bput_i32(b, c->n_snap);
-    bput_i32(b, c->info.n_rough);
-    bput_i32(b, c->info.n_spheres);
-    bput_i32(b, c->info.n_logs);
-    bput_i32(b, c->info.first_moving_gid);
+    sd_bin_put(b, BLOB_MAGIC, 8);
+    sd_bin_put_u64(b, sd_scenario_branch_hash(c->s));
+    sd_bin_put_i32(b, c->phase);
+    sd_bin_put_i32(b, c->flow_ended);
+    sd_bin_put_i32(b, c->dam_built);
+    sd_bin_put_i32(b, c->n_passed);
+    sd_bin_put_i32(b, c->flow_len_done);
+    sd_bin_put_i32(b, c->n_snap);
+    sd_bin_put_i32(b, c->info.n_rough);
+    sd_bin_put_i32(b, c->info.n_spheres);
+    sd_bin_put_i32(b, c->info.n_logs);
+    sd_bin_put_i32(b, c->info.first_moving_gid);
     for (int k = 0; k < SD_MAX_CLASSES; k++)
-        bput_f64(b, c->vol_total_class[k]);
-    bput_f64(b, c->vol_total_logs);
+        sd_bin_put_f64(b, c->vol_total_class[k]);
+    sd_bin_put_f64(b, c->vol_total_logs);
     for (int k = 0; k < SD_MAX_CLASSES; k++)
-        bput_f64(b, c->vol_passed_class[k]);
-    bput_f64(b, c->vol_passed_logs);
-    bput_f64(b, c->h_d);
-    bput_f64(b, c->last_cross_time);
-    bput_f64(b, c->ke_peak);
-    bput_f64(b, c->dam_force_now);
+        sd_bin_put_f64(b, c->vol_passed_class[k]);
+    sd_bin_put_f64(b, c->vol_passed_logs);
+    sd_bin_put_f64(b, c->h_d);
+    sd_bin_put_f64(b, c->last_cross_time);
+    sd_bin_put_f64(b, c->ke_peak);
+    sd_bin_put_f64(b, c->dam_force_now);
     for (int k = 0; k < 4; k++)
-        bput_f64(b, c->phase_end[k]);
+        sd_bin_put_f64(b, c->phase_end[k]);
     for (int k = 0; k < 4; k++)
-        bput_f64(b, c->phase_wall[k]);
-    bput_f64(b, c->flow_len);
-    bput_f64(b, c->flow_q05);
-    bput_f64(b, c->flow_q95);
-    bput_f64(b, c->flow_front);
-    bput_f64(b, c->flow_len_time);
-    bput_f64(b, c->phase_t0);
-    bput_f64(b, sd_now() - c->wall0);
-    bput_i64(b, series_len);
-    bput_i64(b, traj_len);
+        sd_bin_put_f64(b, c->phase_wall[k]);
+    sd_bin_put_f64(b, c->flow_len);
+    sd_bin_put_f64(b, c->flow_q05);
+    sd_bin_put_f64(b, c->flow_q95);
+    sd_bin_put_f64(b, c->flow_front);
+    sd_bin_put_f64(b, c->flow_len_time);
+    sd_bin_put_f64(b, c->phase_t0);
+    sd_bin_put_f64(b, sd_now() - c->wall0);
+    sd_bin_put_i64(b, series_len);
+    sd_bin_put_i64(b, traj_len);
     /* the VTK series so far (file names relative to the output directory) */
     int np = c->pvd_on ? (int)c->pvd.n : 0;
-    bput_i32(b, np);
+    sd_bin_put_i32(b, np);
     for (int k = 0; k < np; k++) {
         int32_t len = (int32_t)strlen(c->pvd.file[k]);
-        bput_f64(b, c->pvd.time[k]);
-        bput_i32(b, c->pvd.part[k]);
-        bput_i32(b, len);
-        bput(b, c->pvd.file[k], (size_t)len);
+        sd_bin_put_f64(b, c->pvd.time[k]);
+        sd_bin_put_i32(b, c->pvd.part[k]);
+        sd_bin_put_i32(b, len);
+        sd_bin_put(b, c->pvd.file[k], (size_t)len);
     }
 }
 
@@ -984,14 +915,15 @@ static void restored_free(restored *r)
 static int state_unpack(run_ctx *c, const void *blob, size_t len, restored *r, char *msg, size_t msglen)
 {
     memset(r, 0, sizeof *r);
-    bcur b = {blob, len, 0, 0};
+    sd_bin_reader b;
+    sd_bin_reader_init(&b, blob, len);
     char magic[8];
-    bget(&b, magic, 8);
+    sd_bin_get(&b, magic, 8);
     if (b.bad || memcmp(magic, BLOB_MAGIC, 8)) {
         snprintf(msg, msglen, "holds no run-driver state of this version (not written by 'sabodem run' at a flow end)");
         return -1;
     }
-    uint64_t h = bget_u64(&b);
+    uint64_t h = sd_bin_get_u64(&b);
     if (h != sd_scenario_branch_hash(c->s)) {
         snprintf(msg, msglen,
                  "was written for other scenario parameters than %s (a restart may change only the capture-phase keys:"
@@ -1000,41 +932,41 @@ static int state_unpack(run_ctx *c, const void *blob, size_t len, restored *r, c
                  c->s->path);
         return -1;
     }
-    c->phase = bget_i32(&b);
-    c->flow_ended = bget_i32(&b);
-    c->dam_built = bget_i32(&b);
-    c->n_passed = bget_i32(&b);
-    c->flow_len_done = bget_i32(&b);
-    c->n_snap = bget_i32(&b);
-    c->info.n_rough = bget_i32(&b);
-    c->info.n_spheres = bget_i32(&b);
-    c->info.n_logs = bget_i32(&b);
-    c->info.first_moving_gid = bget_i32(&b);
+    c->phase = sd_bin_get_i32(&b);
+    c->flow_ended = sd_bin_get_i32(&b);
+    c->dam_built = sd_bin_get_i32(&b);
+    c->n_passed = sd_bin_get_i32(&b);
+    c->flow_len_done = sd_bin_get_i32(&b);
+    c->n_snap = sd_bin_get_i32(&b);
+    c->info.n_rough = sd_bin_get_i32(&b);
+    c->info.n_spheres = sd_bin_get_i32(&b);
+    c->info.n_logs = sd_bin_get_i32(&b);
+    c->info.first_moving_gid = sd_bin_get_i32(&b);
     for (int k = 0; k < SD_MAX_CLASSES; k++)
-        c->vol_total_class[k] = bget_f64(&b);
-    c->vol_total_logs = bget_f64(&b);
+        c->vol_total_class[k] = sd_bin_get_f64(&b);
+    c->vol_total_logs = sd_bin_get_f64(&b);
     for (int k = 0; k < SD_MAX_CLASSES; k++)
-        c->vol_passed_class[k] = bget_f64(&b);
-    c->vol_passed_logs = bget_f64(&b);
-    c->h_d = bget_f64(&b);
-    c->last_cross_time = bget_f64(&b);
-    c->ke_peak = bget_f64(&b);
-    c->dam_force_now = bget_f64(&b);
+        c->vol_passed_class[k] = sd_bin_get_f64(&b);
+    c->vol_passed_logs = sd_bin_get_f64(&b);
+    c->h_d = sd_bin_get_f64(&b);
+    c->last_cross_time = sd_bin_get_f64(&b);
+    c->ke_peak = sd_bin_get_f64(&b);
+    c->dam_force_now = sd_bin_get_f64(&b);
     for (int k = 0; k < 4; k++)
-        c->phase_end[k] = bget_f64(&b);
+        c->phase_end[k] = sd_bin_get_f64(&b);
     for (int k = 0; k < 4; k++)
-        c->phase_wall[k] = bget_f64(&b);
-    c->flow_len = bget_f64(&b);
-    c->flow_q05 = bget_f64(&b);
-    c->flow_q95 = bget_f64(&b);
-    c->flow_front = bget_f64(&b);
-    c->flow_len_time = bget_f64(&b);
-    c->phase_t0 = bget_f64(&b);
-    r->wall_before = bget_f64(&b);
-    r->series_len = (long)bget_i64(&b);
-    r->traj_len = (long)bget_i64(&b);
-    int np = bget_i32(&b);
-    if (b.bad || np < 0 || (size_t)np > (b.n - b.pos) / 16) {
+        c->phase_wall[k] = sd_bin_get_f64(&b);
+    c->flow_len = sd_bin_get_f64(&b);
+    c->flow_q05 = sd_bin_get_f64(&b);
+    c->flow_q95 = sd_bin_get_f64(&b);
+    c->flow_front = sd_bin_get_f64(&b);
+    c->flow_len_time = sd_bin_get_f64(&b);
+    c->phase_t0 = sd_bin_get_f64(&b);
+    r->wall_before = sd_bin_get_f64(&b);
+    r->series_len = (long)sd_bin_get_i64(&b);
+    r->traj_len = (long)sd_bin_get_i64(&b);
+    int np = sd_bin_get_i32(&b);
+    if (b.bad || np < 0 || (size_t)np > sd_bin_left(&b) / 16) {
         snprintf(msg, msglen, "run-driver state is truncated or malformed");
         return -1;
     }
@@ -1047,10 +979,10 @@ static int state_unpack(run_ctx *c, const void *blob, size_t len, restored *r, c
         return -1;
     }
     for (int k = 0; k < np && !b.bad; k++) {
-        r->pvd_time[k] = bget_f64(&b);
-        r->pvd_part[k] = bget_i32(&b);
-        int32_t l = bget_i32(&b);
-        if (b.bad || l <= 0 || l > 255 || (size_t)l > b.n - b.pos) {
+        r->pvd_time[k] = sd_bin_get_f64(&b);
+        r->pvd_part[k] = sd_bin_get_i32(&b);
+        int32_t l = sd_bin_get_i32(&b);
+        if (b.bad || l <= 0 || l > 255 || (size_t)l > sd_bin_left(&b)) {
             b.bad = 1;
             break;
         }
@@ -1060,11 +992,11 @@ static int state_unpack(run_ctx *c, const void *blob, size_t len, restored *r, c
             break;
         }
         r->npvd = k + 1;
-        bget(&b, r->pvd_file[k], (size_t)l);
+        sd_bin_get(&b, r->pvd_file[k], (size_t)l);
         r->pvd_file[k][l] = '\0';
         if (strchr(r->pvd_file[k], '/')) b.bad = 1;
     }
-    if (b.bad || b.pos != b.n) {
+    if (b.bad || sd_bin_left(&b)) {
         snprintf(msg, msglen, "run-driver state is truncated or malformed");
         restored_free(r);
         return -1;
@@ -1181,14 +1113,11 @@ static sd_status checkpoint_flow_end(run_ctx *c, const char *path)
 {
     long sl = file_len(c->series), tl = c->traj ? file_len(c->traj) : -1;
     if (sl < 0 || (c->traj && tl < 0)) return SD_ERR_IO;
-    bbuf b = {NULL, 0, 0, 0};
+    sd_bin_writer b;
+    sd_bin_writer_init(&b);
     state_pack(c, &b, sl, tl);
-    if (b.err) {
-        free(b.p);
-        return SD_ERR_NOMEM;
-    }
-    sd_status st = sd_checkpoint_write(path, c->w, b.p, b.n);
-    free(b.p);
+    sd_status st = b.err ? SD_ERR_NOMEM : sd_checkpoint_write(path, c->w, b.p, b.n);
+    sd_bin_writer_fini(&b);
     return st;
 }
 

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/hash.h"
 #include "core/vmath.h"
 #include "yaml_tree.h"
 
@@ -726,68 +727,58 @@ int sd_scenario_is_capture_key(const char *key)
     return 0;
 }
 
-static uint64_t fnv_bytes(uint64_t h, const void *p, size_t n)
-{
-    const unsigned char *q = p;
-    for (size_t k = 0; k < n; k++) {
-        h ^= q[k];
-        h *= 1099511628211ULL;
-    }
-    return h;
-}
-
 uint64_t sd_scenario_branch_hash(const sd_scenario *s)
 {
-    uint64_t h = 1469598103934665603ULL;
+    uint64_t h = sd_hash_init();
     const char *base = (const char *)s;
     for (int i = 0; i < N_PARAMS; i++) {
         const sd_param *p = &params[i];
         /* threads never change the bits (tests/test_threads.c) */
         if (sd_scenario_is_capture_key(p->key) || !strcmp(p->key, "solver.threads")) continue;
-        h = fnv_bytes(h, p->key, strlen(p->key) + 1);
+        h = sd_hash_bytes(h, p->key, strlen(p->key) + 1);
         switch (p->type) {
         case P_DOUBLE:
-            h = fnv_bytes(h, base + p->off, sizeof(double));
+            h = sd_hash_bytes(h, base + p->off, sizeof(double));
             break;
         case P_INT:
             if (p->off == OFF(seed))
-                h = fnv_bytes(h, base + p->off, sizeof(long));
+                h = sd_hash_bytes(h, base + p->off, sizeof(long));
             else
-                h = fnv_bytes(h, base + p->off, sizeof(int));
+                h = sd_hash_bytes(h, base + p->off, sizeof(int));
             break;
         case P_BOOL:
-            h = fnv_bytes(h, base + p->off, sizeof(int));
+            h = sd_hash_bytes(h, base + p->off, sizeof(int));
             break;
         case P_VEC3:
-            h = fnv_bytes(h, base + p->off, sizeof(sd_vec3));
+            h = sd_hash_bytes(h, base + p->off, sizeof(sd_vec3));
             break;
         case P_DLIST:
         case P_ILIST: {
             int n = *(const int *)(base + p->count_off);
-            h = fnv_bytes(h, &n, sizeof n);
-            h = fnv_bytes(h, base + p->off, (size_t)n * (p->type == P_DLIST ? sizeof(double) : sizeof(int)));
+            h = sd_hash_bytes(h, &n, sizeof n);
+            h = sd_hash_bytes(h, base + p->off, (size_t)n * (p->type == P_DLIST ? sizeof(double) : sizeof(int)));
             break;
         }
         }
     }
     /* explicit elements, field by field (the struct has padding) */
-    h = fnv_bytes(h, &s->n_elems, sizeof s->n_elems);
+    h = sd_hash_bytes(h, &s->n_elems, sizeof s->n_elems);
     for (int i = 0; i < s->n_elems; i++) {
         const sd_elem_def *d = &s->elems[i];
-        h = fnv_bytes(h, &d->type, sizeof d->type);
-        h = fnv_bytes(h, &d->pos, sizeof d->pos);
-        h = fnv_bytes(h, &d->vel, sizeof d->vel);
-        h = fnv_bytes(h, &d->omega, sizeof d->omega);
-        h = fnv_bytes(h, &d->axis, sizeof d->axis);
-        h = fnv_bytes(h, &d->radius, sizeof d->radius);
-        h = fnv_bytes(h, &d->length, sizeof d->length);
-        h = fnv_bytes(h, &d->density, sizeof d->density);
-        h = fnv_bytes(h, &d->fixed, sizeof d->fixed);
-        h = fnv_bytes(h, &d->tag, sizeof d->tag);
-        h = fnv_bytes(h, &d->group, sizeof d->group);
-        h = fnv_bytes(h, d->v, sizeof d->v);
+        h = sd_hash_bytes(h, &d->type, sizeof d->type);
+        h = sd_hash_bytes(h, &d->pos, sizeof d->pos);
+        h = sd_hash_bytes(h, &d->vel, sizeof d->vel);
+        h = sd_hash_bytes(h, &d->omega, sizeof d->omega);
+        h = sd_hash_bytes(h, &d->axis, sizeof d->axis);
+        h = sd_hash_bytes(h, &d->radius, sizeof d->radius);
+        h = sd_hash_bytes(h, &d->length, sizeof d->length);
+        h = sd_hash_bytes(h, &d->density, sizeof d->density);
+        h = sd_hash_bytes(h, &d->fixed, sizeof d->fixed);
+        h = sd_hash_bytes(h, &d->tag, sizeof d->tag);
+        h = sd_hash_bytes(h, &d->group, sizeof d->group);
+        h = sd_hash_bytes(h, d->v, sizeof d->v);
     }
     /* fields outside the table that the scene uses */
-    h = fnv_bytes(h, &s->world.parallel_min, sizeof s->world.parallel_min);
+    h = sd_hash_bytes(h, &s->world.parallel_min, sizeof s->world.parallel_min);
     return h;
 }

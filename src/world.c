@@ -2,6 +2,7 @@
 #include <string.h>
 
 #include "core/cpu.h"
+#include "core/hash.h"
 #include "tuning.h"
 #include "world_internal.h"
 
@@ -572,34 +573,25 @@ double sd_world_spring_energy(const sd_world *w)
     return e;
 }
 
-/* FNV-1a over the bytes of the dynamic state, in gid order. */
+/* FNV-1a (core/hash.h) over the bytes of the dynamic state, in gid order. */
 uint64_t sd_world_state_hash(const sd_world *w)
 {
     sd_contact_springs_home((sd_world *)w); /* (where the springs sit, not what they are) */
-    uint64_t h = 1469598103934665603ULL;
+    uint64_t h = sd_hash_init();
     const sd_bodies *b = &w->b;
-#define SD_HASH_BYTES(ptr, len)                                                                                        \
-    do {                                                                                                               \
-        const unsigned char *q_ = (const unsigned char *)(ptr);                                                        \
-        for (size_t k_ = 0; k_ < (len); k_++) {                                                                        \
-            h ^= q_[k_];                                                                                               \
-            h *= 1099511628211ULL;                                                                                     \
-        }                                                                                                              \
-    } while (0)
     for (int g = 0; g < w->next_gid; g++) {
         int i = w->gid_map[g];
         if (i < 0) continue;
-        SD_HASH_BYTES(&b->pos[i], sizeof(sd_vec3));
-        SD_HASH_BYTES(&b->vel[i], sizeof(sd_vec3));
-        SD_HASH_BYTES(&b->omega[i], sizeof(sd_vec3));
-        SD_HASH_BYTES(&b->quat[i], sizeof(sd_quat));
-        SD_HASH_BYTES(&b->force[i], sizeof(sd_vec3));
+        h = sd_hash_bytes(h, &b->pos[i], sizeof(sd_vec3));
+        h = sd_hash_bytes(h, &b->vel[i], sizeof(sd_vec3));
+        h = sd_hash_bytes(h, &b->omega[i], sizeof(sd_vec3));
+        h = sd_hash_bytes(h, &b->quat[i], sizeof(sd_quat));
+        h = sd_hash_bytes(h, &b->force[i], sizeof(sd_vec3));
     }
     for (int k = 0; k < w->bb.nh; k++)
-        if (w->bb.hist[k].feature >= 0) SD_HASH_BYTES(&w->bb.hist[k].shear, sizeof(sd_vec3));
+        if (w->bb.hist[k].feature >= 0) h = sd_hash_bytes(h, &w->bb.hist[k].shear, sizeof(sd_vec3));
     for (int k = 0; k < w->bt.nh; k++)
-        if (w->bt.hist[k].feature >= 0) SD_HASH_BYTES(&w->bt.hist[k].shear, sizeof(sd_vec3));
-#undef SD_HASH_BYTES
+        if (w->bt.hist[k].feature >= 0) h = sd_hash_bytes(h, &w->bt.hist[k].shear, sizeof(sd_vec3));
     return h;
 }
 

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "core/hash.h"
 #include "core/rng.h"
 #include "io_checkpoint.h"
 #include "world_internal.h"
@@ -224,11 +225,7 @@ static void write_all(const char *path, const void *p, size_t n)
 /* the payload's checksum (FNV-1a over the bytes from 64 on, at offset 40) remade after an edit */
 static void remake_checksum(unsigned char *data, size_t n)
 {
-    uint64_t h = 1469598103934665603ULL;
-    for (size_t q = 64; q < n; q++) {
-        h ^= data[q];
-        h *= 1099511628211ULL;
-    }
+    uint64_t h = sd_hash(data + 64, n - 64);
     memcpy(data + 40, &h, 8);
 }
 
