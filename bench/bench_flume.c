@@ -182,10 +182,10 @@ static double phase(sd_world *w, const char *name, long steps, int n)
         med = (double)n * BLOCK / (nblk % 2 ? blk[nblk / 2] : 0.5 * (blk[nblk / 2 - 1] + blk[nblk / 2]));
         free(blk);
     }
-    printf("PHASE %-7s steps %7ld wall %8.3f s  particle-steps/s %.4e  contacts %6ld  | neighbor %.3f contact %.3f "
-           "gather %.3f integrate %.3f rebuilds %ld candidates %d+%d near %d | median of %d-step blocks %.4e\n",
-           name, steps, wall, ps, sd_world_contact_count(w), t1.neighbor - t0.neighbor, t1.contact - t0.contact,
-           t1.gather - t0.gather, t1.integrate - t0.integrate, t1.rebuilds - t0.rebuilds, w->bb.n, w->bt.n,
+    printf("PHASE %-7s steps %7ld wall %8.3f s  particle-steps/s %.4e  contacts %6ld  | rebuild %.3f contacts %.3f "
+           "moves %.3f rebuilds %ld candidates %d+%d near %d | median of %d-step blocks %.4e\n",
+           name, steps, wall, ps, sd_world_contact_count(w), t1.rebuild - t0.rebuild, t1.contacts - t0.contacts,
+           t1.moves - t0.moves, t1.rebuilds - t0.rebuilds, w->bb.n, w->bt.n,
            sd_contact_near_count(w), BLOCK, med);
     fflush(stdout);
     return ps;

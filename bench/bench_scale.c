@@ -238,7 +238,7 @@ static double time_world(sd_world *w, int n, const char *what, long warm, long s
     printf("N %8d  %ssteps %6ld  wall %8.3f s  particle-steps/s %.4e  ns/particle-step %6.1f  contacts/sphere %.2f  "
            "ns/contact-step %5.1f  rebuilds %ld neighbor %.3f s  front-prefetch %s%s\n",
            n, what, steps, wall, ps, 1e9 / ps, 2.0 * nc / n, 1e9 * wall / ((double)(nc > 0 ? nc : 1) * steps),
-           k1.rebuilds - k0.rebuilds, k1.neighbor - k0.neighbor, sd_front_prefetch_on(w) ? "on" : "off", trial);
+           k1.rebuilds - k0.rebuilds, k1.rebuild - k0.rebuild, sd_front_prefetch_on(w) ? "on" : "off", trial);
     if (stages && k1.rebuilds > k0.rebuilds) {
         printf("  rebuild stages, ms a rebuild:");
         for (int k = 0; k < SD_RB_STAGES; k++)

@@ -140,6 +140,10 @@ int sd_world_add_triangle(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, int grou
 sd_status sd_world_set_group_active(sd_world *w, int group, int active);
 sd_status sd_world_remove_body(sd_world *w, int gid);
 
+/* The largest stable time step for normal stiffness k_n (N/m) and the smallest moving mass
+ * m_min (kg): 8 steps per half period of the stiffest contact (docs/model.md). INFINITY when
+ * there is no moving mass. */
+double sd_stable_dt_max(double k_n, double m_min);
 /* Validate settings against the elements present (time-step stability); called by step. */
 sd_status sd_world_check(const sd_world *w);
 sd_status sd_world_step(sd_world *w);
@@ -181,9 +185,13 @@ void sd_world_set_rebuild_every_step(sd_world *w, int on);
 /* Hash of the full dynamic state (positions, velocities, attitudes, history). */
 uint64_t sd_world_state_hash(const sd_world *w);
 
-/* Phase timers (seconds, cumulative). */
+/* Wall time of the step's stages (seconds, summed over the steps). */
 typedef struct {
-    double integrate, neighbor, contact, gather, other;
+    double rebuild;  /* the candidate pairs and the grid, when a step needs them anew */
+    double contacts; /* the contact pass: forces, and with several threads the moves of the
+                      * bodies each thread owns, which it makes in the same pass */
+    double moves;    /* the moves made apart from the pass (one thread) */
+    double checks;   /* the health check of the state, every 1024 steps */
     long rebuilds;
 } sd_world_timers;
 sd_world_timers sd_world_get_timers(const sd_world *w);

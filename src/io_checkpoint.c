@@ -21,7 +21,7 @@
  * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
-_Static_assert(sizeof(struct sd_world) == 1768, "struct sd_world changed: update io_checkpoint.c");
+_Static_assert(sizeof(struct sd_world) == 1760, "struct sd_world changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_world_def) == 120, "sd_world_def changed: update io_checkpoint.c (its tuning is not saved)");
 /* sd_walls: its edge ids, seams and edge lines are derived (sd_walls_weld, again on load) */
 _Static_assert(sizeof(sd_walls) == 96, "sd_walls changed: update io_checkpoint.c");
@@ -29,7 +29,7 @@ _Static_assert(sizeof(sd_pairlist) == 56, "sd_pairlist changed: update io_checkp
 _Static_assert(sizeof(sd_pair) == 24, "sd_pair changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_hist) == 32, "sd_hist changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_grid) == 72, "sd_grid changed: update io_checkpoint.c");
-_Static_assert(sizeof(sd_world_timers) == 48, "sd_world_timers changed: update io_checkpoint.c");
+_Static_assert(sizeof(sd_world_timers) == 40, "sd_world_timers changed: update io_checkpoint.c");
 #endif
 _Static_assert(sizeof(double) == 8, "double must be IEEE-754 binary64");
 _Static_assert(sizeof(sd_vec3) == 3 * sizeof(double), "sd_vec3 must be three packed doubles");
@@ -241,11 +241,13 @@ static void sec_time(sd_bin_writer *wr, const sd_world *w, const void *ctx)
     sd_bin_put_i32(wr, w->need_rebuild);
     sd_bin_put_i32(wr, w->rebuild_every_step);
     sd_bin_put_i64(wr, w->contacts);
-    sd_bin_put_f64(wr, w->timers.integrate);
-    sd_bin_put_f64(wr, w->timers.neighbor);
-    sd_bin_put_f64(wr, w->timers.contact);
-    sd_bin_put_f64(wr, w->timers.gather);
-    sd_bin_put_f64(wr, w->timers.other);
+    /* (the format's five timers: moves, rebuild, contacts, a stage since folded into the
+     * contact pass, always 0, and checks) */
+    sd_bin_put_f64(wr, w->timers.moves);
+    sd_bin_put_f64(wr, w->timers.rebuild);
+    sd_bin_put_f64(wr, w->timers.contacts);
+    sd_bin_put_f64(wr, 0.0);
+    sd_bin_put_f64(wr, w->timers.checks);
     sd_bin_put_i64(wr, w->timers.rebuilds);
 }
 
@@ -794,11 +796,11 @@ static sd_status parse(const rd_ctx *r, sd_bin_reader *pl, sd_world **out, void 
     w->need_rebuild = sd_bin_get_i32(&c);
     w->rebuild_every_step = sd_bin_get_i32(&c);
     w->contacts = (long)sd_bin_get_i64(&c);
-    w->timers.integrate = sd_bin_get_f64(&c);
-    w->timers.neighbor = sd_bin_get_f64(&c);
-    w->timers.contact = sd_bin_get_f64(&c);
-    w->timers.gather = sd_bin_get_f64(&c);
-    w->timers.other = sd_bin_get_f64(&c);
+    w->timers.moves = sd_bin_get_f64(&c);
+    w->timers.rebuild = sd_bin_get_f64(&c);
+    w->timers.contacts = sd_bin_get_f64(&c);
+    w->timers.moves += sd_bin_get_f64(&c); /* (older files: the gather, 0 now) */
+    w->timers.checks = sd_bin_get_f64(&c);
     w->timers.rebuilds = (long)sd_bin_get_i64(&c);
     if ((st = close_section(r, &c, "TIME"))) goto out;
     if (!isfinite(w->time) || !isfinite(w->last_rebuild_time) || w->step < 0) {

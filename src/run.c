@@ -733,9 +733,9 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
     }
     sd_world_timers tm = sd_world_get_timers(c->w);
     fprintf(f,
-            "  \"timers_s\": {\"neighbor\": %.3f, \"contact\": %.3f, \"gather\": %.3f, \"integrate\": %.3f, "
+            "  \"timers_s\": {\"rebuild\": %.3f, \"contacts\": %.3f, \"moves\": %.3f, \"checks\": %.3f, "
             "\"rebuilds\": %ld},\n",
-            tm.neighbor, tm.contact, tm.gather, tm.integrate, tm.rebuilds);
+            tm.rebuild, tm.contacts, tm.moves, tm.checks, tm.rebuilds);
     fprintf(f,
             "  \"elements\": {\"moving_spheres\": %d, \"logs\": %d, \"roughness_spheres\": %d, \"pipes\": %d, "
             "\"triangles\": %d, \"passed\": %d, \"remaining\": %d},\n",

@@ -556,7 +556,7 @@ static void validate(ectx *e, sd_scenario *s, const sd_ynode *root)
             mmin = fmin(mmin, s->log_density * M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length);
     }
     if (s->world.check_dt && isfinite(mmin)) {
-        double dt_max = M_PI / sqrt(s->world.contact.k_n / (0.5 * mmin)) / 8.0;
+        double dt_max = sd_stable_dt_max(s->world.contact.k_n, mmin);
         if (s->world.dt > dt_max) {
             n = sd_yaml_get(sd_yaml_get(root, "solver"), "dt");
             char a[64], b[200];

@@ -259,30 +259,23 @@ sd_status sd_world_remove_body(sd_world *w, int gid)
     return SD_OK;
 }
 
-/* Stability: the stiffest contact (k_n against the smallest effective mass, m/2 for two equal
- * smallest bodies) must be resolved by at least 8 steps per half period π/ω0; leapfrog itself
- * goes unstable at Δt = 2/ω0 ≈ 0.64 half periods. */
+/* Stability (model.md, the time step): the stiffest contact, k_n against the smallest effective
+ * mass (m/2 for two equal smallest bodies), resolved by at least 8 steps per half period π/ω0;
+ * leapfrog itself goes unstable at Δt = 2/ω0 ≈ 0.64 half periods. */
+double sd_stable_dt_max(double k_n, double m_min)
+{
+    if (!(m_min > 0.0) || !isfinite(m_min) || !(k_n > 0.0)) return INFINITY;
+    const double omega0 = sqrt(k_n / (0.5 * m_min));
+    return M_PI / omega0 / 8.0;
+}
+
 sd_status sd_world_check(const sd_world *w)
 {
     if (!w->def.check_dt) return SD_OK;
     double mmin = INFINITY;
     for (int i = 0; i < w->b.n; i++)
         if (!w->b.fixed[i] && w->b.mass[i] < mmin) mmin = w->b.mass[i];
-    if (!isfinite(mmin)) return SD_OK;
-    double omega0 = sqrt(w->def.contact.k_n / (0.5 * mmin));
-    double t_half = M_PI / omega0;
-    if (w->def.dt > t_half / 8.0) return SD_ERR_UNSTABLE;
-    return SD_OK;
-}
-
-double sd_world_max_stable_dt(const sd_world *w);
-double sd_world_max_stable_dt(const sd_world *w)
-{
-    double mmin = INFINITY;
-    for (int i = 0; i < w->b.n; i++)
-        if (!w->b.fixed[i] && w->b.mass[i] < mmin) mmin = w->b.mass[i];
-    if (!isfinite(mmin)) return INFINITY;
-    return M_PI / sqrt(w->def.contact.k_n / (0.5 * mmin)) / 8.0;
+    return w->def.dt > sd_stable_dt_max(w->def.contact.k_n, mmin) ? SD_ERR_UNSTABLE : SD_OK;
 }
 
 static sd_status health(const sd_world *w)
@@ -411,18 +404,17 @@ sd_status sd_world_step(sd_world *w)
     if ((st = sd_contact_compute(w, &integrated))) return st;
     double t2 = sd_now();
     sd_pf_trial_after(w, t2 - t1);
-    double t3 = sd_now(); /* the wall loads are summed when asked for (sd_contact_gather) */
+    /* (the wall loads are summed when asked for, sd_contact_gather) */
     if (!integrated) sd_integrate(w);
-    double t4 = sd_now();
+    double t3 = sd_now();
     w->step++;
     w->time = (double)w->step * w->def.dt;
-    w->timers.neighbor += t1 - t0;
-    w->timers.contact += t2 - t1;
-    w->timers.gather += t3 - t2;
-    w->timers.integrate += t4 - t3;
+    w->timers.rebuild += t1 - t0;
+    w->timers.contacts += t2 - t1;
+    w->timers.moves += t3 - t2;
     if ((w->step & 1023) == 0) {
         st = health(w);
-        w->timers.other += sd_now() - t4;
+        w->timers.checks += sd_now() - t3;
         if (st) return st;
     }
     return SD_OK;

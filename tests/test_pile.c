@@ -182,8 +182,8 @@ int main(void)
     /* the side walls are pushed outwards */
     CHECK(fw[WALL_X0].x < 0 && fw[WALL_X1].x > 0 && fw[WALL_Y0].y < 0 && fw[WALL_Y1].y > 0);
     sd_world_timers tm = sd_world_get_timers(w);
-    printf("timers: neighbor %.2f s (%ld rebuilds), contact %.2f s, gather %.2f s, integrate %.2f s\n", tm.neighbor,
-           tm.rebuilds, tm.contact, tm.gather, tm.integrate);
+    printf("timers: rebuild %.2f s (%ld rebuilds), contacts %.2f s, moves %.2f s, checks %.2f s\n", tm.rebuild,
+           tm.rebuilds, tm.contacts, tm.moves, tm.checks);
     free(pos);
     free(rad);
     sd_world_destroy(w);
