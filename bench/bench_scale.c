@@ -174,9 +174,9 @@ static void ab_restore(sd_world *w, int was)
  * A B B A B A A B; prints the median and quartiles of each group's B/A time. The switch is left
  * as it was. Why eight: the tiled bed rings (at 1e4 the step's cost swings a few per cent over a
  * period of ~400 steps), and A B B A alone, four blocks of 100 steps, put B on the dear half of
- * each swing: a switch that changes nothing read 1.045-1.050 at 1e4 (docs/performance-log.md
- * §P40). The second half turns the first around, so a swing of four blocks cancels, as does a
- * steady drift. */
+ * each swing: a switch that changes nothing read 1.045-1.050 at 1e4 (performance pass P40, in
+ * the git history). The second half turns the first around, so a swing of four blocks cancels,
+ * as does a steady drift. */
 static void ab_world(sd_world *w, int n)
 {
     enum { BLOCK = 100 };
@@ -283,7 +283,7 @@ static double run_case(int n, long steps)
     open_box(w, nt * tile, ymax, 0.5);
     /* warm-up past the first 1 ms rebuild, as --same: candidate lists, history, caches, and
      * the buffers that grow once (their pages first touched; at 1e6 the first rebuild took
-     * ~330 ms more than the next ones, docs/performance-log.md §P41) */
+     * ~330 ms more than the next ones, performance pass P41, in the git history) */
     return time_world(w, n, "", 110, steps);
 }
 

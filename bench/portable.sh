@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The speed checks on another machine that has no compiler or libyaml (a bare host, such as
-# the 16-core Intel Xeon of docs/performance-log.md §P21):
+# the 16-core Intel Xeon of performance pass P21, in the git history):
 #   bash bench/portable.sh build DIR   here: static sabodem, bench_scale, bench_flume and the
 #                                      C test programs (DIR/tests) into DIR, with a settled bed
 #                                      for bench_scale (bench/settle.sh, as bench/run.sh makes

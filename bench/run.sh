@@ -29,7 +29,7 @@ ref=../shared/reference/lammps
 bash bench/settle.sh "$work/settled.data"
 
 # one thread / one rank: both codes pinned to the same CPU (this VM's two vCPUs differ in speed
-# for minutes at a time, docs/performance-log.md §P4, and a ratio across them measures that too)
+# for minutes at a time, performance pass P4, in the git history, and a ratio across them measures that too)
 pin="taskset -c 0"
 command -v taskset >/dev/null || pin=""
 bind="env OMP_PROC_BIND=true OMP_PLACES=cores"

@@ -4,7 +4,7 @@
 # from an instrumented build run on a short version of the paper's flume (a dense packing with
 # logs, the flow and the jam at a nearer dam, on two threads; a short packing on one thread),
 # and is made again only when a source file changed (its id is a hash of the sources).
-# docs/performance-log.md (§P32, the thirty-second pass) has what it gains; the simulation is the same to the
+# the thirty-second performance pass (P32, in the git history) measured what it gains; the simulation is the same to the
 # last bit (same state hash), only the compiled code's layout and inlining change.
 #   usage: [PGO=0] bash scripts/pgo.sh BUILD_DIR   -> prints the CMake options that build with it
 # (PGO=0: the options of the plain build, and nothing made)

@@ -193,7 +193,7 @@ sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n, int thread
     /* Only the blocks the permutation moves: a rebuild's sort moves a few bodies a few places
      * each (neighbor.c), so most entries stay, and copying every field whole through an
      * n-long scratch cost 100-280 ms a rebuild at 1e6 bodies, much of it the scratch's fresh
-     * pages (docs/performance-log.md §P38). */
+     * pages (performance pass P38, in the git history). */
     int nblk = 0, widest = 0;
     long moved = 0;
     for (int i = 0; i < n;) {

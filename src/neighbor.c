@@ -378,7 +378,7 @@ static inline const sd_hist *any_hist(const sd_pairlist *const *lists, int k, co
  * first body is at most a slab of cells from its lower one, so the counts and the entries are
  * written within a window that the caches hold (grouped by gid, which the store does not
  * follow, the writes went anywhere: the collect took 109-186 ms a rebuild at 1e6 spheres,
- * 50-55 since, docs/performance-log.md §P41). restore_history finds a body's entries through the rebuild's
+ * 50-55 since, performance pass P41, in the git history). restore_history finds a body's entries through the rebuild's
  * sort, or, when the store changed since the collect, through the gid in the keys. */
 sd_status sd_neighbor_collect_history(sd_world *w)
 {
@@ -1010,7 +1010,7 @@ static int bb_scan(const sd_world *w, int i, double hm, const moving_index *mi, 
     const int fixed_i = b->fixed[i], use_mi = fixed_i && mi->start;
 #ifdef SD_SCAN512
     /* a moving body's entries 8 at a time where the CPU has AVX-512 (an AVX2 form, 4 at a
-     * time, was measured and dropped: docs/performance-log.md §P11) */
+     * time, was measured and dropped: performance pass P11, in the git history) */
     const int vec = !fixed_i && w->simd >= SD_SIMD_AVX512;
     const double bri = b->bound_r[i];
     const sd_vec3 pi = b->pos[i];

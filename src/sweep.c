@@ -21,7 +21,7 @@
 
 #include "run.h"
 #include "scenario.h"
-#include "world_internal.h"
+#include "core/status.h"
 #include "yaml_tree.h"
 
 #define MAX_VARY 8

@@ -5,6 +5,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 
+#include "core/status.h"
 #include "core/vmath.h"
 #include "geom/geom.h"
 #include "sabodem.h"
@@ -320,7 +321,7 @@ struct sd_world {
     float gq_slack; /* what the prefilter adds to a reach: its rounding, bounded (grid_coords) */
     /* the candidate scan's chunk buffers, kept from one rebuild to the next with what they
      * grew to (neighbor.c; scratch, not saved): made afresh, they took ~300 reallocs a
-     * rebuild (docs/performance-log.md §P22) */
+     * rebuild (performance pass P22, in the git history) */
     void *scan_bufs;
     int scan_bufs_n;
     int32_t (*trange)[6]; /* per-triangle cell range in the triangle grid */
@@ -643,8 +644,5 @@ static inline int sd_grow(void **p, int *cap, int need, size_t elem)
     return 0;
 }
 
-double sd_now(void);
-/* mkdir -p; 0 on success. */
-int sd_mkdir_p(const char *path);
 
 #endif

@@ -1,10 +1,11 @@
+/* The status table's messages, the wall clock, mkdir -p (core/status.h). */
 #include <errno.h>
 #include <stdio.h>
 #include <sys/stat.h>
 #include <sys/time.h>
 #include <time.h>
 
-#include "../world_internal.h"
+#include "core/status.h"
 
 const char *sd_status_message(sd_status s)
 {
