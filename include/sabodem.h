@@ -166,6 +166,43 @@ double sd_world_kinetic_energy(const sd_world *w);
 double sd_world_spring_energy(const sd_world *w);
 /* Gravitational potential energy of the moving bodies (-m g.x), J. */
 double sd_world_potential_energy(const sd_world *w);
+/* The body store's arrays, read-only, in store order (0 .. n-1; the order changes when the
+ * candidates are rebuilt): for code that visits every body each step (a water model, outputs,
+ * statistics) without a call per body. Valid until the next step, addition or removal. */
+typedef struct {
+    int n;
+    const int32_t *gid, *tag;
+    const uint8_t *shape, *fixed;  /* SD_SHAPE_*; 1 for a fixed body */
+    const sd_vec3 *pos, *vel;      /* centre, m; velocity, m/s */
+    const sd_vec3 *omega, *axis;   /* angular velocity, rad/s; a cylinder's unit axis */
+    const sd_vec3 *force, *torque; /* contact force and torque of the last step, N, N m */
+    const double *radius;          /* m */
+    const double *half_length;     /* a cylinder's half length, m (0 for a sphere) */
+    const double *bound_radius;    /* the bounding sphere's radius, m */
+    const double *mass;            /* kg */
+} sd_body_view;
+sd_body_view sd_world_bodies(const sd_world *w);
+/* The farthest downstream point (largest x of a surface) of the moving bodies, m; -inf when
+ * none moves. */
+double sd_world_front_x(const sd_world *w);
+/* Triangle i's corners, group and whether its group is active. */
+sd_status sd_world_triangle(const sd_world *w, int i, sd_vec3 corner[3], int *group, int *active);
+/* The world's definition as created (its threads and tuning as set since). */
+const sd_world_def *sd_world_definition(const sd_world *w);
+/* The prefetch's state for reports: SD_PREFETCH_ON or _OFF as it runs now; *trial: the last
+ * trial's verdict in auto mode (-1 none yet, 0 off, 1 on) and *ratio its time on over off. */
+int sd_world_prefetch(const sd_world *w, int *trial, double *ratio);
+
+/* External forces computed inside the step (a water model): fn fills out[k - k0] with the
+ * force on body index[k] (a store index, sd_world_bodies) for k0 <= k < k1, a block of at most
+ * SD_EXTERNAL_BLOCK moving bodies, called by the thread that moves them just before it moves
+ * them (their data are then in its cache), so fn must be safe to call from several threads at
+ * once. While set, it replaces the forces of sd_world_set_external_force; NULL removes it. The
+ * hook is not saved in checkpoints. */
+#define SD_EXTERNAL_BLOCK 128
+typedef void (*sd_external_force_fn)(void *ctx, const sd_world *w, const int32_t *index, int k0, int k1,
+                                     sd_vec3 *out);
+void sd_world_set_external_force_fn(sd_world *w, sd_external_force_fn fn, void *ctx);
 /* Set an external force (fluid) on a body for the next steps, N. */
 sd_status sd_world_set_external_force(sd_world *w, int gid, sd_vec3 f);
 /* The threads this world's steps use from now on (>= 1); the same bits for any count. */

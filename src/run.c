@@ -16,7 +16,8 @@
 #include "fluid.h"
 #include "io_checkpoint.h"
 #include "io_vtk.h"
-#include "world_internal.h"
+#include "core/status.h"
+#include "core/vmath.h"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -78,13 +79,13 @@ typedef struct {
     const char *plot_png[RUN_PLOTS];
 } run_ctx;
 
-static double body_volume(const sd_bodies *b, int i)
+static double body_volume(const sd_body_view *b, int i)
 {
     double r = b->radius[i];
-    return b->shape[i] == SD_SHAPE_SPHERE ? 4.0 / 3.0 * M_PI * r * r * r : M_PI * r * r * 2.0 * b->hl[i];
+    return b->shape[i] == SD_SHAPE_SPHERE ? 4.0 / 3.0 * M_PI * r * r * r : M_PI * r * r * 2.0 * b->half_length[i];
 }
 
-static int is_debris(const sd_bodies *b, int i) { return !b->fixed[i]; }
+static int is_debris(const sd_body_view *b, int i) { return !b->fixed[i]; }
 
 /* Volume still upstream of the dam: centre upstream of the pipes' axis plane. */
 static double x_trap(const run_ctx *c) { return c->s->x_dam + 0.5 * c->s->pipe_diam; }
@@ -98,7 +99,7 @@ static double x_trap(const run_ctx *c) { return c->s->x_dam + 0.5 * c->s->pipe_d
 
 int sd_run_crossing(const sd_world *w, double xt)
 {
-    const sd_bodies *b = &w->b;
+    const sd_body_view bv = sd_world_bodies(w), *b = &bv;
     for (int i = 0; i < b->n; i++)
         if (!b->fixed[i] && b->pos[i].x >= xt && b->pos[i].x < xt + 0.02 && b->vel[i].x > SD_REST_SPEED) return 1;
     return 0;
@@ -106,7 +107,7 @@ int sd_run_crossing(const sd_world *w, double xt)
 
 static void volumes_upstream(const run_ctx *c, double *cls, double *logs, int *n_up)
 {
-    const sd_bodies *b = &c->w->b;
+    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
     for (int k = 0; k < SD_MAX_CLASSES; k++)
         cls[k] = 0.0;
     *logs = 0.0;
@@ -157,12 +158,12 @@ static void fluid_flush(fluid_batch *q, const sd_fluid_params *fp, double h_d, s
  * (gathers by index, the forces scattered into out[k - k0]): sd_fluid_sphere_batch's
  * operations in its order, so the same bits, without the copy of each body into the batch and
  * out. The logs among them are left to the caller. */
-__attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const struct fluid_ctx *fc, sd_world *w,
-                                                                         const int32_t *mov, int k0, int k1,
-                                                                         int32_t *logs, int *nlogs, sd_vec3 *out)
+__attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const struct fluid_ctx *fc,
+                                                                         const sd_body_view *b, const int32_t *mov,
+                                                                         int k0, int k1, int32_t *logs, int *nlogs,
+                                                                         sd_vec3 *out)
 {
     const sd_fluid_params *p = &fc->fp;
-    sd_bodies *b = &w->b;
     const double *pos = &b->pos[0].x, *vel = &b->vel[0].x, *rad = b->radius;
     double *ext = &out[0].x;
     const uint8_t *shape = b->shape;
@@ -238,11 +239,11 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
  * stopped; the rest go through the batch): fluid_spheres512's operations, so the same bits, with
  * each body's centre and velocity read as a row (SD_XYZ_LOAD) and its force written into
  * out[k - k0] as one. The logs among them are left to the caller. */
-__attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_ctx *fc, sd_world *w, const int32_t *mov,
-                                                            int k0, int k1, int32_t *logs, int *nlogs, sd_vec3 *out)
+__attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_ctx *fc, const sd_body_view *b,
+                                                            const int32_t *mov, int k0, int k1, int32_t *logs,
+                                                            int *nlogs, sd_vec3 *out)
 {
     const sd_fluid_params *p = &fc->fp;
-    sd_bodies *b = &w->b;
     const double *pos = &b->pos[0].x, *vel = &b->vel[0].x, *rad = b->radius;
     const uint8_t *shape = b->shape;
     sd_vec3 *const ext = out; /* (ext[k - k0]: body mov[k]'s) */
@@ -355,7 +356,7 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const struct fluid_c
 #endif
 
 /* The fluid force on log i, one by one (sd_fluid_force_total). */
-static sd_vec3 fluid_log(const struct fluid_ctx *fc, const sd_bodies *b, int i)
+static sd_vec3 fluid_log(const struct fluid_ctx *fc, const sd_body_view *b, int i)
 {
     sd_fluid_element e;
     e.shape = b->shape[i];
@@ -363,22 +364,22 @@ static sd_vec3 fluid_log(const struct fluid_ctx *fc, const sd_bodies *b, int i)
     e.vel = b->vel[i];
     e.axis = b->axis[i];
     e.radius = b->radius[i];
-    e.length = 2.0 * b->hl[i];
+    e.length = 2.0 * b->half_length[i];
     /* the capture profile applies upstream of the dam; passed elements keep the flow one */
     const sd_fluid_phase ph = (fc->capture && b->pos[i].x < fc->xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
     return sd_fluid_force_total(&fc->fp, ph, fc->h_d, &e);
 }
 
-#define SD_FLUID_LOGS 128 /* the bodies of a block whose logs the lanes list (SD_EXT_BLOCK) */
+#define SD_FLUID_LOGS SD_EXTERNAL_BLOCK /* the bodies of a block whose logs the lanes list */
 
 /* The fluid forces on the moving bodies mov[k0 .. k1), into out[k - k0]: called by the world's
- * step for each block of up to SD_EXT_BLOCK of a thread's bodies just before it moves them
- * (sd_world.ext_fn), so their data are still in that core's L1 when they move. Spheres in
+ * step for each block of up to SD_EXTERNAL_BLOCK of a thread's bodies just before it moves them
+ * (sd_world_set_external_force_fn), so their data are still in that core's L1 when they move. Spheres in
  * batches (sd_fluid_sphere_batch: the same bits, vectorized), logs one by one. */
-static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int k1, sd_vec3 *out)
+static void fluid_range(void *ctx, const sd_world *w, const int32_t *mov, int k0, int k1, sd_vec3 *out)
 {
     const struct fluid_ctx *fc = ctx;
-    const sd_bodies *b = &w->b;
+    const sd_body_view bv = sd_world_bodies(w), *b = &bv;
     const sd_fluid_params *fp = &fc->fp;
     const double xd = fc->xd, h_d = fc->h_d;
     const int capture = fc->capture;
@@ -393,10 +394,10 @@ static void fluid_range(void *ctx, sd_world *w, const int32_t *mov, int k0, int 
     int32_t *lp = k1 - k0 <= SD_FLUID_LOGS ? logs : NULL;
 #ifdef SD_FLUID512
     if (sd_world_simd_level(w) == SD_SIMD_AVX512) {
-        fluid_spheres512(fc, w, mov, k0, k1, lp, &nlogs, out);
+        fluid_spheres512(fc, b, mov, k0, k1, lp, &nlogs, out);
         kv = k1;
     } else if (sd_world_simd_level(w) == SD_SIMD_AVX2)
-        kv = fluid_spheres256(fc, w, mov, k0, k1, lp, &nlogs, out);
+        kv = fluid_spheres256(fc, b, mov, k0, k1, lp, &nlogs, out);
 #else
     lp = NULL;
 #endif
@@ -433,7 +434,7 @@ static void set_fluid(run_ctx *c)
 {
     const sd_scenario *s = c->s;
     if (!s->water_on || c->phase == PH_PACK || c->phase == PH_RUN) {
-        c->w->ext_fn = NULL;
+        sd_world_set_external_force_fn(c->w, NULL, NULL);
         return;
     }
     sd_fluid_params fp = sd_fluid_params_default(s->slope_deg * M_PI / 180.0);
@@ -441,18 +442,17 @@ static void set_fluid(run_ctx *c)
     fp.h = s->water_h;
     fp.rho = s->water_rho;
     fp.C_D = s->water_cd;
-    fp.gravity = c->w->def.gravity;
+    fp.gravity = sd_world_definition(c->w)->gravity;
     c->fluid.fp = fp;
     c->fluid.xd = s->x_dam;
     c->fluid.capture = c->phase == PH_CAPTURE;
     c->fluid.h_d = c->h_d;
-    c->w->ext_fn = fluid_range;
-    c->w->ext_ctx = &c->fluid;
+    sd_world_set_external_force_fn(c->w, fluid_range, &c->fluid);
 }
 
 double sd_run_capture_depth(const sd_scenario *s, const sd_world *w)
 {
-    const sd_bodies *b = &w->b;
+    const sd_body_view bv = sd_world_bodies(w), *b = &bv;
     double h = s->water_h, xd = s->x_dam, lo = xd - s->water_probe;
     for (int i = 0; i < b->n; i++) {
         if (b->fixed[i] || b->pos[i].x < lo || b->pos[i].x > xd || b->pos[i].z <= h) continue;
@@ -467,7 +467,8 @@ static void update_h_d(run_ctx *c) { c->h_d = sd_run_capture_depth(c->s, c->w); 
 
 static void remove_passed(run_ctx *c)
 {
-    sd_bodies *b = &c->w->b;
+    sd_body_view bv = sd_world_bodies(c->w);
+    const sd_body_view *b = &bv;
     for (int i = b->n - 1; i >= 0; i--) {
         if (b->fixed[i] || b->pos[i].x <= c->s->x_end) continue;
         if (b->shape[i] == SD_SHAPE_CYLINDER)
@@ -476,6 +477,7 @@ static void remove_passed(run_ctx *c)
             c->vol_passed_class[b->tag[i]] += body_volume(b, i);
         c->n_passed++;
         sd_world_remove_body(c->w, b->gid[i]);
+        bv = sd_world_bodies(c->w); /* (the last body took i's place: those above i are done) */
     }
 }
 
@@ -487,7 +489,7 @@ static double front_x(const run_ctx *c) { return sd_world_front_x(c->w); }
 
 static double upstream_ke(const run_ctx *c)
 {
-    const sd_bodies *b = &c->w->b;
+    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
     double e = 0.0, xt = x_trap(c);
     for (int i = 0; i < b->n; i++)
         if (!b->fixed[i] && b->pos[i].x < xt) e += 0.5 * b->mass[i] * v3_norm2(b->vel[i]);
@@ -496,7 +498,7 @@ static double upstream_ke(const run_ctx *c)
 
 static double max_speed(const run_ctx *c)
 {
-    const sd_bodies *b = &c->w->b;
+    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
     double v = 0.0;
     for (int i = 0; i < b->n; i++)
         if (!b->fixed[i]) v = fmax(v, v3_norm2(b->vel[i]));
@@ -517,7 +519,7 @@ static int cmp_xv(const void *pa, const void *pb)
  * volume that has left the reservoir. */
 static void measure_flow_length(run_ctx *c)
 {
-    const sd_bodies *b = &c->w->b;
+    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
     xv *a = malloc((size_t)(b->n + 1) * sizeof(*a));
     if (!a) return;
     int m = 0;
@@ -541,7 +543,7 @@ static void measure_flow_length(run_ctx *c)
     c->flow_q95 = q95;
     c->flow_len = q95 - q05;
     c->flow_front = front_x(c);
-    c->flow_len_time = c->w->time;
+    c->flow_len_time = sd_world_time(c->w);
     c->flow_len_done = 1;
 }
 
@@ -555,9 +557,9 @@ static void write_series_row(run_ctx *c)
     for (int k = 0; k < SD_MAX_CLASSES; k++)
         up += cls[k];
     double pv = c->s->flume_on ? trap_ratio(c, NULL, NULL, &n_up) : 0.0;
-    fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d\n", c->w->time, phase_names[c->phase],
-            c->w->b.n ? front_x(c) : 0.0, up, sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w),
-            c->dam_force_now, pv, c->h_d, c->w->b.n, c->n_passed);
+    fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d\n", sd_world_time(c->w), phase_names[c->phase],
+            sd_world_body_count(c->w) ? front_x(c) : 0.0, up, sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w),
+            c->dam_force_now, pv, c->h_d, sd_world_body_count(c->w), c->n_passed);
 }
 
 static void write_traj(run_ctx *c)
@@ -568,7 +570,7 @@ static void write_traj(run_ctx *c)
         if (sd_world_body(c->w, c->s->traj_ids[k], &st)) continue;
         fprintf(c->traj,
                 "%.9f,%d,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e,%.9f,%.9f,%.9f,%.9e,%.9e,%.9e\n",
-                c->w->time, st.gid, st.pos.x, st.pos.y, st.pos.z, st.vel.x, st.vel.y, st.vel.z, st.omega.x, st.omega.y,
+                sd_world_time(c->w), st.gid, st.pos.x, st.pos.y, st.pos.z, st.vel.x, st.vel.y, st.vel.z, st.omega.x, st.omega.y,
                 st.omega.z, st.axis.x, st.axis.y, st.axis.z, st.force.x, st.force.y, st.force.z);
     }
 }
@@ -576,7 +578,7 @@ static void write_traj(run_ctx *c)
 static int snapshot(run_ctx *c, const char *name)
 {
     if (!c->s->vtk_on) return 0;
-    const sd_bodies *b = &c->w->b;
+    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
     size_t cap = (size_t)(b->n + 1);
     sd_vec3 *pos = malloc(cap * sizeof(sd_vec3)), *vel = malloc(cap * sizeof(sd_vec3)),
             *ax = malloc(cap * sizeof(sd_vec3));
@@ -595,7 +597,7 @@ static int snapshot(run_ctx *c, const char *name)
                 vel[m] = b->vel[i];
                 ax[m] = b->axis[i];
                 rad[m] = b->radius[i];
-                len[m] = 2.0 * b->hl[i];
+                len[m] = 2.0 * b->half_length[i];
                 id[m] = b->gid[i];
                 tag[m] = b->tag[i];
                 m++;
@@ -606,8 +608,8 @@ static int snapshot(run_ctx *c, const char *name)
             if (rc) break;
         }
         if (!rc && c->pvd_on) {
-            rc = sd_vtk_series_add(&c->pvd, c->w->time, 0, r1);
-            if (!rc) rc = sd_vtk_series_add(&c->pvd, c->w->time, 1, r2);
+            rc = sd_vtk_series_add(&c->pvd, sd_world_time(c->w), 0, r1);
+            if (!rc) rc = sd_vtk_series_add(&c->pvd, sd_world_time(c->w), 1, r2);
         }
     }
     free(pos);
@@ -624,19 +626,16 @@ static int snapshot(run_ctx *c, const char *name)
 static int write_walls(run_ctx *c)
 {
     if (!c->s->vtk_on) return 0;
-    const sd_walls *wl = &c->w->w;
+    const int nt = sd_world_triangle_count(c->w);
     char f[1200];
     snprintf(f, sizeof f, "%s/walls.vtp", c->dir);
-    sd_vec3 *v = malloc((size_t)(3 * wl->n + 1) * sizeof(sd_vec3));
-    int *g = malloc((size_t)(wl->n + 1) * sizeof(int));
+    sd_vec3 *v = malloc((size_t)(3 * nt + 1) * sizeof(sd_vec3));
+    int *g = malloc((size_t)(nt + 1) * sizeof(int));
     int rc = -1;
     if (v && g) {
-        for (int t = 0; t < wl->n; t++) {
-            for (int k = 0; k < 3; k++)
-                v[3 * t + k] = wl->tri[t].v[k];
-            g[t] = wl->group[t];
-        }
-        rc = sd_vtk_write_triangles(f, (size_t)wl->n, v, g);
+        for (int t = 0; t < nt; t++)
+            sd_world_triangle(c->w, t, &v[3 * t], &g[t], NULL);
+        rc = sd_vtk_write_triangles(f, (size_t)nt, v, g);
     }
     free(v);
     free(g);
@@ -684,15 +683,15 @@ static void plots_draw(run_ctx *c)
 static void progress(run_ctx *c, double t_end_est)
 {
     double wall = sd_now() - c->rate_wall0;
-    double sps = wall > 0 ? (double)(c->w->step - c->rate_step0) / wall : 0.0;
-    double eta = sps > 0 && t_end_est > c->w->time ? (t_end_est - c->w->time) / c->w->def.dt / sps : 0.0;
+    double sps = wall > 0 ? (double)(sd_world_step_count(c->w) - c->rate_step0) / wall : 0.0;
+    double eta = sps > 0 && t_end_est > sd_world_time(c->w) ? (t_end_est - sd_world_time(c->w)) / sd_world_definition(c->w)->dt / sps : 0.0;
     if (!c->o->log) return;
     if (c->o->progress_tty)
         fprintf(c->o->log, "\r%-8s t = %8.4f s  %9.0f steps/s  %6d elements  ETA %6.0f s   ", phase_names[c->phase],
-                c->w->time, sps, c->w->b.n, eta);
+                sd_world_time(c->w), sps, sd_world_body_count(c->w), eta);
     else
         fprintf(c->o->log, "phase=%s t=%.4f steps_per_s=%.0f elements=%d passed=%d eta_s=%.0f\n", phase_names[c->phase],
-                c->w->time, sps, c->w->b.n, c->n_passed, eta);
+                sd_world_time(c->w), sps, sd_world_body_count(c->w), c->n_passed, eta);
     fflush(c->o->log);
 }
 
@@ -709,7 +708,7 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
     double pv = s->flume_on ? trap_ratio(c, per, &logs_ratio, &n_up) : 0.0;
     fprintf(f, "{\n  \"scenario\": \"%s\",\n  \"status\": \"%s\",\n  \"exit_code\": %d,\n", s->path, status_msg,
             status_code);
-    fprintf(f, "  \"simulated_time_s\": %.6f,\n  \"steps\": %ld,\n  \"wall_time_s\": %.3f,\n", c->w->time, c->w->step,
+    fprintf(f, "  \"simulated_time_s\": %.6f,\n  \"steps\": %ld,\n  \"wall_time_s\": %.3f,\n", sd_world_time(c->w), sd_world_step_count(c->w),
             sd_now() - c->wall0);
     fprintf(f, "  \"state_hash\": \"%016llx\",\n", (unsigned long long)sd_world_state_hash(c->w));
     /* the hand-written kernels this run used (the same bits at every level: for the speed) */
@@ -718,13 +717,14 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
     /* the front prefetch (a hint: the same bits either way) and, in auto mode, the last trial's
      * verdict and its time on over off */
     double pf_ratio = 0.0;
-    const int pf_verdict = sd_front_prefetch_verdict(c->w, &pf_ratio), pf_mode = c->w->sw[SD_SW_PREFETCH];
-    if (pf_mode != SD_PREFETCH_AUTO)
-        fprintf(f, "  \"front_prefetch\": \"%s (set)\",\n", pf_mode == SD_PREFETCH_ON ? "on" : "off");
-    else if (pf_verdict < 0)
-        fprintf(f, "  \"front_prefetch\": \"%s (no trial)\",\n", sd_front_prefetch_on(c->w) ? "on" : "off");
+    int pf_trial = -1;
+    const int pf_on = sd_world_prefetch(c->w, &pf_trial, &pf_ratio) == SD_PREFETCH_ON;
+    if (sd_world_definition(c->w)->tuning.prefetch != SD_PREFETCH_AUTO)
+        fprintf(f, "  \"front_prefetch\": \"%s (set)\",\n", pf_on ? "on" : "off");
+    else if (pf_trial < 0)
+        fprintf(f, "  \"front_prefetch\": \"%s (no trial)\",\n", pf_on ? "on" : "off");
     else
-        fprintf(f, "  \"front_prefetch\": \"%s (trial: on/off %.3f)\",\n", pf_verdict ? "on" : "off", pf_ratio);
+        fprintf(f, "  \"front_prefetch\": \"%s (trial: on/off %.3f)\",\n", pf_trial ? "on" : "off", pf_ratio);
     if (c->restarted_from) {
         fprintf(f, "  \"restarted_from\": \"");
         for (const char *q = c->restarted_from; *q; q++)
@@ -760,10 +760,10 @@ static int write_summary(run_ctx *c, sd_run_result *res, int status_code, const 
                 logs_ratio, vt + vs > 0 ? vt / (vt + vs) : 0.0, vs, vt);
         /* deposit height at the dam: top of the highest element within the probe length */
         double dep = 0.0;
-        const sd_bodies *b = &c->w->b;
+        const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
         for (int i = 0; i < b->n; i++)
             if (!b->fixed[i] && b->pos[i].x >= s->x_dam - s->water_probe && b->pos[i].x <= x_trap(c))
-                dep = fmax(dep, b->pos[i].z + b->bound_r[i]);
+                dep = fmax(dep, b->pos[i].z + b->bound_radius[i]);
         fprintf(f, "  \"deposit_height_at_dam_m\": %.5f,\n", dep);
         fprintf(f, "  \"phase_end_s\": {\"packing\": %.4f, \"flow\": %.4f, \"capture\": %.4f},\n", c->phase_end[0],
                 c->phase_end[1], c->phase_end[2]);
@@ -802,10 +802,10 @@ static void accumulate_pipes(run_ctx *c)
         tot += f;
         if (f > c->pipe_peak[k]) {
             c->pipe_peak[k] = f;
-            c->pipe_peak_t[k] = c->w->time;
+            c->pipe_peak_t[k] = sd_world_time(c->w);
         }
-        c->pipe_impulse[k] += f * c->w->def.dt;
-        c->pipe_impulse_vec[k] = v3_madd(c->pipe_impulse_vec[k], st.force, c->w->def.dt);
+        c->pipe_impulse[k] += f * sd_world_definition(c->w)->dt;
+        c->pipe_impulse_vec[k] = v3_madd(c->pipe_impulse_vec[k], st.force, sd_world_definition(c->w)->dt);
     }
     c->dam_force_now = tot;
 }
@@ -822,9 +822,9 @@ static sd_status capture_start(run_ctx *c)
     if (st) return st;
     c->dam_built = 1;
     c->phase = PH_CAPTURE;
-    c->phase_t0 = c->w->time;
+    c->phase_t0 = sd_world_time(c->w);
     c->phase_w0 = sd_now();
-    c->last_cross_time = c->w->time;
+    c->last_cross_time = sd_world_time(c->w);
     update_h_d(c);
     snapshot(c, "arrival");
     plot(c, "arrival", "side_arrival.png", s->x_dam - 1.2, s->x_end);
@@ -1164,8 +1164,11 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
             return 2;
         }
         /* the thread count is the caller's (the bits do not depend on it) */
-        c.w->def.threads = s->world.threads;
-        if (s->world.threads > 0) sd_world_set_threads(c.w, s->world.threads);
+        int threads = s->world.threads;
+#ifdef _OPENMP
+        if (threads <= 0) threads = omp_get_max_threads();
+#endif
+        if (threads > 0) sd_world_set_threads(c.w, threads);
         sd_world_set_tuning(c.w, &s->world.tuning); /* (and how it runs, too) */
         c.restarted_from = o->restart;
         c.flow_wall = rs.wall_before;
@@ -1231,7 +1234,7 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         sd_world_destroy(c.w);
         return 1;
     }
-    const sd_bodies *b = &c.w->b;
+    const sd_body_view bv = sd_world_bodies(c.w), *b = &bv;
     const double dt = s->world.dt;
     if (!c.restarted_from) {
         for (int i = 0; i < b->n; i++) {
@@ -1260,7 +1263,7 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         write_series_row(&c);
         write_traj(&c);
     }
-    c.rate_step0 = c.w->step;
+    c.rate_step0 = sd_world_step_count(c.w);
     c.rate_wall0 = sd_now();
     for (;;) {
         if (o->stop && *o->stop) {
@@ -1269,7 +1272,7 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
             res->interrupted = 1;
             break;
         }
-        if (c.phase == PH_RUN && c.w->time >= s->duration - 0.5 * dt) break;
+        if (c.phase == PH_RUN && sd_world_time(c.w) >= s->duration - 0.5 * dt) break;
         if (c.phase == PH_DONE) break;
         if (c.flow_ended && !c.dam_built) {
             /* the branch point: a flow-end checkpoint holds the state of exactly this moment, and
@@ -1285,7 +1288,7 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
                 }
                 if (o->log && !o->progress_tty)
                     fprintf(o->log, "flow-end checkpoint %s written at t = %.4f s\n", o->checkpoint_flow_end,
-                            c.w->time);
+                            sd_world_time(c.w));
             }
             if (o->stop_at_flow_end) {
                 res->stopped_at_flow_end = 1;
@@ -1303,56 +1306,56 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         set_fluid(&c);
         st = sd_world_step(c.w);
         if (st) {
-            fprintf(o->err, "%s: step %ld, t = %.6f s: %s\n", s->path, c.w->step, c.w->time, sd_status_message(st));
+            fprintf(o->err, "%s: step %ld, t = %.6f s: %s\n", s->path, sd_world_step_count(c.w), sd_world_time(c.w), sd_status_message(st));
             code = 1;
             msg = sd_status_message(st);
             break;
         }
-        long step = c.w->step;
+        long step = sd_world_step_count(c.w);
         if (c.info.n_pipes) accumulate_pipes(&c);
         int next = c.phase;
         if (s->flume_on && step % 100 == 0) {
             int before = c.n_passed;
             remove_passed(&c);
-            double tph = c.w->time - c.phase_t0;
-            if (sd_run_crossing(c.w, x_trap(&c))) c.last_cross_time = c.w->time;
-            if (c.n_passed != before) c.last_cross_time = c.w->time;
+            double tph = sd_world_time(c.w) - c.phase_t0;
+            if (sd_run_crossing(c.w, x_trap(&c))) c.last_cross_time = sd_world_time(c.w);
+            if (c.n_passed != before) c.last_cross_time = sd_world_time(c.w);
             if (c.phase == PH_PACK) {
                 if (tph >= s->packing_time - 0.5 * dt) next = PH_FLOW;
             } else if (c.phase == PH_CAPTURE) {
                 update_h_d(&c);
                 double ke = upstream_ke(&c);
                 if (ke > c.ke_peak) c.ke_peak = ke;
-                int quiet = c.w->time - c.last_cross_time >= s->quiet_time && ke < s->ke_fraction * c.ke_peak;
+                int quiet = sd_world_time(c.w) - c.last_cross_time >= s->quiet_time && ke < s->ke_fraction * c.ke_peak;
                 if (tph >= s->capture_limit || (tph > s->quiet_time && quiet)) next = PH_DONE;
             }
         }
         if (c.phase == PH_FLOW && !c.flow_ended) {
             /* checked at every step, so that the front has moved less than one step's travel
              * (~v dt) past the dam face when the pipes appear (docs/physics.md) */
-            double fx = front_x(&c), tph = c.w->time - c.phase_t0;
+            double fx = front_x(&c), tph = sd_world_time(c.w) - c.phase_t0;
             if (step % 100 == 0 && !c.flow_len_done && s->x_dam - 1.0 > s->x_gate && fx >= s->x_dam - 1.0)
                 measure_flow_length(&c);
             if (fx >= s->x_dam || tph >= s->flow_limit) next = PH_CAPTURE;
         }
         if (next != c.phase) {
-            c.phase_end[c.phase] = c.w->time;
+            c.phase_end[c.phase] = sd_world_time(c.w);
             c.phase_wall[c.phase] = sd_now() - c.phase_w0;
             c.phase_w0 = sd_now();
             if (o->log && !o->progress_tty)
-                fprintf(o->log, "phase %s ended at t = %.4f s (max speed %.4f m/s)\n", phase_names[c.phase], c.w->time,
+                fprintf(o->log, "phase %s ended at t = %.4f s (max speed %.4f m/s)\n", phase_names[c.phase], sd_world_time(c.w),
                         max_speed(&c));
             if (c.phase == PH_PACK) {
                 sd_world_set_group_active(c.w, SD_GROUP_GATE, 0);
                 snapshot(&c, "packed");
-                c.phase_t0 = c.w->time;
+                c.phase_t0 = sd_world_time(c.w);
                 c.phase = next;
             } else if (next == PH_CAPTURE) {
                 /* the capture (pipes, capture fluid) starts at the top of the next iteration */
                 c.flow_ended = 1;
                 c.flow_wall = sd_now() - c.wall0; /* the build included */
             } else {
-                c.phase_t0 = c.w->time;
+                c.phase_t0 = sd_world_time(c.w);
                 c.phase = next;
             }
         }
@@ -1371,10 +1374,10 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         close_outputs(&c);
     } else {
         if (c.phase != PH_DONE && c.phase != PH_RUN && !c.flow_ended) {
-            c.phase_end[c.phase] = c.w->time;
+            c.phase_end[c.phase] = sd_world_time(c.w);
             c.phase_wall[c.phase] = sd_now() - c.phase_w0;
         } else if (c.phase == PH_CAPTURE) {
-            c.phase_end[c.phase] = c.w->time;
+            c.phase_end[c.phase] = sd_world_time(c.w);
             c.phase_wall[c.phase] = sd_now() - c.phase_w0;
         }
         write_series_row(&c);
@@ -1398,7 +1401,7 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
     res->n_passed = c.n_passed;
     for (int k = 0; k < c.info.n_pipes; k++)
         res->peak_dam_force = fmax(res->peak_dam_force, c.pipe_peak[k]);
-    res->steps = c.w->step;
+    res->steps = sd_world_step_count(c.w);
     res->wall_time = sd_now() - c.wall0;
     res->flow_wall = c.flow_wall;
     res->restarted = c.restarted_from != NULL;

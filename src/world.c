@@ -590,6 +590,7 @@ uint64_t sd_world_state_hash(const sd_world *w)
 sd_status sd_world_set_threads(sd_world *w, int threads)
 {
     if (!w || threads < 1) return SD_ERR_ARG;
+    w->def.threads = threads;
 #ifdef _OPENMP
     w->nthreads = threads;
 #endif
@@ -645,4 +646,50 @@ int sd_switch_by_name(const char *name)
         if (!*a && !*b) return k;
     }
     return -1;
+}
+
+sd_body_view sd_world_bodies(const sd_world *w)
+{
+    const sd_bodies *b = &w->b;
+    sd_body_view v = {.n = b->n,
+                      .gid = b->gid,
+                      .tag = b->tag,
+                      .shape = b->shape,
+                      .fixed = b->fixed,
+                      .pos = b->pos,
+                      .vel = b->vel,
+                      .omega = b->omega,
+                      .axis = b->axis,
+                      .force = b->force,
+                      .torque = b->torque,
+                      .radius = b->radius,
+                      .half_length = b->hl,
+                      .bound_radius = b->bound_r,
+                      .mass = b->mass};
+    return v;
+}
+
+sd_status sd_world_triangle(const sd_world *w, int i, sd_vec3 corner[3], int *group, int *active)
+{
+    if (!w || i < 0 || i >= w->w.n) return SD_ERR_NOTFOUND;
+    for (int k = 0; k < 3; k++)
+        corner[k] = w->w.tri[i].v[k];
+    if (group) *group = w->w.group[i];
+    if (active) *active = w->w.active[i];
+    return SD_OK;
+}
+
+const sd_world_def *sd_world_definition(const sd_world *w) { return &w->def; }
+
+int sd_world_prefetch(const sd_world *w, int *trial, double *ratio)
+{
+    const int v = sd_front_prefetch_verdict(w, ratio);
+    if (trial) *trial = w->sw[SD_SW_PREFETCH] == SD_PREFETCH_AUTO ? v : -1;
+    return sd_front_prefetch_on(w) ? SD_PREFETCH_ON : SD_PREFETCH_OFF;
+}
+
+void sd_world_set_external_force_fn(sd_world *w, sd_external_force_fn fn, void *ctx)
+{
+    w->ext_fn = fn;
+    w->ext_ctx = fn ? ctx : NULL;
 }

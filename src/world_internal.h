@@ -175,12 +175,11 @@ typedef struct {
     int passes; /* passes timed in tau */
 } sd_owned;
 
-/* External forces of a step on the moving bodies mov[k0 .. k1), into out[k - k0] (not into
- * ext_force, which such a function overrides: a block's buffer stays in L1, where the store's
- * array cost a line's fetch and write-back per body and step), called just before they move,
- * by the thread that moves them, a block of up to SD_EXT_BLOCK bodies at a time. */
-#define SD_EXT_BLOCK 128
-typedef void (*sd_ext_force_fn)(void *ctx, struct sd_world *w, const int32_t *mov, int k0, int k1, sd_vec3 *out);
+/* External forces of a step (sabodem.h sd_external_force_fn) on the moving bodies mov[k0 .. k1),
+ * into out[k - k0], not into ext_force, which such a function overrides: a block's buffer stays
+ * in L1, where the store's array cost a line's fetch and write-back per body and step. */
+#define SD_EXT_BLOCK SD_EXTERNAL_BLOCK
+typedef sd_external_force_fn sd_ext_force_fn;
 
 /* The bed bodies nb0 .. n-1 as the last full rebuild placed them in the body grid (lo, cell,
  * nx, ny; the grid's nz may change, the bed's cells do not): the union of their boxes (its low
@@ -616,9 +615,7 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves 
 /* After the bodies moved (m: the step's largest moves): the near list's and the rebuild's
  * drift, and the front (sd_world_front_x). */
 void sd_world_after_moves(sd_world *w, const sd_moves *m);
-/* The farthest downstream point (largest x of a surface) of the moving bodies, as they are:
- * kept by the step, computed when the store changed since. -inf when none moves. */
-double sd_world_front_x(const sd_world *w);
+/* (sd_world_front_x, sabodem.h: kept by the step, computed when the store changed since) */
 
 /* world.c: bring w->mov up to date (O(n) when the store changed since it was made). */
 sd_status sd_world_moving_update(sd_world *w);
