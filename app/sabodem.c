@@ -9,6 +9,7 @@
 #include "build.h"
 #include "run.h"
 #include "scenario.h"
+#include "plot.h"
 #include "sweep.h"
 
 static volatile sig_atomic_t stop_flag = 0;
@@ -54,6 +55,8 @@ static void tuning_from_env(sd_tuning *t)
     char msg[200];
     if (sd_tuning_from_env(t, msg, sizeof msg)) fprintf(stderr, "sabodem: warning: %s: ignored\n", msg);
 }
+
+static void draw_run_pictures(const sd_run_result *res, FILE *log) { app_draw_pictures(res, log); }
 
 static const char *basename_noext(const char *path, char *buf, size_t n)
 {
@@ -116,7 +119,10 @@ int main(int argc, char **argv)
         sigaction(SIGINT, &sa, NULL);
         sigaction(SIGTERM, &sa, NULL);
         tuning_from_env(&so.tuning);
+        so.run_done = draw_run_pictures;
         int code = sd_sweep_run(file, outdir, &so, &stop_flag, stdout, stderr);
+        if ((code == 0 || code == 1) && !so.dry_run && app_draw_sweep(outdir))
+            fprintf(stdout, "note: figures not drawn (see %s/plot.log)\n", outdir);
         if ((code == 0 || code == 1) && !so.dry_run) printf("sweep results in %s/results.csv, %s/cases.csv\n", outdir, outdir);
         return code;
     }
@@ -217,7 +223,9 @@ int main(int argc, char **argv)
     o.checkpoint_flow_end = ckpt_flow_end ? ckpt_path : NULL;
     o.restart = restart;
     sd_run_result r;
+    memset(&r, 0, sizeof r);
     int code = sd_run_scenario(&s, &o, &r);
+    app_draw_pictures(&r, stderr);
     if (code == 0 || code == 130) {
         printf("%s: %s, %ld steps, %.1f s wall", file, code ? "interrupted" : "done", r.steps, r.wall_time);
         if (s.flume_on) printf(", trap ratio P_V = %.4f (capture limit %.2f s)", r.p_v, s.capture_limit);

@@ -3,11 +3,9 @@
 #include "run.h"
 
 #include <errno.h>
-#include <spawn.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include "build.h"
@@ -30,8 +28,6 @@
 
 enum { PH_PACK = 0, PH_FLOW = 1, PH_CAPTURE = 2, PH_DONE = 3, PH_RUN = 4 };
 static const char *phase_names[] = {"packing", "flow", "capture", "done", "run"};
-
-enum { RUN_PLOTS = 2 };
 
 typedef struct {
     const sd_scenario *s;
@@ -72,11 +68,9 @@ typedef struct {
         double h_d, xd;
         int capture;
     } fluid; /* what the step's fluid forces need (set_fluid) */
-    /* the side views asked for so far (the arrival's, the end's), drawn together at the end
-     * (plots_draw) */
+    /* the side views asked for so far (the arrival's, the end's), for the caller to draw */
     int n_plots;
-    char plot_cmd[RUN_PLOTS][4096];
-    const char *plot_png[RUN_PLOTS];
+    sd_run_picture plots[SD_RUN_PICTURES];
 } run_ctx;
 
 static double body_volume(const sd_body_view *b, int i)
@@ -642,42 +636,20 @@ static int write_walls(run_ctx *c)
     return rc;
 }
 
-/* A side view of snapshot `name` into png, drawn by scripts/plot_side.py at the end of the run
- * (plots_draw) from the snapshot's files. The arrival's picture, drawn when the front reached
- * the dam, held the two threads up for the ~1.5 s of a Python process; drawn at the end
- * beside the final one, the two cost the run ~1.5 s instead of ~3. */
+/* A side view of snapshot `name` into png, from the snapshot's files, for the caller to draw
+ * after the run (sd_run_result.pictures: the driver starts no program). The arrival's picture,
+ * drawn when the front reached the dam, held the two threads up for the ~1.5 s of a Python
+ * process; drawn at the end beside the final one, the two cost the run ~1.5 s instead of ~3. */
 static void plot(run_ctx *c, const char *name, const char *png, double xmin, double xmax)
 {
-    if (!c->s->png_on || !c->s->vtk_on || c->n_plots >= RUN_PLOTS) return;
-    snprintf(c->plot_cmd[c->n_plots], sizeof c->plot_cmd[0],
-             "exec /usr/bin/python3 \"%s/scripts/plot_side.py\" --spheres \"%s/spheres_%s.vtp\" --logs "
-             "\"%s/cylinders_%s.vtp\" --xdam %g"
-             " --xmin %g --xmax %g --out \"%s/%s\" >/dev/null 2>&1",
-             SD_SOURCE_DIR, c->dir, name, c->dir, name, c->s->x_dam, xmin, xmax, c->dir, png);
-    c->plot_png[c->n_plots++] = png;
-}
-
-/* The side views asked for, each in its own process, all at once; then waited for. */
-static void plots_draw(run_ctx *c)
-{
-    extern char **environ;
-    pid_t pid[RUN_PLOTS];
-    int ok[RUN_PLOTS];
-    for (int k = 0; k < c->n_plots; k++) {
-        char *argv[] = {"/bin/sh", "-c", c->plot_cmd[k], NULL};
-        ok[k] = posix_spawn(&pid[k], "/bin/sh", NULL, NULL, argv, environ) == 0;
-    }
-    for (int k = 0; k < c->n_plots; k++) {
-        int status = 0;
-        if (ok[k]) {
-            while (waitpid(pid[k], &status, 0) < 0 && errno == EINTR)
-                ;
-            ok[k] = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-        }
-        if (!ok[k] && c->o->log)
-            fprintf(c->o->log, "note: picture %s not drawn (python3-matplotlib missing?)\n", c->plot_png[k]);
-    }
-    c->n_plots = 0;
+    if (!c->s->png_on || !c->s->vtk_on || c->n_plots >= SD_RUN_PICTURES) return;
+    sd_run_picture *p = &c->plots[c->n_plots++];
+    snprintf(p->spheres, sizeof p->spheres, "%s/spheres_%s.vtp", c->dir, name);
+    snprintf(p->logs, sizeof p->logs, "%s/cylinders_%s.vtp", c->dir, name);
+    snprintf(p->png, sizeof p->png, "%s/%s", c->dir, png);
+    p->x_dam = c->s->x_dam;
+    p->x_min = xmin;
+    p->x_max = xmax;
 }
 
 static void progress(run_ctx *c, double t_end_est)
@@ -1383,7 +1355,6 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         write_series_row(&c);
         snapshot(&c, "final");
         if (s->flume_on && code == 0) plot(&c, "final", "side_final.png", s->x_dam - 1.0, s->x_end);
-        plots_draw(&c);
         fclose(c.series);
         c.series = NULL;
         if (c.traj) fclose(c.traj);
@@ -1403,6 +1374,8 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         res->peak_dam_force = fmax(res->peak_dam_force, c.pipe_peak[k]);
     res->steps = sd_world_step_count(c.w);
     res->wall_time = sd_now() - c.wall0;
+    res->n_pictures = c.n_plots;
+    memcpy(res->pictures, c.plots, (size_t)c.n_plots * sizeof c.plots[0]);
     res->flow_wall = c.flow_wall;
     res->restarted = c.restarted_from != NULL;
     res->state_hash = sd_world_state_hash(c.w);

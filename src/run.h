@@ -25,6 +25,14 @@ typedef struct {
                                       * directory) up to the checkpoint are carried into outdir */
 } sd_run_opts;
 
+/* A side view the run asks its caller to draw (the driver starts no program): the snapshot's
+ * spheres and logs (.vtp), the dam's x and the x range to show, and the picture to write. */
+enum { SD_RUN_PICTURES = 2 };
+typedef struct {
+    char spheres[1200], logs[1200], png[1200];
+    double x_dam, x_min, x_max;
+} sd_run_picture;
+
 typedef struct {
     double p_v; /* trap ratio (eq 55) */
     double p_v_class[SD_MAX_CLASSES];
@@ -40,6 +48,8 @@ typedef struct {
     int restarted;           /* the run continued from opts.restart */
     double flow_wall;        /* wall time from the start to the flow end (build, packing, flow), s;
                               * a restarted run: the checkpoint writer's */
+    int n_pictures;          /* the side views asked for (output.png), for the caller to draw */
+    sd_run_picture pictures[SD_RUN_PICTURES];
 } sd_run_result;
 
 /* Build and run; returns 0 on success, 1 on a failed run, 2 on bad input, 130 when stopped. */

@@ -40,6 +40,7 @@ typedef struct {
     char set[MAX_SETS][256];
     int parallel;
     sd_tuning tuning; /* the caller's (sd_sweep_opts), for every run */
+    void (*run_done)(const sd_run_result *res, FILE *log);
 } sweep_def;
 
 static int load_sweep(const char *path, sweep_def *d, FILE *err)
@@ -248,6 +249,7 @@ static int child_run(const sweep_def *d, const run_item *r, const char *restart)
     sd_run_result res;
     double t0 = sd_now();
     int code = sd_run_scenario(&s, &o, &res);
+    if (code == 0 && d->run_done) d->run_done(&res, log);
     double wall = sd_now() - t0;
     if (code == 0) {
         /* result.csv marks the run done: written last, atomically */
@@ -330,6 +332,7 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
     sweep_def d;
     if (load_sweep(sweep_file, &d, err)) return 2;
     d.tuning = so->tuning;
+    d.run_done = so->run_done;
     int ncase = 1;
     for (int v = 0; v < d.n_vary; v++)
         ncase *= d.n_val[v];
@@ -669,10 +672,6 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
         }
     free(gflow);
     free(gdone);
-    char cmd[4096];
-    snprintf(cmd, sizeof cmd, "/usr/bin/python3 \"%s/scripts/plot_sweep.py\" \"%s\" > \"%s/plot.log\" 2>&1",
-             SD_SOURCE_DIR, outdir, outdir);
-    if (!interrupted && system(cmd) != 0) fprintf(log, "note: figures not drawn (see %s/plot.log)\n", outdir);
     fprintf(log,
             "sweep: this invocation started %d flow(s) and %d run(s) in %.1f s; %d run(s) were already done, %d flow "
             "checkpoint(s) reused\n",
