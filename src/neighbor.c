@@ -1373,7 +1373,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     const int nr = bed ? bc->nb0 : b->n; /* the bodies whose cells and ranges are made here */
     if ((st = sort_bodies_by_cell(w, nr))) return st;
     w->mov_stamp = -1; /* the store was reordered */
-    if ((st = sd_world_moving_update(w))) return st;
+    if ((st = sd_neighbor_moving_update(w))) return st;
     RB_STAGE(SD_RB_SORT);
     if (sd_grow((void **)&w->range, &w->range_cap, b->n + 1, sizeof(*w->range)) ||
         sd_grow((void **)&w->box, &w->box_cap, 2 * b->n + 2, sizeof(sd_vec3)))
@@ -1504,3 +1504,19 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     return SD_OK;
 }
 #undef RB_STAGE
+
+sd_status sd_neighbor_moving_update(sd_world *w)
+{
+    const sd_bodies *b = &w->b;
+    if (w->mov_stamp == w->timers.rebuilds && w->mov_bn == b->n && w->mov) return SD_OK;
+    if (sd_grow((void **)&w->mov, &w->mov_cap, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    int m = 0;
+    for (int i = 0; i < b->n; i++) {
+        w->mov[m] = i;
+        m += !b->fixed[i];
+    }
+    w->mov_n = m;
+    w->mov_bn = b->n;
+    w->mov_stamp = w->timers.rebuilds;
+    return SD_OK;
+}

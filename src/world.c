@@ -286,22 +286,6 @@ static sd_status health(const sd_world *w)
     return SD_OK;
 }
 
-sd_status sd_world_moving_update(sd_world *w)
-{
-    const sd_bodies *b = &w->b;
-    if (w->mov_stamp == w->timers.rebuilds && w->mov_bn == b->n && w->mov) return SD_OK;
-    if (sd_grow((void **)&w->mov, &w->mov_cap, b->n + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    int m = 0;
-    for (int i = 0; i < b->n; i++) {
-        w->mov[m] = i;
-        m += !b->fixed[i];
-    }
-    w->mov_n = m;
-    w->mov_bn = b->n;
-    w->mov_stamp = w->timers.rebuilds;
-    return SD_OK;
-}
-
 void sd_world_after_moves(sd_world *w, const sd_moves *m)
 {
     const double step = sqrt(m->v2) * w->def.dt;
@@ -398,7 +382,7 @@ sd_status sd_world_step(sd_world *w)
         if ((st = sd_neighbor_rebuild(w))) return st;
     }
     double t1 = sd_now();
-    if ((st = sd_world_moving_update(w))) return st;
+    if ((st = sd_neighbor_moving_update(w))) return st;
     sd_pf_trial_before(w);
     int integrated;
     if ((st = sd_contact_compute(w, &integrated))) return st;

@@ -617,8 +617,9 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves 
 void sd_world_after_moves(sd_world *w, const sd_moves *m);
 /* (sd_world_front_x, sabodem.h: kept by the step, computed when the store changed since) */
 
-/* world.c: bring w->mov up to date (O(n) when the store changed since it was made). */
-sd_status sd_world_moving_update(sd_world *w);
+/* neighbor.c: bring w->mov up to date (O(n) when the store changed since it was made; the
+ * rebuild makes it with the sort). */
+sd_status sd_neighbor_moving_update(sd_world *w);
 
 /* helpers */
 /* an external force other than (+0, +0, +0): the moves must add it (a -0 too: f + -0 is not
