@@ -21,7 +21,8 @@
  * assertions fail the build until then. Only checked on the LP64 targets the sizes were taken
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
-_Static_assert(sizeof(struct sd_world) == 1760, "struct sd_world changed: update io_checkpoint.c");
+/* the world's state: the fields before its first field of scratch (world_internal.h) */
+_Static_assert(offsetof(struct sd_world, nthreads) == 784, "the world's state changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_world_def) == 120, "sd_world_def changed: update io_checkpoint.c (its tuning is not saved)");
 /* sd_walls: its edge ids, seams and edge lines are derived (sd_walls_weld, again on load) */
 _Static_assert(sizeof(sd_walls) == 96, "sd_walls changed: update io_checkpoint.c");

@@ -249,14 +249,13 @@ int sd_world_switch(sd_world *w, sd_switch which, int value);
 int sd_switch_by_name(const char *name);
 const char *sd_switch_name(sd_switch which);
 
+/* A world: first its state, what a checkpoint saves (io_checkpoint.c, which fails to build
+ * when this part changes size: a field added here must be saved there too); then how it runs
+ * and its scratch, derived or set by the caller, never saved, where a new field changes no
+ * file format. */
 struct sd_world {
+    /* ---- state ---- */
     sd_world_def def;
-    int nthreads;             /* this world's OpenMP threads (def.threads, or the runtime's default) */
-    int simd;                 /* the SIMD level its kernels run at (SD_SIMD_*, resolved) */
-    long llc_bytes;           /* the last-level cache the prefetch's guess assumes */
-    int sw[SD_SWITCH_COUNT];  /* sd_world_switch */
-    sd_ext_force_fn ext_fn; /* NULL: ext_force applies (set by the driver, not saved) */
-    void *ext_ctx;
     sd_bodies b;
     sd_walls w;
     sd_pairlist bb;      /* body–body */
@@ -264,11 +263,9 @@ struct sd_world {
     sd_manifold *bt_man; /* narrow-phase result per body–triangle pair (for mesh dedup) */
     int bt_man_cap;
     sd_csr csr;
-    sd_owned *owned;  /* NULL until a parallel pass needs it */
-    void *bb_scratch; /* per-thread scratch of the body-body pass (contact.c) */
-    int bb_scratch_n;
-    sd_grid grid;     /* bodies */
-    sd_grid tgrid;    /* triangles */
+    sd_grid tgrid;                /* triangles */
+    int32_t (*trange)[6];         /* per-triangle cell range in the triangle grid */
+    int trange_cap;
     int32_t *gid_map; /* gid -> index, -1 removed */
     int gid_cap, next_gid;
     double time;
@@ -279,13 +276,25 @@ struct sd_world {
     long contacts;
     sd_world_timers timers;
     int checked;
-    /* scratch for rebuilds: contact history carried across by key */
+    /* contact history carried across a rebuild by key, collected and not yet restored */
     sd_hist *old_hist;
     uint64_t *old_keys;
     int n_old, old_cap, old_hist_cap;
     int keys_collected;  /* old keys already taken (a body was removed since) */
     int ext_any;         /* a body's external force was ever set non-zero (else the moves skip the
                           * store's zeros; a checkpoint's read sets it from the forces) */
+    double ref_drift; /* the same bound as near_drift since the last rebuild (pos_ref) */
+    /* ---- how it runs, and scratch ---- */
+    int nthreads;             /* this world's OpenMP threads (def.threads, or the runtime's default) */
+    int simd;                 /* the SIMD level its kernels run at (SD_SIMD_*, resolved) */
+    long llc_bytes;           /* the last-level cache the prefetch's guess assumes */
+    int sw[SD_SWITCH_COUNT];  /* sd_world_switch */
+    sd_ext_force_fn ext_fn; /* NULL: ext_force applies (set by the driver, not saved) */
+    void *ext_ctx;
+    sd_owned *owned;  /* NULL until a parallel pass needs it */
+    void *bb_scratch; /* per-thread scratch of the body-body pass (contact.c) */
+    int bb_scratch_n;
+    sd_grid grid;     /* bodies */
     /* the old entries are grouped by the first body's store index at the collect (any one
      * run a gid: a checkpoint's, or the gid order of earlier versions, reads the same):
      * old_start[i] .. old_start[i + 1] are body i's, for old_n_bodies bodies; scratch, not
@@ -323,8 +332,6 @@ struct sd_world {
      * rebuild (performance pass P22, in the git history) */
     void *scan_bufs;
     int scan_bufs_n;
-    int32_t (*trange)[6]; /* per-triangle cell range in the triangle grid */
-    int trange_cap;
     uint8_t *tflag; /* the triangle grid's entries' flags, as gflag for the body grid */
     int tflag_cap;
     /* derived, never saved: the indices of the moving bodies, ascending, for the per-body
@@ -373,7 +380,6 @@ struct sd_world {
     long wall_skip;
     long wall_skipped; /* bodies the wall pass skipped, summed over the steps (for the tests) */
     long near_mark_rb;
-    double ref_drift; /* the same bound as near_drift since the last rebuild (pos_ref) */
     /* derived, never saved: what the rebuilds know of the bed roughness (the fixed spheres,
      * sorted after everything else), which never moves: valid while bodies are neither added
      * nor removed (body_version) and the body grid keeps its layout (neighbor.c) */
