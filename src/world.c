@@ -1,4 +1,5 @@
 /* The world owns every store; sd_world_step() is a short list of timed phases. */
+#include <assert.h>
 #include <string.h>
 
 #include "core/cpu.h"
@@ -370,6 +371,39 @@ void sd_pf_trial_after(sd_world *w, double pass_s)
     p->next = w->step + SD_PF_RETRY;
 }
 
+#ifndef NDEBUG
+/* The caches' invariants (debug and RelWithDebInfo builds, every 256 steps): the gid map, the
+ * bed roughness trailing the store, the moving bodies' list while it claims to be current, the
+ * wall pairs grouped by body after a rebuild. A broken one aborts at once, near its cause. */
+static void check_caches(const sd_world *w)
+{
+    const sd_bodies *b = &w->b;
+    for (int i = 0; i < b->n; i++)
+        assert(b->gid[i] >= 0 && b->gid[i] < w->next_gid && w->gid_map[b->gid[i]] == i);
+    const int nb = sd_bed_start(b);
+    for (int i = 0; i < nb; i++)
+        assert(!sd_body_is_bed(b, i) || w->need_rebuild); /* (an added bed sphere waits for the sort) */
+    if (w->mov && w->mov_stamp == w->timers.rebuilds && w->mov_bn == b->n) {
+        int moving = 0;
+        for (int i = 0; i < b->n; i++)
+            moving += !b->fixed[i];
+        assert(w->mov_n == moving);
+        for (int k = 0; k < w->mov_n; k++) {
+            assert(!b->fixed[w->mov[k]]);
+            assert(k == 0 || w->mov[k - 1] < w->mov[k]);
+        }
+    }
+    if (!w->need_rebuild && w->csr.bt_start && w->timers.rebuilds > 0) {
+        assert(w->csr.bt_start[0] == 0 && w->csr.bt_start[b->n] == w->bt.n);
+        for (int i = 0; i < b->n; i++) {
+            assert(w->csr.bt_start[i] <= w->csr.bt_start[i + 1]);
+            for (int k = w->csr.bt_start[i]; k < w->csr.bt_start[i + 1]; k++)
+                assert(w->bt.p[k].a == i);
+        }
+    }
+}
+#endif
+
 sd_status sd_world_step(sd_world *w)
 {
     sd_status st;
@@ -396,6 +430,9 @@ sd_status sd_world_step(sd_world *w)
     w->timers.rebuild += t1 - t0;
     w->timers.contacts += t2 - t1;
     w->timers.moves += t3 - t2;
+#ifndef NDEBUG
+    if ((w->step & 255) == 0) check_caches(w);
+#endif
     if ((w->step & 1023) == 0) {
         st = health(w);
         w->timers.checks += sd_now() - t3;
