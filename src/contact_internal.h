@@ -16,7 +16,7 @@
 #define SD_FILTER512 1
 #endif
 
-/* Sphere–sphere, the most common pair, in batches (ss_chunk below): a filter pass keeps the
+/* Sphere–sphere, the most common pair, in batches (sd_bb_chunk, contact_bb.c): a filter pass keeps the
  * touching pairs, a branch-free pass over arrays applies case 1 of the kernel and the law of
  * contact_law.h to all of them at once (the compiler vectorizes it), and the results go back in
  * pair order. The arithmetic is that of sd_contact_law, operation for operation (both sides of

@@ -11,7 +11,7 @@
 
 #include "contact_internal.h"
 
-/* The constants of sd_contact_law for one pass of the lanes below. */
+/* The constants of sd_contact_law for one pass of the lanes (lane_law.c, contact_simd_avx2.c). */
 typedef struct {
     double k_n, c_n, c_s, tan_phi, coh, mks_dt;
 } lane_law;
