@@ -95,7 +95,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         if (moved) w->need_rebuild = 1;
         if (integrated) {
             *integrated = 1;
-            sd_world_after_moves(w, &mv);
+            sd_integrate_after_moves(w, &mv);
         }
     } else
 #endif

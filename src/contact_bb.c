@@ -141,60 +141,6 @@ static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m
     }
 }
 
-/* A sphere-log pair whose manifold is one point (the sphere against the log's side or end:
- * most of them) through the law in lanes, like the walls' face contacts: sd_manifold_apply's
- * arithmetic for a one-point manifold between two moving bodies, operation for operation
- * (same bits). */
-static void sc_lane_fill(const sd_world *w, const sd_pair *p, const sd_manifold *mf, const sd_hist *h, int i,
-                         struct sc_lanes *q, int j)
-{
-    const sd_bodies *b = &w->b;
-    const int a = p->a, c = p->b;
-    const sd_vec3 pt = mf->point[0], ra = v3_sub(pt, b->pos[a]), rb = v3_sub(pt, b->pos[c]);
-    const sd_vec3 va = b->vel[a], wa = b->omega[a], vb = b->vel[c], wb = b->omega[c];
-    q->nx[j] = mf->normal[0].x, q->ny[j] = mf->normal[0].y, q->nz[j] = mf->normal[0].z, q->ov[j] = mf->overlap[0];
-    q->px[j] = pt.x, q->py[j] = pt.y, q->pz[j] = pt.z;
-    q->rax[j] = ra.x, q->ray[j] = ra.y, q->raz[j] = ra.z;
-    q->rbx[j] = rb.x, q->rby[j] = rb.y, q->rbz[j] = rb.z;
-    q->vax[j] = va.x, q->vay[j] = va.y, q->vaz[j] = va.z, q->wax[j] = wa.x, q->way[j] = wa.y, q->waz[j] = wa.z;
-    q->vbx[j] = vb.x, q->vby[j] = vb.y, q->vbz[j] = vb.z, q->wbx[j] = wb.x, q->wby[j] = wb.y, q->wbz[j] = wb.z;
-    q->sqm[j] = p->sqrt_m_eff;
-    /* the spring of the same feature, or a new one (the pair has one slot) */
-    const int same = h->feature == mf->feature[0];
-    q->sx[j] = same ? h->shear.x : 0.0, q->sy[j] = same ? h->shear.y : 0.0, q->sz[j] = same ? h->shear.z : 0.0;
-    q->feature[j] = mf->feature[0];
-    q->i[j] = i;
-}
-
-/* A pair of another shape (chunk entry i) through its kernel: a one-point sphere-log contact
- * into lane msc of q (returns 1), anything else through sd_manifold_apply now (returns 0). Out of
- * line: inlined, it crowded the sphere pass's registers. */
-__attribute__((noinline)) int sd_bb_pair_general(const sd_world *w, const sd_law *law, const sd_pair *p, int i,
-                                                 struct sc_lanes *q, int msc, sd_pair_out *out, int *used)
-{
-    sd_manifold m;
-    sd_hist *h = &w->bb.hist[p->off];
-    if (p->kind == SD_PAIR_CC) {
-        /* two logs (or a log and a pipe): the axis that showed them apart last time first */
-        sd_vec3 sep = h->feature == SD_HIST_SEP_AXIS ? h->shear : v3(0.0, 0.0, 0.0);
-        const sd_cyl ca = sd_body_cyl(&w->b, p->a), cb = sd_body_cyl(&w->b, p->b);
-        sd_geom_cyl_cyl_sep(&ca, &cb, &m, &sep);
-        used[i] = sd_manifold_apply(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, &out[i]);
-        if (m.n == 0 && (sep.x != 0.0 || sep.y != 0.0 || sep.z != 0.0)) {
-            h->feature = SD_HIST_SEP_AXIS;
-            h->shear = sep;
-        }
-        return 0;
-    }
-    sd_manifold_bb(&w->b, p, &m);
-    if (p->kind == SD_PAIR_SC && m.n == 1 && p->cap == 1 && w->sw[SD_SW_SC_LANES]) {
-        sc_lane_fill(w, p, &m, h, i, q, msc);
-        return 1;
-    }
-    used[i] = sd_manifold_apply(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, &out[i]);
-    return 0;
-}
-
 /* The lanes' results into their pairs' slots and out[]; a lane the law sends back (its spring
  * tilted past the small-angle rule) through sd_manifold_apply, from the slot not yet written. */
 static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, int m, const int32_t *ks,
@@ -244,7 +190,7 @@ static int other_pair(const sd_world *w, const sd_law *law, const sd_pair *p, in
             w->bb.hist[p->off + s].feature = -1;
         return 0;
     }
-    return sd_bb_pair_general(w, law, p, i, q, j, out, used);
+    return sd_manifold_general_pair(w, law, p, i, q, j, out, used);
 }
 
 /* The pairs ks[0 .. n) (n <= SS_CHUNK): forces into out[i], contact points into used[i]. Each

@@ -121,6 +121,10 @@ int sd_manifold_bb(const sd_bodies *b, const sd_pair *p, sd_manifold *m);
 int sd_manifold_bt(const sd_bodies *b, const sd_walls *wl, const sd_pair *p, sd_manifold *m);
 int sd_manifold_apply(const sd_world *w, const sd_law *law, const sd_manifold *m, int ia, int ib, int b_is_static,
                       double sqm, sd_hist *slots, int cap, sd_pair_out *out);
+/* a pair of another shape than two spheres (chunk entry i): a one-point sphere-log contact into
+ * lane msc of q (returns 1), anything else through sd_manifold_apply now (returns 0) */
+int sd_manifold_general_pair(const sd_world *w, const sd_law *law, const sd_pair *p, int i, struct sc_lanes *q,
+                             int msc, sd_pair_out *out, int *used);
 
 /* lane_law.c: the law in lanes over a batch (sphere pairs in two loops, sphere-log pairs,
  * sphere-wall face contacts) */
@@ -134,8 +138,6 @@ int sd_pair_soa_reserve(sd_pair_soa *s, int n);
 
 /* contact_bb.c: the body-body pass */
 void sd_bb_bed_split(const sd_world *w, sd_bed_split *s);
-int sd_bb_pair_general(const sd_world *w, const sd_law *law, const sd_pair *p, int i, struct sc_lanes *q, int msc,
-                       sd_pair_out *out, int *used);
 void sd_bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, const soa_view *v, int n, sd_pair_out *out,
                  int *used, ss_batch *q, sd_bodies *acc);
 long sd_bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x);

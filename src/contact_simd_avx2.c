@@ -493,7 +493,7 @@ static inline void sc_group(const soa_view *v, const int *sg, int nl, int sa[4],
  * sd_geom_sphere_cyl's contact on the log's side, an end face or an end rim, and sc_lane_fill,
  * with their operations in their order (same bits), lane by lane into q from msc on. A pair
  * whose centre is on the axis or inside the log, or that does not touch after all (near a
- * rim), goes through sd_bb_pair_general as before. Returns the lanes filled. The scalar path spent
+ * rim), goes through sd_manifold_general_pair as before. Returns the lanes filled. The scalar path spent
  * ~12 % of the settled packing's step here. */
 __attribute__((target("avx2"))) int sd_avx2_sc_geom(const sd_world *w, const sd_law *law, const int32_t *ks,
                                                     const soa_view *v, const int *sg, int n, struct sc_lanes *q,
@@ -621,7 +621,7 @@ __attribute__((target("avx2"))) int sd_avx2_sc_geom(const sd_world *w, const sd_
         for (int l = 0; l < nl; l++) {
             const int i = sg[g + l];
             if (!(ok >> l & 1)) {
-                msc += sd_bb_pair_general(w, law, &pairs[ks[i]], i, q, msc, out, used);
+                msc += sd_manifold_general_pair(w, law, &pairs[ks[i]], i, q, msc, out, used);
                 continue;
             }
             /* sc_lane_fill */

@@ -195,7 +195,7 @@ static inline __attribute__((always_inline)) void move_one(int i, sd_vec3 e, dou
     if (shape[i] == SD_SHAPE_SPHERE) {
         omega[i] = v3_madd(omega[i], torque[i], dt * inv_i_ax[i]);
         /* a sphere's displacement since the rebuild is bounded by the summed largest |v| dt
-         * (sd_world_after_moves checks it exactly only when that bound nears half the
+         * (sd_integrate_after_moves checks it exactly only when that bound nears half the
          * margin) */
         const double v2 = v3_norm2(vn);
         *vm = v2 > *vm ? v2 : *vm;
@@ -372,6 +372,32 @@ int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves 
     return moved;
 }
 
+void sd_integrate_after_moves(sd_world *w, const sd_moves *m)
+{
+    const double step = sqrt(m->v2) * w->def.dt;
+    /* the near pairs: the farthest any surface went, a sphere's or a log's */
+    w->near_drift += step > m->dc ? step : m->dc;
+    /* no sphere can have moved more than ref_drift since the rebuild: the exact test of
+     * each against half the margin (what the cylinders get every step) only once that bound
+     * is near it, with the same outcome */
+    w->ref_drift += step;
+    if (!w->need_rebuild && w->ref_drift >= 0.5 * w->def.margin * (1.0 - 1e-3)) {
+        const sd_bodies *b = &w->b;
+        const double lim2 = 0.25 * w->def.margin * w->def.margin;
+        const int nm = w->mov_n;
+        int moved = 0;
+#pragma omp parallel for num_threads(w->nthreads) schedule(static) reduction(| : moved) if (nm > w->def.parallel_min)
+        for (int k = 0; k < nm; k++) {
+            const int i = w->mov[k];
+            moved |= b->shape[i] == SD_SHAPE_SPHERE && v3_norm2(v3_sub(b->pos[i], b->pos_ref[i])) > lim2;
+        }
+        if (moved) w->need_rebuild = 1;
+    }
+    w->front = m->xf;
+    w->front_step = w->step + 1; /* the step that is ending */
+    w->front_bn = w->b.n;
+}
+
 /* The moving bodies only (w->mov, made current by sd_world_step): a fixed body has no
  * triangle pairs to gather and does not move; split evenly among the threads. */
 void sd_integrate(sd_world *w)
@@ -390,5 +416,5 @@ void sd_integrate(sd_world *w)
     moved = sd_integrate_list(w, w->mov, 0, nm, &mm);
 #endif
     if (moved) w->need_rebuild = 1;
-    sd_world_after_moves(w, &mm);
+    sd_integrate_after_moves(w, &mm);
 }

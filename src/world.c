@@ -287,32 +287,6 @@ static sd_status health(const sd_world *w)
     return SD_OK;
 }
 
-void sd_world_after_moves(sd_world *w, const sd_moves *m)
-{
-    const double step = sqrt(m->v2) * w->def.dt;
-    /* the near pairs: the farthest any surface went, a sphere's or a log's */
-    w->near_drift += step > m->dc ? step : m->dc;
-    /* no sphere can have moved more than ref_drift since the rebuild: the exact test of
-     * each against half the margin (what the cylinders get every step) only once that bound
-     * is near it, with the same outcome */
-    w->ref_drift += step;
-    if (!w->need_rebuild && w->ref_drift >= 0.5 * w->def.margin * (1.0 - 1e-3)) {
-        const sd_bodies *b = &w->b;
-        const double lim2 = 0.25 * w->def.margin * w->def.margin;
-        const int nm = w->mov_n;
-        int moved = 0;
-#pragma omp parallel for num_threads(w->nthreads) schedule(static) reduction(| : moved) if (nm > w->def.parallel_min)
-        for (int k = 0; k < nm; k++) {
-            const int i = w->mov[k];
-            moved |= b->shape[i] == SD_SHAPE_SPHERE && v3_norm2(v3_sub(b->pos[i], b->pos_ref[i])) > lim2;
-        }
-        if (moved) w->need_rebuild = 1;
-    }
-    w->front = m->xf;
-    w->front_step = w->step + 1; /* the step that is ending */
-    w->front_bn = w->b.n;
-}
-
 double sd_world_front_x(const sd_world *w)
 {
     if (w->front_step == w->step && w->front_bn == w->b.n && w->step > 0) return w->front;

@@ -620,7 +620,7 @@ static inline void sd_moves_max(sd_moves *a, const sd_moves *b)
 int sd_integrate_list(sd_world *w, const int32_t *mov, int k0, int k1, sd_moves *m);
 /* After the bodies moved (m: the step's largest moves): the near list's and the rebuild's
  * drift, and the front (sd_world_front_x). */
-void sd_world_after_moves(sd_world *w, const sd_moves *m);
+void sd_integrate_after_moves(sd_world *w, const sd_moves *m);
 /* (sd_world_front_x, sabodem.h: kept by the step, computed when the store changed since) */
 
 /* neighbor.c: bring w->mov up to date (O(n) when the store changed since it was made; the
