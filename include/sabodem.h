@@ -222,6 +222,21 @@ void sd_world_set_rebuild_every_step(sd_world *w, int on);
 /* Hash of the full dynamic state (positions, velocities, attitudes, history). */
 uint64_t sd_world_state_hash(const sd_world *w);
 
+/* Checkpoints: the whole state of a world in one versioned, checksummed file, from which a run
+ * continues bit for bit as if never stopped (the format: src/io_checkpoint.h).
+ * Write w and an opaque blob of the caller's (extra) to path atomically: a temporary file in the
+ * same directory, fsynced, renamed over path; on any failure the previous file at path is
+ * untouched. SD_ERR_ARG: NULL path or world, or extra_len > 0 with extra NULL; SD_ERR_IO: not
+ * written (errno kept); SD_ERR_NOMEM. */
+sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *extra, size_t extra_len);
+/* Read a checkpoint into a new world (*out, destroy with sd_world_destroy) and the blob (*extra
+ * malloc'ed, free() it; NULL when extra_len is 0). extra, extra_len, msg may be NULL.
+ * SD_ERR_FORMAT for an empty, truncated, corrupted, foreign or incompatible file; SD_ERR_IO when
+ * it cannot be read; SD_ERR_NOMEM. On failure *out and *extra are NULL and msg (msglen bytes)
+ * names the file and what is wrong. */
+sd_status sd_checkpoint_read(const char *path, sd_world **out, void **extra, size_t *extra_len, char *msg,
+                             size_t msglen);
+
 /* Wall time of the step's stages (seconds, summed over the steps). */
 typedef struct {
     double rebuild;  /* the candidate pairs and the grid, when a step needs them anew */

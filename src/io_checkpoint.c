@@ -44,9 +44,6 @@ static const double probe = -1.5;
 static const uint8_t type_sizes[8] = {
     sizeof(double), sizeof(sd_vec3), sizeof(sd_quat), sizeof(int32_t), sizeof(int64_t), sizeof(sd_tri), 0, 0};
 
-static long long fail_after = -1;
-
-void sd_checkpoint_test_fail_after(long long nbytes) { fail_after = nbytes < 0 ? -1 : nbytes; }
 
 /* ---------------------------------------------------------------- writing ---- */
 
@@ -55,16 +52,17 @@ void sd_checkpoint_test_fail_after(long long nbytes) { fail_after = nbytes < 0 ?
  * second copy of the state. */
 typedef struct {
     FILE *f;
-    uint64_t hash; /* of the payload so far */
-    uint64_t len;  /* payload bytes so far */
+    uint64_t hash;        /* of the payload so far */
+    uint64_t len;         /* payload bytes so far */
+    long long fail_after; /* the tests' full disk (sd_checkpoint_write_capped), -1 none */
 } file_sink;
 
 static int to_file(void *ctx, const void *p, size_t n)
 {
     file_sink *fs = ctx;
-    if (fail_after >= 0 && (unsigned long long)HEADER_SIZE + fs->len + n > (unsigned long long)fail_after) {
+    if (fs->fail_after >= 0 && (unsigned long long)HEADER_SIZE + fs->len + n > (unsigned long long)fs->fail_after) {
         /* injected failure: write what fits, then fail as a full disk does */
-        long long room = fail_after - HEADER_SIZE - (long long)fs->len;
+        long long room = fs->fail_after - HEADER_SIZE - (long long)fs->len;
         if (room > 0) (void)fwrite(p, 1, (size_t)room, fs->f);
         return ENOSPC;
     }
@@ -305,6 +303,13 @@ static void sync_dir(const char *path)
 
 sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *extra, size_t extra_len)
 {
+    return sd_checkpoint_write_capped(path, w, extra, extra_len, -1);
+}
+
+sd_status sd_checkpoint_write_capped(const char *path, const sd_world *w, const void *extra, size_t extra_len,
+                                     long long fail_after)
+{
+    if (fail_after < 0) fail_after = -1;
     if (!path || !*path || !w || (extra_len > 0 && !extra)) return SD_ERR_ARG;
     /* the sphere pairs' springs into bb.hist, where the section reads them (where they are
      * kept, not what they are: the world is const to the caller) */
@@ -332,7 +337,7 @@ sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *e
         errno = e;
         return SD_ERR_IO;
     }
-    file_sink fs = {f, sd_hash_init(), 0};
+    file_sink fs = {f, sd_hash_init(), 0, fail_after};
     sd_bin_writer wr;
     sd_bin_writer_init_sink(&wr, to_file, &fs);
     unsigned char hdr[HEADER_SIZE];

@@ -45,25 +45,11 @@
 
 #define SD_CHECKPOINT_VERSION 1u
 
-/* Write the state of w and the extra blob to path atomically: to path.tmp.XXXXXX in the same
- * directory, fflush + fsync, rename over path (then the directory is fsynced, best effort).
- * On any failure the previous file at path is untouched and the temporary file removed.
- * SD_ERR_ARG: NULL path or world, or extra_len > 0 with extra NULL (nothing is written);
- * SD_ERR_IO: the file could not be written (errno of the failing call is kept);
- * SD_ERR_NOMEM. */
-sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *extra, size_t extra_len);
+/* (sd_checkpoint_write and sd_checkpoint_read: sabodem.h) */
 
-/* Read a checkpoint into a new world (*out, destroy with sd_world_destroy) and the extra blob
- * (*extra malloc'ed, free() it; NULL when extra_len is 0). extra, extra_len, msg may be NULL.
- * SD_ERR_FORMAT for an empty, truncated, corrupted, foreign or incompatible file; SD_ERR_IO when
- * it cannot be opened or read; SD_ERR_NOMEM. On failure *out is NULL, *extra NULL, and msg
- * (msglen bytes, NUL-terminated) names the file and what is wrong. */
-sd_status sd_checkpoint_read(const char *path, sd_world **out, void **extra, size_t *extra_len, char *msg,
-                             size_t msglen);
-
-/* Test only: make the next writes fail (as a full disk would, errno ENOSPC) once more than
- * nbytes bytes of a checkpoint have been written; -1 (the default) switches it off.
- * Process-wide, not thread safe. */
-void sd_checkpoint_test_fail_after(long long nbytes);
+/* sd_checkpoint_write that fails (as a full disk would, errno ENOSPC) once more than fail_after
+ * bytes of the file have been written (-1: never), for the tests. */
+sd_status sd_checkpoint_write_capped(const char *path, const sd_world *w, const void *extra, size_t extra_len,
+                                     long long fail_after);
 
 #endif

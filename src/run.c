@@ -12,7 +12,6 @@
 #include "core/binio.h"
 #include "core/simd.h"
 #include "fluid.h"
-#include "io_checkpoint.h"
 #include "io_vtk.h"
 #include "core/status.h"
 #include "core/vmath.h"
