@@ -142,3 +142,16 @@ void sd_contact_gather(sd_world *w)
         w->w.force[t] = v3_sub(w->w.force[t], w->bt.out[k]);
     }
 }
+
+static const sd_contact_kernels scalar_kernels = {NULL, NULL, NULL, NULL, NULL, NULL};
+
+const sd_contact_kernels *sd_contact_kernels_for(int simd)
+{
+#ifdef SD_FILTER512
+    if (simd == SD_SIMD_AVX512) return &sd_avx512_kernels;
+    if (simd == SD_SIMD_AVX2) return &sd_avx2_kernels;
+#else
+    (void)simd;
+#endif
+    return &scalar_kernels;
+}

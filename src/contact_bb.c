@@ -205,6 +205,7 @@ void sd_bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, const 
 {
     const sd_pair *restrict pairs = w->bb.p;
     sd_hist *restrict hist = v->sh;
+    const sd_contact_kernels *K = w->kern; /* (the SIMD kernels at this world's level) */
     int gen[SS_CHUNK];
     int m = 0, ng = 0;
     q->sh = v->sh;
@@ -214,19 +215,13 @@ void sd_bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, const 
         /* (8 pairs at a time in AVX-512, 4 in AVX2, where the CPU has it; the rest, or all,
          * in the scalar loop) */
         int i = 0;
-#ifdef SD_FILTER512
-        if (w->simd == SD_SIMD_AVX512)
-            i = sd_avx512_ss_filter(w, ks, v, 0, n, used, q, &m, gen, &ng);
-        else if (w->simd == SD_SIMD_AVX2)
-            i = sd_avx2_ss_filter(w, v, 0, n, used, q, &m, gen, &ng);
-#endif
+        if (K->ss_filter) i = K->ss_filter(w, ks, v, 0, n, used, q, &m, gen, &ng);
         ss_filter_range(w, ks, v, i, n, used, q, &m, gen, &ng);
     }
     /* 2. the other shapes, through the manifold */
     {
         int msc = 0;
-#ifdef SD_FILTER512
-        if (w->simd >= SD_SIMD_AVX2 && w->sw[SD_SW_SC_LANES] && w->sw[SD_SW_SC_GEOM]) {
+        if (K->sc_geom && w->sw[SD_SW_SC_LANES] && w->sw[SD_SW_SC_GEOM]) {
             /* the sphere-log pairs in lanes (sd_avx2_sc_geom), the others first, one by one: each
              * pair's result is its own, whatever the order (same bits) */
             int sg[SS_CHUNK], nsg = 0;
@@ -239,9 +234,8 @@ void sd_bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, const 
                 else
                     msc += other_pair(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
             }
-            msc = sd_avx2_sc_geom(w, law, ks, v, sg, nsg, &q->sc, msc, out, used);
+            msc = K->sc_geom(w, law, ks, v, sg, nsg, &q->sc, msc, out, used);
         } else
-#endif
             for (int g = 0; g < ng; g++) {
                 const int i = gen[g];
                 if (ks[i] >= 0) msc += other_pair(w, law, &pairs[ks[i]], i, &q->sc, msc, out, used);
@@ -250,23 +244,13 @@ void sd_bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, const 
     }
     /* 3. the rest of what the law needs of the touching spheres */
     {
-        int j = 0;
-#ifdef SD_FILTER512
-        if (w->simd == SD_SIMD_AVX512) {
-            sd_avx512_ss_gather(w, q, m);
-            j = m;
-        } else if (w->simd == SD_SIMD_AVX2)
-            j = sd_avx2_ss_gather(w, q, m);
-#endif
+        const int j = K->ss_gather ? K->ss_gather(w, q, m) : 0;
         ss_gather_range(w, q, j, m);
     }
     /* 4. the law, vectorized */
     {
         sd_lane_law_ss_normal(q, m);
-        int j = 0;
-#ifdef SD_FILTER512
-        if (w->simd == SD_SIMD_AVX2 && w->sw[SD_SW_SS_LAW256]) j = sd_avx2_ss_law_spring(law, w->def.dt, q, m);
-#endif
+        const int j = K->ss_law_spring && w->sw[SD_SW_SS_LAW256] ? K->ss_law_spring(law, w->def.dt, q, m) : 0;
         sd_lane_law_ss_spring(law, w->def.dt, q, j, m);
     }
     /* 5. results and springs back */
@@ -287,15 +271,12 @@ void sd_bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, const 
                 }
             }
             if (j == m) break;
-#ifdef SD_FILTER512
             /* four lanes at once where no other shape's pair comes between them and none is
              * to be redone (nearly always) */
-            if (w->simd >= SD_SIMD_AVX2 && j + 4 <= m && (g == ng || gen[g] > q->sel[j + 3]) &&
-                sd_avx2_ss_sums(q, j, acc)) {
+            if (K->ss_sums && j + 4 <= m && (g == ng || gen[g] > q->sel[j + 3]) && K->ss_sums(q, j, acc)) {
                 j += 3;
                 continue;
             }
-#endif
             const int ia = q->ia[j], ib = q->ib[j];
             sd_hist *h = &hist[q->off[j]];
             if (q->redo[j] != 0.0) {

@@ -164,7 +164,27 @@ int sd_owned_count(const sd_world *w);
 void sd_front_prefetch_rows(const sd_bodies *b, const int32_t *pa, const int32_t *pb, int j0, int j1, int lim,
                             int *front);
 
+/* The hand-written SIMD kernels of the contact pass at one width, chosen once per world by its
+ * SIMD level (w->kern, sd_contact_kernels_for): each takes what it can, starting where the
+ * scalar loop would, and returns where it stopped; the scalar code (contact_bb.c, lane_law.c,
+ * contact_kernels.h's near_test) finishes, and is the reference each kernel gives the same
+ * bits as. NULL: none at this width. */
+struct sd_contact_kernels {
+    /* the touch filter (step 1 of sd_bb_chunk) from entry i */
+    int (*ss_filter)(const sd_world *w, const int32_t *ks, const soa_view *v, int i, int n, int *used, ss_batch *q,
+                     int *mp, int *gen, int *ngp);
+    int (*ss_gather)(const sd_world *w, ss_batch *q, int m);                 /* step 3, from 0 */
+    int (*ss_law_spring)(const sd_law *law, double dt, ss_batch *q, int m); /* step 4's springs */
+    int (*ss_sums)(ss_batch *q, int j, sd_bodies *acc); /* step 5: lanes j .. j + 3 at once, or 0 */
+    /* the sphere-log pairs sg[0 .. n) of step 2 in lanes */
+    int (*sc_geom)(const sd_world *w, const sd_law *law, const int32_t *ks, const soa_view *v, const int *sg, int n,
+                   struct sc_lanes *q, int msc, sd_pair_out *out, int *used);
+    /* the near test of candidates k0 .. k1 */
+    int (*near_test)(const sd_world *w, double skin, int k0, int k1, uint8_t *restrict keep, int nf);
+};
+
 #ifdef SD_FILTER512
+extern const sd_contact_kernels sd_avx2_kernels, sd_avx512_kernels;
 /* contact_simd_avx2.c: the AVX2 kernels (their scalar references are in contact_bb.c,
  * lane_law.c and contact_kernels.h's near_test) */
 void sd_avx2_tables_ready(void);

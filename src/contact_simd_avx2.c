@@ -648,6 +648,23 @@ __attribute__((target("avx2"))) int sd_avx2_sc_geom(const sd_world *w, const sd_
     }
     return msc;
 }
+
+/* the table's forms (contact_internal.h sd_contact_kernels): the filter takes no ks */
+static int ss_filter2(const sd_world *w, const int32_t *ks, const soa_view *v, int i, int n, int *used, ss_batch *q,
+                      int *mp, int *gen, int *ngp)
+{
+    (void)ks;
+    return sd_avx2_ss_filter(w, v, i, n, used, q, mp, gen, ngp);
+}
+
+const sd_contact_kernels sd_avx2_kernels = {
+    .ss_filter = ss_filter2,
+    .ss_gather = sd_avx2_ss_gather,
+    .ss_law_spring = sd_avx2_ss_law_spring,
+    .ss_sums = sd_avx2_ss_sums,
+    .sc_geom = sd_avx2_sc_geom,
+    .near_test = sd_avx2_near_test,
+};
 #else
 typedef int sd_contact_simd_avx2_none; /* (ISO C: a translation unit declares something) */
 #endif

@@ -123,6 +123,25 @@ __attribute__((target("avx512f,avx512vl"))) void sd_avx512_ss_gather(const sd_wo
             _mm512_storeu_pd(q->sqm + j, _mm512_mask_i32gather_pd(zero, live, o4, sh - 8, 8));
     }
 }
+
+/* the table's form of the gather (contact_internal.h sd_contact_kernels): all m lanes */
+static int ss_gather8(const sd_world *w, ss_batch *q, int m)
+{
+    sd_avx512_ss_gather(w, q, m);
+    return m;
+}
+
+/* AVX-512: the filter and the gather in 8 lanes; the sums, the sphere-log geometry and the
+ * near test in AVX2's 4; the springs as the compiler vectorizes them (where the AVX2 loop,
+ * which skips the limit's root and division, ran no faster) */
+const sd_contact_kernels sd_avx512_kernels = {
+    .ss_filter = sd_avx512_ss_filter,
+    .ss_gather = ss_gather8,
+    .ss_law_spring = NULL,
+    .ss_sums = sd_avx2_ss_sums,
+    .sc_geom = sd_avx2_sc_geom,
+    .near_test = sd_avx2_near_test,
+};
 #else
 typedef int sd_contact_simd_avx512_none; /* (ISO C: a translation unit declares something) */
 #endif

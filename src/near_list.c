@@ -18,9 +18,7 @@ static const uint8_t *near_keep_range(sd_world *w, double skin, int k0, int k1, 
     const sd_pair *restrict pairs = w->bb.p;
     uint8_t *restrict keep = w->near_mark + w->bb.n + 1 + k0; /* (near_mark's second half) */
     int k = k0;
-#ifdef SD_FILTER512
-    if (w->simd >= SD_SIMD_AVX2) k = sd_avx2_near_test(w, skin, k0, k1, keep, nf);
-#endif
+    if (w->kern->near_test) k = w->kern->near_test(w, skin, k0, k1, keep, nf);
     for (; k < k1; k++)
         keep[k - k0] = (uint8_t)near_test(w, skin, &pairs[k], nf);
     uint8_t *restrict mark = w->near_mark;

@@ -599,6 +599,7 @@ int sd_world_simd_level(const sd_world *w) { return w->simd; }
 int sd_world_set_simd_level(sd_world *w, int level)
 {
     w->simd = sd_tuning_simd_level(level, sd_cpu_simd_level(), sd_cpu_is_amd());
+    w->kern = sd_contact_kernels_for(w->simd);
     return w->simd;
 }
 

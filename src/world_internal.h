@@ -217,6 +217,8 @@ typedef struct {
     double ratio; /* the last verdict's median of (on) / (off) */
 } sd_pf_trial;
 
+typedef struct sd_contact_kernels sd_contact_kernels;
+
 /* The engine's optimizations that tests and benchmarks switch for A/B runs: every setting
  * gives the same bits (the tests prove it). Each world has its own (sd_world_switch); a new
  * world has every one at its default. X(name, default, what it does when on). */
@@ -289,6 +291,7 @@ struct sd_world {
     int simd;                 /* the SIMD level its kernels run at (SD_SIMD_*, resolved) */
     long llc_bytes;           /* the last-level cache the prefetch's guess assumes */
     int sw[SD_SWITCH_COUNT];  /* sd_world_switch */
+    const sd_contact_kernels *kern; /* the contact pass's SIMD kernels at this level (contact_internal.h) */
     sd_ext_force_fn ext_fn; /* NULL: ext_force applies (set by the driver, not saved) */
     void *ext_ctx;
     sd_owned *owned;  /* NULL until a parallel pass needs it */
@@ -452,6 +455,8 @@ sd_law sd_law_make(const sd_contact_def *d);
 /* contact.c: the forces of one step. With several threads and integrated != NULL, each thread
  * also moves its own bodies (w->mov must be current) and *integrated is set to 1. */
 sd_status sd_contact_compute(sd_world *w, int *integrated);
+/* The contact pass's SIMD kernels at a level (contact_internal.h; SD_SIMD_SCALAR: none). */
+const sd_contact_kernels *sd_contact_kernels_for(int simd);
 /* Sums the last step's wall pairs into w.force if not done yet (lazy: see contact.c). */
 void sd_contact_gather(sd_world *w);
 /* How many body-body pairs the next step tests (the near pairs of whichever pass made them
