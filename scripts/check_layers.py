@@ -14,7 +14,8 @@ import subprocess
 import sys
 
 LAYERS = ["core", "geom", "engine", "driver", "app"]
-DRIVER = {"scenario", "yaml_tree", "build", "run", "fluid", "io_vtk", "sweep"}
+DRIVER = {"scenario", "yaml_tree", "build", "run", "run_ctx", "run_output", "run_state", "trap", "water", "fluid",
+          "io_vtk", "sweep"}
 
 
 def layer_of(rel):

@@ -53,14 +53,6 @@ typedef struct {
 } sd_run_result;
 
 /* Build and run; returns 0 on success, 1 on a failed run, 2 on bad input, 130 when stopped. */
-/* Capture-phase depth h_D (SPEC §5, eqs 51-53): the highest centre among moving elements
- * within water.probe upstream of the dam face, never below h. Elements lighter than water
- * (floating logs) are left out unless water.h_d_floating is set. */
-double sd_run_capture_depth(const sd_scenario *s, const sd_world *w);
-/* Whether an element is crossing the dam's trap plane at x = xt: moving, its centre past xt by
- * less than 2 cm, and moving downstream faster than ~1 mm/s (the capture's settled rule). */
-int sd_run_crossing(const sd_world *w, double xt);
-
 int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *res);
 
 /* Can the scenario continue from this flow-end checkpoint? Reads and checks it whole (format,

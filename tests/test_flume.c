@@ -8,6 +8,7 @@
 #include "check.h"
 #include "fluid.h"
 #include "run.h"
+#include "trap.h"
 #include "world_internal.h"
 
 static void test_reduced_flume(void)
@@ -123,7 +124,7 @@ static void test_capture_depth(void)
     sd_scenario_default(&s);
     sd_world *w;
     CHECK(sd_world_create(&s.world, &w) == SD_OK);
-    CHECK_NEAR(sd_run_capture_depth(&s, w), s.water_h, 0.0); /* empty: h */
+    CHECK_NEAR(sd_trap_capture_depth(&s, w), s.water_h, 0.0); /* empty: h */
     sd_sphere_def sp = sd_sphere_def_default();
     sp.radius = 0.005;
     sp.density = 1900;
@@ -140,12 +141,12 @@ static void test_capture_depth(void)
     c.axis = v3(0, 1, 0);
     c.pos = v3(s.x_dam - 0.03, 0.15, 0.200);
     sd_world_add_cylinder(w, &c);
-    CHECK_NEAR(sd_run_capture_depth(&s, w), 0.050, 1e-15);
+    CHECK_NEAR(sd_trap_capture_depth(&s, w), 0.050, 1e-15);
     s.water_hd_floating = 1;
-    CHECK_NEAR(sd_run_capture_depth(&s, w), 0.200, 1e-15);
+    CHECK_NEAR(sd_trap_capture_depth(&s, w), 0.200, 1e-15);
     s.water_hd_floating = 0;
     s.water_rho = 2000; /* a denser fluid: the spheres float too, h_D falls back to h */
-    CHECK_NEAR(sd_run_capture_depth(&s, w), s.water_h, 0.0);
+    CHECK_NEAR(sd_trap_capture_depth(&s, w), s.water_h, 0.0);
     sd_world_destroy(w);
     sd_scenario_free(&s);
 }
@@ -174,12 +175,12 @@ static void test_crossing(void)
     sp.pos = v3(xt + 0.01, 0.2, 0.0075); /* fixed in the band */
     sp.fixed = 1;
     sd_world_add_sphere(w, &sp);
-    CHECK(sd_run_crossing(w, xt) == 0);
+    CHECK(sd_trap_crossing(w, xt) == 0);
     sp.fixed = 0;
     sp.pos = v3(xt + 0.01, 0.25, 0.0075); /* in the band, moving on at 2 mm/s: crossing */
     sp.vel = v3(0.002, 0.0, 0.0);
     sd_world_add_sphere(w, &sp);
-    CHECK(sd_run_crossing(w, xt) == 1);
+    CHECK(sd_trap_crossing(w, xt) == 1);
     sd_world_destroy(w);
     sd_scenario_free(&s);
 }

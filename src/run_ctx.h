@@ -1,0 +1,106 @@
+/* The driver's internals, shared by its files (run.c: the phases; trap.c: what the dam holds
+ * and how the flow goes; run_output.c: the files a run writes; run_state.c: the driver's state
+ * in a flow-end checkpoint and a restart from it). Not an interface: run.h is. */
+#ifndef SD_RUN_CTX_H
+#define SD_RUN_CTX_H
+
+#include <stdio.h>
+
+#include "build.h"
+#include "core/binio.h"
+#include "io_vtk.h"
+#include "run.h"
+#include "trap.h"
+#include "water.h"
+
+enum { PH_PACK = 0, PH_FLOW = 1, PH_CAPTURE = 2, PH_DONE = 3, PH_RUN = 4 };
+static inline const char *sd_run_phase_name(int phase)
+{
+    static const char *const names[] = {"packing", "flow", "capture", "done", "run"};
+    return names[phase];
+}
+
+typedef struct {
+    const sd_scenario *s;
+    const sd_run_opts *o;
+    sd_world *w;
+    sd_build_info info;
+    FILE *series, *traj;
+    char dir[1024];
+    int phase;
+    double vol_total_class[SD_MAX_CLASSES], vol_total_logs;
+    double vol_passed_class[SD_MAX_CLASSES], vol_passed_logs;
+    int n_passed;
+    double h_d;
+    double last_cross_time;
+    double ke_peak;
+    double pipe_peak[2 * SD_MAX_PIPES], pipe_impulse[2 * SD_MAX_PIPES];
+    double pipe_peak_t[2 * SD_MAX_PIPES]; /* when the peak happened (pipes exist from the capture start) */
+    sd_vec3 pipe_impulse_vec[2 * SD_MAX_PIPES];
+    double dam_force_now;
+    double phase_end[4];
+    double phase_wall[4];
+    int flow_len_done;
+    double flow_len, flow_q05, flow_q95, flow_front, flow_len_time;
+    int n_snap;
+    sd_vtk_series pvd;
+    int pvd_on;
+    double wall0;
+    long rate_step0;           /* world step and wall clock when this process started stepping */
+    double rate_wall0;         /* (a restart continues from the checkpoint's step) */
+    double phase_t0, phase_w0; /* simulated and wall time at the start of the current phase */
+    int flow_ended;            /* the flow phase has ended; the capture starts at the next step */
+    int dam_built;             /* the pipes are in the world (sd_build_dam at the capture start) */
+    const char *restarted_from;
+    double flow_wall; /* wall time from the start to the flow end, build included (a restarted
+                       * run: that of the run that wrote the checkpoint) */
+    sd_water fluid; /* what the step's water forces need (set_fluid) */
+    /* the side views asked for so far (the arrival's, the end's), for the caller to draw */
+    int n_plots;
+    sd_run_picture plots[SD_RUN_PICTURES];
+} run_ctx;
+
+typedef struct {
+    long series_len, traj_len;
+    double wall_before;
+    int npvd;
+    double *pvd_time;
+    int *pvd_part;
+    char **pvd_file;
+} sd_run_restored;
+
+/* trap.c */
+/* a body's volume, m^3 */
+double sd_trap_body_volume(const sd_body_view *b, int i);
+/* the trap plane: the pipes' axis plane, x_dam + d/2 (what is upstream of it is held) */
+double sd_trap_plane_x(const run_ctx *c);
+/* the volumes upstream of the trap plane, per size class and of the logs, and how many bodies */
+void sd_trap_volumes_upstream(const run_ctx *c, double *cls, double *logs, int *n_up);
+/* the trap ratio P_V (model.md eq. (55)), per class and for the logs */
+double sd_trap_ratio(const run_ctx *c, double *per_class, double *logs_ratio, int *n_up);
+/* the farthest downstream surface of the moving bodies, m */
+double sd_trap_front_x(const run_ctx *c);
+/* the kinetic energy upstream of the trap plane, J, and the moving bodies' top speed, m/s */
+double sd_trap_upstream_ke(const run_ctx *c);
+double sd_trap_max_speed(const run_ctx *c);
+/* the flow length 1 m before the dam (model.md), into c->flow_len and its fields */
+void sd_trap_flow_length(run_ctx *c);
+
+/* run_output.c: the files a run writes (series.csv, trajectories.csv, VTK snapshots, walls,
+ * summary.json), the pictures it asks for, the progress line */
+void sd_output_series_row(run_ctx *c);
+void sd_output_traj(run_ctx *c);
+int sd_output_snapshot(run_ctx *c, const char *name);
+int sd_output_walls(run_ctx *c);
+void sd_output_picture(run_ctx *c, const char *name, const char *png, double xmin, double xmax);
+void sd_output_progress(run_ctx *c, double t_end_est);
+int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg);
+void sd_output_close(run_ctx *c);
+
+/* run_state.c: the driver's state in a flow-end checkpoint */
+void sd_run_state_free(sd_run_restored *r);
+int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restored *r, char *msg, size_t msglen);
+int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg, size_t msglen);
+sd_status sd_run_state_checkpoint(run_ctx *c, const char *path);
+
+#endif

@@ -1,0 +1,293 @@
+/* The driver's state in a flow-end checkpoint's blob, and a restart from it: the state read
+ * back, the outputs of packing and flow carried into the new run's directory. */
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "core/status.h"
+#include "core/vmath.h"
+#include "run_ctx.h"
+
+/* The driver's state in the checkpoint's extra blob: a tagged, versioned byte string. It is
+ * written only at the flow end (before the pipes exist), so the pipe accumulators are zero and
+ * not stored. The build's random numbers are spent before the first step; the driver draws
+ * none later, so there is no rng state to carry. */
+#define BLOB_MAGIC "SDRUNv1"
+
+static long file_len(FILE *f)
+{
+    if (!f || fflush(f)) return -1;
+    return ftell(f);
+}
+
+static void state_pack(const run_ctx *c, sd_bin_writer *b, long series_len, long traj_len)
+{
+    sd_bin_put(b, BLOB_MAGIC, 8);
+    sd_bin_put_u64(b, sd_scenario_branch_hash(c->s));
+    sd_bin_put_i32(b, c->phase);
+    sd_bin_put_i32(b, c->flow_ended);
+    sd_bin_put_i32(b, c->dam_built);
+    sd_bin_put_i32(b, c->n_passed);
+    sd_bin_put_i32(b, c->flow_len_done);
+    sd_bin_put_i32(b, c->n_snap);
+    sd_bin_put_i32(b, c->info.n_rough);
+    sd_bin_put_i32(b, c->info.n_spheres);
+    sd_bin_put_i32(b, c->info.n_logs);
+    sd_bin_put_i32(b, c->info.first_moving_gid);
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        sd_bin_put_f64(b, c->vol_total_class[k]);
+    sd_bin_put_f64(b, c->vol_total_logs);
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        sd_bin_put_f64(b, c->vol_passed_class[k]);
+    sd_bin_put_f64(b, c->vol_passed_logs);
+    sd_bin_put_f64(b, c->h_d);
+    sd_bin_put_f64(b, c->last_cross_time);
+    sd_bin_put_f64(b, c->ke_peak);
+    sd_bin_put_f64(b, c->dam_force_now);
+    for (int k = 0; k < 4; k++)
+        sd_bin_put_f64(b, c->phase_end[k]);
+    for (int k = 0; k < 4; k++)
+        sd_bin_put_f64(b, c->phase_wall[k]);
+    sd_bin_put_f64(b, c->flow_len);
+    sd_bin_put_f64(b, c->flow_q05);
+    sd_bin_put_f64(b, c->flow_q95);
+    sd_bin_put_f64(b, c->flow_front);
+    sd_bin_put_f64(b, c->flow_len_time);
+    sd_bin_put_f64(b, c->phase_t0);
+    sd_bin_put_f64(b, sd_now() - c->wall0);
+    sd_bin_put_i64(b, series_len);
+    sd_bin_put_i64(b, traj_len);
+    /* the VTK series so far (file names relative to the output directory) */
+    int np = c->pvd_on ? (int)c->pvd.n : 0;
+    sd_bin_put_i32(b, np);
+    for (int k = 0; k < np; k++) {
+        int32_t len = (int32_t)strlen(c->pvd.file[k]);
+        sd_bin_put_f64(b, c->pvd.time[k]);
+        sd_bin_put_i32(b, c->pvd.part[k]);
+        sd_bin_put_i32(b, len);
+        sd_bin_put(b, c->pvd.file[k], (size_t)len);
+    }
+}
+
+void sd_run_state_free(sd_run_restored *r)
+{
+    for (int k = 0; k < r->npvd; k++)
+        free(r->pvd_file[k]);
+    free(r->pvd_time);
+    free(r->pvd_part);
+    free(r->pvd_file);
+    memset(r, 0, sizeof *r);
+}
+
+/* 0 on success; otherwise writes why to msg. */
+int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restored *r, char *msg, size_t msglen)
+{
+    memset(r, 0, sizeof *r);
+    sd_bin_reader b;
+    sd_bin_reader_init(&b, blob, len);
+    char magic[8];
+    sd_bin_get(&b, magic, 8);
+    if (b.bad || memcmp(magic, BLOB_MAGIC, 8)) {
+        snprintf(msg, msglen, "holds no run-driver state of this version (not written by 'sabodem run' at a flow end)");
+        return -1;
+    }
+    uint64_t h = sd_bin_get_u64(&b);
+    if (h != sd_scenario_branch_hash(c->s)) {
+        snprintf(msg, msglen,
+                 "was written for other scenario parameters than %s (a restart may change only the capture-phase keys:"
+                 " dam.l_h, dam.l_v, dam.top_beam, dam.columns, dam.beams, phases.capture_limit, phases.quiet_time,"
+                 " phases.ke_fraction, water.probe, water.h_d_floating)",
+                 c->s->path);
+        return -1;
+    }
+    c->phase = sd_bin_get_i32(&b);
+    c->flow_ended = sd_bin_get_i32(&b);
+    c->dam_built = sd_bin_get_i32(&b);
+    c->n_passed = sd_bin_get_i32(&b);
+    c->flow_len_done = sd_bin_get_i32(&b);
+    c->n_snap = sd_bin_get_i32(&b);
+    c->info.n_rough = sd_bin_get_i32(&b);
+    c->info.n_spheres = sd_bin_get_i32(&b);
+    c->info.n_logs = sd_bin_get_i32(&b);
+    c->info.first_moving_gid = sd_bin_get_i32(&b);
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        c->vol_total_class[k] = sd_bin_get_f64(&b);
+    c->vol_total_logs = sd_bin_get_f64(&b);
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        c->vol_passed_class[k] = sd_bin_get_f64(&b);
+    c->vol_passed_logs = sd_bin_get_f64(&b);
+    c->h_d = sd_bin_get_f64(&b);
+    c->last_cross_time = sd_bin_get_f64(&b);
+    c->ke_peak = sd_bin_get_f64(&b);
+    c->dam_force_now = sd_bin_get_f64(&b);
+    for (int k = 0; k < 4; k++)
+        c->phase_end[k] = sd_bin_get_f64(&b);
+    for (int k = 0; k < 4; k++)
+        c->phase_wall[k] = sd_bin_get_f64(&b);
+    c->flow_len = sd_bin_get_f64(&b);
+    c->flow_q05 = sd_bin_get_f64(&b);
+    c->flow_q95 = sd_bin_get_f64(&b);
+    c->flow_front = sd_bin_get_f64(&b);
+    c->flow_len_time = sd_bin_get_f64(&b);
+    c->phase_t0 = sd_bin_get_f64(&b);
+    r->wall_before = sd_bin_get_f64(&b);
+    r->series_len = (long)sd_bin_get_i64(&b);
+    r->traj_len = (long)sd_bin_get_i64(&b);
+    int np = sd_bin_get_i32(&b);
+    if (b.bad || np < 0 || (size_t)np > sd_bin_left(&b) / 16) {
+        snprintf(msg, msglen, "run-driver state is truncated or malformed");
+        return -1;
+    }
+    r->pvd_time = calloc((size_t)np + 1, sizeof(double));
+    r->pvd_part = calloc((size_t)np + 1, sizeof(int));
+    r->pvd_file = calloc((size_t)np + 1, sizeof(char *));
+    if (!r->pvd_time || !r->pvd_part || !r->pvd_file) {
+        snprintf(msg, msglen, "out of memory");
+        sd_run_state_free(r);
+        return -1;
+    }
+    for (int k = 0; k < np && !b.bad; k++) {
+        r->pvd_time[k] = sd_bin_get_f64(&b);
+        r->pvd_part[k] = sd_bin_get_i32(&b);
+        int32_t l = sd_bin_get_i32(&b);
+        if (b.bad || l <= 0 || l > 255 || (size_t)l > sd_bin_left(&b)) {
+            b.bad = 1;
+            break;
+        }
+        r->pvd_file[k] = malloc((size_t)l + 1);
+        if (!r->pvd_file[k]) {
+            b.bad = 1;
+            break;
+        }
+        r->npvd = k + 1;
+        sd_bin_get(&b, r->pvd_file[k], (size_t)l);
+        r->pvd_file[k][l] = '\0';
+        if (strchr(r->pvd_file[k], '/')) b.bad = 1;
+    }
+    if (b.bad || sd_bin_left(&b)) {
+        snprintf(msg, msglen, "run-driver state is truncated or malformed");
+        sd_run_state_free(r);
+        return -1;
+    }
+    int ok = c->phase == PH_FLOW && c->flow_ended == 1 && c->dam_built == 0 && c->n_passed >= 0 && c->n_snap >= 0 &&
+             r->series_len >= 0 && r->traj_len >= -1 && isfinite(c->phase_t0) && isfinite(c->h_d);
+    if (!ok) {
+        snprintf(msg, msglen, "is not a flow-end checkpoint of a flume run");
+        sd_run_state_free(r);
+        return -1;
+    }
+    return 0;
+}
+
+static void dir_of(const char *path, char *buf, size_t n)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        snprintf(buf, n, ".");
+    else if (slash == path)
+        snprintf(buf, n, "/");
+    else
+        snprintf(buf, n, "%.*s", (int)(slash - path), path);
+}
+
+static int same_dir(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+/* dst := the first len bytes of src (len < 0: all of it); src and dst may be the same file. */
+static int copy_prefix(const char *src, const char *dst, long len, char *msg, size_t msglen)
+{
+    FILE *f = fopen(src, "rb");
+    if (!f) {
+        snprintf(msg, msglen, "%s: cannot open: %s", src, strerror(errno));
+        return -1;
+    }
+    size_t cap = 1 << 16, n = 0;
+    char *buf = malloc(cap);
+    while (buf) {
+        if (n == cap) {
+            char *q = realloc(buf, cap * 2);
+            if (!q) {
+                free(buf);
+                buf = NULL;
+                break;
+            }
+            buf = q;
+            cap *= 2;
+        }
+        size_t got = fread(buf + n, 1, cap - n, f);
+        n += got;
+        if (got == 0 || (len >= 0 && n >= (size_t)len)) break;
+    }
+    fclose(f);
+    if (!buf) {
+        snprintf(msg, msglen, "%s: out of memory", src);
+        return -1;
+    }
+    if (len >= 0 && n < (size_t)len) {
+        snprintf(msg, msglen,
+                 "%s: %zu bytes, shorter than the %ld the checkpoint recorded (not the checkpoint's own output?)", src,
+                 n, len);
+        free(buf);
+        return -1;
+    }
+    if (len >= 0) n = (size_t)len;
+    char tmp[1400];
+    snprintf(tmp, sizeof tmp, "%s.tmp", dst);
+    FILE *g = fopen(tmp, "wb");
+    int bad = !g || fwrite(buf, 1, n, g) != n;
+    if (g && fclose(g)) bad = 1;
+    if (!bad && rename(tmp, dst)) bad = 1;
+    free(buf);
+    if (bad) {
+        snprintf(msg, msglen, "%s: cannot write: %s", dst, strerror(errno));
+        unlink(tmp);
+        return -1;
+    }
+    return 0;
+}
+
+/* The outputs of packing and flow continue in the new run's directory: the time series up to
+ * the checkpoint (the recorded lengths) and, when the checkpoint lives elsewhere, the VTK
+ * files listed in the series. */
+int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg, size_t msglen)
+{
+    char src[1100], a[1300], b[1300];
+    dir_of(c->restarted_from, src, sizeof src);
+    snprintf(a, sizeof a, "%s/series.csv", src);
+    snprintf(b, sizeof b, "%s/series.csv", c->dir);
+    if (copy_prefix(a, b, r->series_len, msg, msglen)) return -1;
+    if (c->s->n_traj > 0 && r->traj_len >= 0) {
+        snprintf(a, sizeof a, "%s/trajectories.csv", src);
+        snprintf(b, sizeof b, "%s/trajectories.csv", c->dir);
+        if (copy_prefix(a, b, r->traj_len, msg, msglen)) return -1;
+    }
+    if (c->s->vtk_on && !same_dir(src, c->dir)) {
+        for (int k = -1; k < r->npvd; k++) {
+            const char *name = k < 0 ? "walls.vtp" : r->pvd_file[k];
+            snprintf(a, sizeof a, "%s/%s", src, name);
+            snprintf(b, sizeof b, "%s/%s", c->dir, name);
+            char why[1400];
+            if (copy_prefix(a, b, -1, why, sizeof why) && c->o->log)
+                fprintf(c->o->log, "note: %s (the VTK series of the new run lacks it)\n", why);
+        }
+    }
+    return 0;
+}
+
+sd_status sd_run_state_checkpoint(run_ctx *c, const char *path)
+{
+    long sl = file_len(c->series), tl = c->traj ? file_len(c->traj) : -1;
+    if (sl < 0 || (c->traj && tl < 0)) return SD_ERR_IO;
+    sd_bin_writer b;
+    sd_bin_writer_init(&b);
+    state_pack(c, &b, sl, tl);
+    sd_status st = b.err ? SD_ERR_NOMEM : sd_checkpoint_write(path, c->w, b.p, b.n);
+    sd_bin_writer_fini(&b);
+    return st;
+}
