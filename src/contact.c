@@ -65,7 +65,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
 #ifdef SD_FILTER512
     sd_avx2_tables_ready();
 #endif
-    sd_law law = sd_law_make(&w->def.contact);
+    const sd_law *law = &sd_law_ctx_ready(w)->law;
     long count = 0;
     const int T = sd_owned_count(w);
     if (integrated) *integrated = 0;
@@ -89,7 +89,7 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         if (st) return st;
         int moved = 0;
         sd_moves mv = SD_MOVES_NONE;
-        count = sd_owned_pass(w, &law, T, w->bb_scratch, integrated ? &moved : NULL, &mv);
+        count = sd_owned_pass(w, law, T, w->bb_scratch, integrated ? &moved : NULL, &mv);
         for (int t = 0; t < T; t++)
             w->wall_skipped += w->owned->wskip[t];
         if (moved) w->need_rebuild = 1;
@@ -103,8 +103,8 @@ sd_status sd_contact_compute(sd_world *w, int *integrated)
         sd_status nst = sd_near_update(w);
         if (!nst) nst = sd_near_springs_to(w, 1);
         if (nst) return nst;
-        count = sd_bb_serial_pass(w, &law, w->bb_scratch);
-        count += sd_bt_range(w, &law, w->wall_list, w->wall_n, &((bb_scratch *)w->bb_scratch)[0].wq);
+        count = sd_bb_serial_pass(w, law, w->bb_scratch);
+        count += sd_bt_range(w, law, w->wall_list, w->wall_n, &((bb_scratch *)w->bb_scratch)[0].wq);
         w->wall_skipped += w->wall_skip;
     }
     sc_lanes_fold(w->bb_scratch, T);

@@ -146,7 +146,7 @@ static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m
 static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, int m, const int32_t *ks,
                      const soa_view *v, sd_pair_out *out, int *used)
 {
-    sd_lane_law_sc(law, w->def.dt, q, m);
+    sd_lane_law_sc(&w->ctx.lane, q, m);
     long redo = 0;
     for (int j = 0; j < m; j++)
         redo += q->redo[j] != 0.0;
@@ -250,8 +250,8 @@ void sd_bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, const 
     /* 4. the law, vectorized */
     {
         sd_lane_law_ss_normal(q, m);
-        const int j = K->ss_law_spring && w->sw[SD_SW_SS_LAW256] ? K->ss_law_spring(law, w->def.dt, q, m) : 0;
-        sd_lane_law_ss_spring(law, w->def.dt, q, j, m);
+        const int j = K->ss_law_spring && w->sw[SD_SW_SS_LAW256] ? K->ss_law_spring(&w->ctx.lane, q, m) : 0;
+        sd_lane_law_ss_spring(&w->ctx.lane, q, j, m);
     }
     /* 5. results and springs back */
     if (acc) {

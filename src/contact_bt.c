@@ -12,7 +12,7 @@
 static void bt_flush(sd_world *w, const sd_law *law, bt_batch *q, int m)
 {
     sd_bodies *b = &w->b;
-    sd_lane_law_bt(law, w->def.dt, q, m);
+    sd_lane_law_bt(&w->ctx.lane, q, m);
     for (int j = 0; j < m; j++) {
         const int k = q->k[j];
         const sd_pair *p = &w->bt.p[k];

@@ -129,9 +129,9 @@ int sd_manifold_general_pair(const sd_world *w, const sd_law *law, const sd_pair
 /* lane_law.c: the law in lanes over a batch (sphere pairs in two loops, sphere-log pairs,
  * sphere-wall face contacts) */
 void sd_lane_law_ss_normal(ss_batch *restrict q, int m);
-void sd_lane_law_ss_spring(const sd_law *law, double dt, ss_batch *restrict q, int j0, int m);
-void sd_lane_law_sc(const sd_law *law, double dt, struct sc_lanes *restrict q, int m);
-void sd_lane_law_bt(const sd_law *law, double dt, bt_batch *restrict q, int m);
+void sd_lane_law_ss_spring(const sd_lane_law *lanes, ss_batch *restrict q, int j0, int m);
+void sd_lane_law_sc(const sd_lane_law *lanes, struct sc_lanes *restrict q, int m);
+void sd_lane_law_bt(const sd_lane_law *lanes, bt_batch *restrict q, int m);
 
 /* pair_records.c: room for n records (nonzero when out of memory) */
 int sd_pair_soa_reserve(sd_pair_soa *s, int n);
@@ -174,7 +174,7 @@ struct sd_contact_kernels {
     int (*ss_filter)(const sd_world *w, const int32_t *ks, const soa_view *v, int i, int n, int *used, ss_batch *q,
                      int *mp, int *gen, int *ngp);
     int (*ss_gather)(const sd_world *w, ss_batch *q, int m);                 /* step 3, from 0 */
-    int (*ss_law_spring)(const sd_law *law, double dt, ss_batch *q, int m); /* step 4's springs */
+    int (*ss_law_spring)(const sd_lane_law *lanes, ss_batch *q, int m); /* step 4's springs */
     int (*ss_sums)(ss_batch *q, int j, sd_bodies *acc); /* step 5: lanes j .. j + 3 at once, or 0 */
     /* the sphere-log pairs sg[0 .. n) of step 2 in lanes */
     int (*sc_geom)(const sd_world *w, const sd_law *law, const int32_t *ks, const soa_view *v, const int *sg, int n,
@@ -192,7 +192,7 @@ __attribute__((target("avx2,popcnt"))) int sd_avx2_ss_filter(const sd_world *w, 
                                                              int *used, ss_batch *q, int *mp, int *gen, int *ngp);
 __attribute__((target("avx2"))) int sd_avx2_ss_gather(const sd_world *w, ss_batch *q, int m);
 __attribute__((target("avx2"))) int sd_avx2_ss_sums(ss_batch *q, int j, sd_bodies *acc);
-__attribute__((target("avx2"))) int sd_avx2_ss_law_spring(const sd_law *law, double dt, ss_batch *restrict q, int m);
+__attribute__((target("avx2"))) int sd_avx2_ss_law_spring(const sd_lane_law *lanes, ss_batch *restrict q, int m);
 __attribute__((target("avx2"))) int sd_avx2_sc_geom(const sd_world *w, const sd_law *law, const int32_t *ks,
                                                     const soa_view *v, const int *sg, int n, struct sc_lanes *q,
                                                     int msc, sd_pair_out *out, int *used);

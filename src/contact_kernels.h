@@ -11,15 +11,6 @@
 
 #include "contact_internal.h"
 
-/* The constants of sd_contact_law for one pass of the lanes (lane_law.c, contact_simd_avx2.c). */
-typedef struct {
-    double k_n, c_n, c_s, tan_phi, coh, mks_dt;
-} lane_law;
-
-static inline lane_law lane_law_make(const sd_law *law, double dt)
-{
-    return (lane_law){law->k_n, law->c_n_factor, law->c_s_factor, law->tan_phi, law->cohesion, -law->k_s * dt};
-}
 
 /* A log's pair that fails its kernel's first exact rejection (most of them): skips the
  * manifold round trip. */

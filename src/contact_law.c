@@ -14,3 +14,15 @@ sd_law sd_law_make(const sd_contact_def *d)
     l.cohesion = d->cohesion;
     return l;
 }
+
+const sd_step_ctx *sd_law_ctx_ready(sd_world *w)
+{
+    sd_step_ctx *c = &w->ctx;
+    if (c->step == w->step + 1) return c;
+    c->dt = w->def.dt;
+    c->law = sd_law_make(&w->def.contact);
+    const sd_law *l = &c->law;
+    c->lane = (sd_lane_law){l->k_n, l->c_n_factor, l->c_s_factor, l->tan_phi, l->cohesion, -l->k_s * c->dt};
+    c->step = w->step + 1;
+    return c;
+}

@@ -322,9 +322,9 @@ long sd_ss_law256_count(long *skipped)
  * left out of a group where no lane slides and no lane's force passes the limit (three groups
  * in four on a bed at rest: they were a fifth of this loop's samples there). Returns the lanes
  * done. */
-__attribute__((target("avx2"))) int sd_avx2_ss_law_spring(const sd_law *law, double dt, ss_batch *restrict q, int m)
+__attribute__((target("avx2"))) int sd_avx2_ss_law_spring(const sd_lane_law *lanes, ss_batch *restrict q, int m)
 {
-    const lane_law L = lane_law_make(law, dt);
+    const sd_lane_law L = *lanes;
     const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5),
                   c375 = _mm256_set1_pd(0.375), c1e4 = _mm256_set1_pd(1e-4), sign = _mm256_set1_pd(-0.0),
                   kn = _mm256_set1_pd(L.k_n), cn = _mm256_set1_pd(L.c_n), mks = _mm256_set1_pd(L.mks_dt),

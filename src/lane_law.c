@@ -11,7 +11,7 @@
  * relative velocity v at the contact, sqrt of the effective mass sqm, the stored spring s (in,
  * then out), the force f on A. Returns nonzero when the spring tilted past the small-angle
  * rule and the lane must be redone by the scalar law (rare: a normal turning fast). */
-static inline __attribute__((always_inline)) double law_lane(const lane_law *L, double nx, double ny, double nz,
+static inline __attribute__((always_inline)) double law_lane(const sd_lane_law *L, double nx, double ny, double nz,
                                                              double ov, double vx, double vy, double vz, double sqm,
                                                              double *sx, double *sy, double *sz, double *fx, double *fy,
                                                              double *fz)
@@ -93,9 +93,9 @@ void sd_lane_law_ss_normal(ss_batch *restrict q, int m)
 }
 
 SD_SIMD_CLONES
-void sd_lane_law_ss_spring(const sd_law *law, double dt, ss_batch *restrict q, int j0, int m)
+void sd_lane_law_ss_spring(const sd_lane_law *lanes, ss_batch *restrict q, int j0, int m)
 {
-    const lane_law L = lane_law_make(law, dt);
+    const sd_lane_law L = *lanes;
     for (int j = j0; j < m; j++) {
         const double nx = q->dx[j], ny = q->dy[j], nz = q->dz[j];
         double sx = q->sx[j], sy = q->sy[j], sz = q->sz[j], fx, fy, fz;
@@ -114,9 +114,9 @@ void sd_lane_law_ss_spring(const sd_law *law, double dt, ss_batch *restrict q, i
 }
 
 SD_SIMD_CLONES
-void sd_lane_law_sc(const sd_law *law, double dt, struct sc_lanes *restrict q, int m)
+void sd_lane_law_sc(const sd_lane_law *lanes, struct sc_lanes *restrict q, int m)
 {
-    const lane_law L = lane_law_make(law, dt);
+    const sd_lane_law L = *lanes;
     for (int j = 0; j < m; j++) {
         const double rax = q->rax[j], ray = q->ray[j], raz = q->raz[j], rbx = q->rbx[j], rby = q->rby[j],
                      rbz = q->rbz[j];
@@ -147,9 +147,9 @@ void sd_lane_law_sc(const sd_law *law, double dt, struct sc_lanes *restrict q, i
 }
 
 SD_SIMD_CLONES
-void sd_lane_law_bt(const sd_law *law, double dt, bt_batch *restrict q, int m)
+void sd_lane_law_bt(const sd_lane_law *lanes, bt_batch *restrict q, int m)
 {
-    const lane_law L = lane_law_make(law, dt);
+    const sd_lane_law L = *lanes;
     for (int j = 0; j < m; j++) {
         const double nx = q->nx[j], ny = q->ny[j], nz = q->nz[j], rx = q->rx[j], ry = q->ry[j], rz = q->rz[j];
         /* v + w x r (the wall is still: v - 0 is v) */

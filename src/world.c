@@ -381,6 +381,7 @@ static void check_caches(const sd_world *w)
 sd_status sd_world_step(sd_world *w)
 {
     sd_status st;
+    sd_law_ctx_ready(w);
     if (!w->checked) {
         if ((st = sd_world_check(w))) return st;
         w->checked = 1;

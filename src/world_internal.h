@@ -217,6 +217,27 @@ typedef struct {
     double ratio; /* the last verdict's median of (on) / (off) */
 } sd_pf_trial;
 
+/* contact_law.c */
+typedef struct {
+    double k_n, k_s, c_n_factor, c_s_factor, tan_phi, cohesion; /* c = factor * sqrt(m*) */
+} sd_law;
+sd_law sd_law_make(const sd_contact_def *d);
+/* The law's constants as the lanes use them (lane_law.c, the SIMD kernels): the dashpots'
+ * factors, and -k_s dt, the tangential spring's change per unit of sliding speed. */
+typedef struct {
+    double k_n, c_n, c_s, tan_phi, coh, mks_dt;
+} sd_lane_law;
+/* What a step's stages read of the definition, made once a step (sd_law_ctx_ready): the time
+ * step, the contact law's constants and their lane form. */
+typedef struct {
+    double dt;
+    sd_law law;
+    sd_lane_law lane;
+    long step; /* the step it was made for */
+} sd_step_ctx;
+/* contact_law.c: w->ctx for the coming step, made unless it already is */
+const sd_step_ctx *sd_law_ctx_ready(sd_world *w);
+
 typedef struct sd_contact_kernels sd_contact_kernels;
 
 /* The engine's optimizations that tests and benchmarks switch for A/B runs: every setting
@@ -292,6 +313,7 @@ struct sd_world {
     long llc_bytes;           /* the last-level cache the prefetch's guess assumes */
     int sw[SD_SWITCH_COUNT];  /* sd_world_switch */
     const sd_contact_kernels *kern; /* the contact pass's SIMD kernels at this level (contact_internal.h) */
+    sd_step_ctx ctx;                /* (sd_law_ctx_ready) */
     sd_ext_force_fn ext_fn; /* NULL: ext_force applies (set by the driver, not saved) */
     void *ext_ctx;
     sd_owned *owned;  /* NULL until a parallel pass needs it */
@@ -445,11 +467,6 @@ void sd_grid_free(sd_grid *g);
 void sd_bed_cache_free(sd_bed_cache *c);
 void sd_scan_bufs_free(sd_world *w);
 
-/* contact_law.c */
-typedef struct {
-    double k_n, k_s, c_n_factor, c_s_factor, tan_phi, cohesion; /* c = factor * sqrt(m*) */
-} sd_law;
-sd_law sd_law_make(const sd_contact_def *d);
 /* sd_contact_law (contact_law.h, inline in the contact loop): force on A from one contact. */
 
 /* contact.c: the forces of one step. With several threads and integrated != NULL, each thread
