@@ -24,11 +24,11 @@
 
 static long sc_geom_run;
 
-long sd_sc_geom_count(void) { return __atomic_load_n(&sc_geom_run, __ATOMIC_RELAXED); }
+long sd_contact_sc_geom_count(void) { return __atomic_load_n(&sc_geom_run, __ATOMIC_RELAXED); }
 
 static long sc_lanes_run, sc_lanes_redo;
 
-long sd_sc_lanes_count(long *redo)
+long sd_contact_sc_lanes_count(long *redo)
 {
     if (redo) *redo = __atomic_load_n(&sc_lanes_redo, __ATOMIC_RELAXED);
     return __atomic_load_n(&sc_lanes_run, __ATOMIC_RELAXED);

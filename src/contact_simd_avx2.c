@@ -311,7 +311,7 @@ __attribute__((target("avx2"))) int sd_avx2_near_test(const sd_world *w, double 
 /* the calling thread's groups run in lanes, and of them those that skipped the limit (tests) */
 static _Thread_local long ss_law256_groups, ss_law256_skips;
 
-long sd_ss_law256_count(long *skipped)
+long sd_avx2_ss_law_count(long *skipped)
 {
     if (skipped) *skipped = ss_law256_skips;
     return ss_law256_groups;

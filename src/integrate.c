@@ -20,7 +20,7 @@
 /* the groups of four spheres moved in lanes (move_block256), by this thread (tests) */
 static _Thread_local long move_lanes_groups;
 
-long sd_move_lanes_count(void) { return move_lanes_groups; }
+long sd_integrate_lanes_count(void) { return move_lanes_groups; }
 
 /* A log's rotation and its rebuild bounds (out of line, so that the sphere loop keeps its
  * running maxima in registers): returns the x of its downstream end. */

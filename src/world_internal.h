@@ -516,12 +516,12 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
  * bits at every level. */
 /* The groups of four the calling thread ran through the sphere law's AVX2 spring loop so far,
  * and of them those where no lane slid or passed the limit (*skipped). */
-long sd_ss_law256_count(long *skipped);
-long sd_move_lanes_count(void); /* the groups of four spheres the calling thread moved in lanes */
+long sd_avx2_ss_law_count(long *skipped);
+long sd_integrate_lanes_count(void); /* the groups of four spheres the calling thread moved in lanes */
 /* Sphere-log lanes filled by the AVX2 geometry since the start (for the tests). */
-long sd_sc_geom_count(void);
+long sd_contact_sc_geom_count(void);
 /* the sphere-log lanes run so far, and of them the ones sent back to the scalar law (*redo) */
-long sd_sc_lanes_count(long *redo);
+long sd_contact_sc_lanes_count(long *redo);
 /* The body-body pass's prefetch of the bodies it is about to reach for the first time (contact.c),
  * as switch SD_SW_PREFETCH says: SD_PREFETCH_AUTO (the default: tried on and off during the run,
  * sd_pf_trial; before the first verdict, and below SD_PF_MIN_BODIES, on when the step's data

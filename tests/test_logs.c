@@ -546,11 +546,11 @@ static void test_batched_moves(void)
  * one by one) */
 static void test_sphere_lanes(void)
 {
-    const long g0 = sd_move_lanes_count();
+    const long g0 = sd_integrate_lanes_count();
     const heap_end on = heap_run(1, 4000, 1, 0);
-    const long g1 = sd_move_lanes_count();
+    const long g1 = sd_integrate_lanes_count();
     const heap_end off = heap_run(1, 4000, 0, 0);
-    const long g2 = sd_move_lanes_count();
+    const long g2 = sd_integrate_lanes_count();
     printf("8 spheres moved in lanes (%ld groups of four): state hash %016llx, near drift %.17g m, front %.17g m, %ld "
            "rebuilds; one by one %016llx, %.17g, %.17g, %ld\n",
            g1 - g0, (unsigned long long)on.hash, on.near_drift, on.front, on.rebuilds, (unsigned long long)off.hash,

@@ -401,11 +401,11 @@ int main(void)
         /* the sphere-log pairs touching at one point through the law in lanes and through
          * apply_manifold: the log flume above, the same bits */
         long redo0 = 0, redo1 = 0;
-        const long lanes0 = sd_sc_lanes_count(&redo0);
+        const long lanes0 = sd_contact_sc_lanes_count(&redo0);
         const int was = cfg_set(SD_SW_SC_LANES, 0);
         long cg = 0;
         const uint64_t hg = run(1, &cg);
-        const long lanes1 = sd_sc_lanes_count(&redo1);
+        const long lanes1 = sd_contact_sc_lanes_count(&redo1);
         cfg_set(SD_SW_SC_LANES, was);
         printf("sphere-log lanes: %ld run (%ld sent back to the scalar law) in the runs above; all through "
                "apply_manifold: hash %016llx\n",
@@ -418,15 +418,15 @@ int main(void)
         /* the sphere-log contacts' geometry in AVX2 lanes (contact.c sc_geom256: side, end face
          * and rim in lanes, the rest pair by pair) against sd_geom_sphere_cyl pair by pair: every
          * case, and the log flume above, the same bits */
-        const long g0 = sd_sc_geom_count();
+        const long g0 = sd_contact_sc_geom_count();
         int seen_on = 0, seen_off = 0;
         const uint64_t hc_on = run_sc_cases(40, &seen_on);
-        const long g1 = sd_sc_geom_count();
+        const long g1 = sd_contact_sc_geom_count();
         const int was = cfg_set(SD_SW_SC_GEOM, 0);
         const uint64_t hc_off = run_sc_cases(40, &seen_off);
         long cg = 0;
         const uint64_t hg = run(1, &cg);
-        const long g2 = sd_sc_geom_count();
+        const long g2 = sd_contact_sc_geom_count();
         cfg_set(SD_SW_SC_GEOM, was);
         printf("sphere-log geometry in lanes: %ld lanes in the runs above, %ld on the cases (features held "
                "0x%x); pair by pair: cases hash %016llx against %016llx, log flume %016llx\n",
@@ -445,11 +445,11 @@ int main(void)
          * no lane slides or passes the limit without the limit's root and division) against the
          * compiler's loop: the log flume above, the same bits */
         long sk = 0;
-        const long g = sd_ss_law256_count(&sk);
+        const long g = sd_avx2_ss_law_count(&sk);
         const int was = cfg_set(SD_SW_SS_LAW256, 0);
         long cg = 0;
         const uint64_t hg = run(1, &cg);
-        const long g2 = sd_ss_law256_count(NULL);
+        const long g2 = sd_avx2_ss_law_count(NULL);
         cfg_set(SD_SW_SS_LAW256, was);
         printf("sphere law's spring loop in lanes: %ld groups on this thread above, %ld without the limit; "
                "the compiler's loop: log flume %016llx\n",
