@@ -20,6 +20,16 @@ static void on_sigint(int sig)
     stop_flag = 1;
 }
 
+/* Ctrl-C, a kill, a closed terminal or a closed pipe downstream (`sabodem run ... | head`) all
+ * stop the run as Ctrl-C does, with every output file closed and valid: none kills it. */
+static void stop_on_signals(struct sigaction *sa)
+{
+    sigaction(SIGINT, sa, NULL);
+    sigaction(SIGTERM, sa, NULL);
+    sigaction(SIGHUP, sa, NULL);
+    sigaction(SIGPIPE, sa, NULL);
+}
+
 static void usage(FILE *f)
 {
     fprintf(f,
@@ -116,8 +126,7 @@ int main(int argc, char **argv)
         struct sigaction sa;
         memset(&sa, 0, sizeof sa);
         sa.sa_handler = on_sigint;
-        sigaction(SIGINT, &sa, NULL);
-        sigaction(SIGTERM, &sa, NULL);
+        stop_on_signals(&sa);
         tuning_from_env(&so.tuning);
         so.run_done = draw_run_pictures;
         int code = sd_sweep_run(file, outdir, &so, &stop_flag, stdout, stderr);
@@ -210,8 +219,7 @@ int main(int argc, char **argv)
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_sigint;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    stop_on_signals(&sa);
     if ((ckpt_flow_end || restart) && !s.flume_on) {
         fprintf(stderr, "%s: --%s needs a flume scenario (flume.on: true)\n", file, restart ? "restart" : "checkpoint-at");
         sd_scenario_free(&s);

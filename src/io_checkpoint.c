@@ -865,24 +865,22 @@ static sd_status slurp(const rd_ctx *r, unsigned char **data, size_t *size)
         errno = e;
         return SD_ERR_IO;
     }
-    size_t cap = 1 << 16, n = 0;
+    /* a regular file, read up to its size and no further: a device or a pipe (/dev/zero) would
+     * be read until memory ran out */
+    struct stat sb;
+    if (fstat(fileno(f), &sb) != 0 || !S_ISREG(sb.st_mode)) {
+        fclose(f);
+        if (r->msg && r->msglen) snprintf(r->msg, r->msglen, "%s: not a regular file", r->path);
+        return SD_ERR_FORMAT;
+    }
+    size_t cap = (size_t)sb.st_size + 1, n = 0; /* (one more byte: a file that grew is refused below) */
     unsigned char *buf = malloc(cap);
     if (!buf) {
         fclose(f);
         return SD_ERR_NOMEM;
     }
     for (;;) {
-        if (n == cap) {
-            unsigned char *q = cap <= SIZE_MAX / 2 ? realloc(buf, cap * 2) : NULL;
-            if (!q) {
-                free(buf);
-                fclose(f);
-                return SD_ERR_NOMEM;
-            }
-            buf = q;
-            cap *= 2;
-        }
-        size_t got = fread(buf + n, 1, cap - n, f);
+        size_t got = n < cap ? fread(buf + n, 1, cap - n, f) : 0;
         n += got;
         if (got == 0) break;
     }

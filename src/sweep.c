@@ -17,6 +17,9 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#ifdef __linux__
+#include <sys/prctl.h>
+#endif
 #include <unistd.h>
 
 #include "run.h"
@@ -526,9 +529,17 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
                         ri = i;
             if (gi < 0 && ri < 0) break;
             fflush(NULL);
+            const pid_t parent = getpid();
             pid_t pid = fork();
             if (pid == 0) {
                 signal(SIGINT, SIG_IGN); /* the parent stops the children */
+#ifdef __linux__
+                /* and a parent killed outright (SIGKILL) takes them with it, as SIGTERM would */
+                prctl(PR_SET_PDEATHSIG, SIGTERM);
+                if (getppid() != parent) _exit(130); /* (it died before the line above) */
+#else
+                (void)parent;
+#endif
                 if (gi >= 0) _exit(child_flow(&d, &items[groups[gi].first], &groups[gi]));
                 _exit(child_run(&d, &items[ri], items[ri].group >= 0 ? groups[items[ri].group].ckpt : NULL));
             }

@@ -33,19 +33,25 @@ void sd_yaml_free(sd_ynode *n)
 
 static int push_child(sd_ynode *p, sd_ynode *c, char *key, int kl, int kc)
 {
-    sd_ynode **it = realloc(p->items, (size_t)(p->n + 1) * sizeof(*it));
-    if (!it) return -1;
-    p->items = it;
+    if (p->n == p->cap) { /* (room doubled: a map of many keys grows in linear time) */
+        const int cap = p->cap ? 2 * p->cap : 8;
+        sd_ynode **it = realloc(p->items, (size_t)cap * sizeof(*it));
+        if (!it) return -1;
+        p->items = it;
+        if (p->kind == SD_Y_MAP) {
+            char **k = realloc(p->keys, (size_t)cap * sizeof(*k));
+            if (!k) return -1;
+            p->keys = k;
+            int *l = realloc(p->key_line, (size_t)cap * sizeof(int));
+            if (!l) return -1;
+            p->key_line = l;
+            int *c2 = realloc(p->key_col, (size_t)cap * sizeof(int));
+            if (!c2) return -1;
+            p->key_col = c2;
+        }
+        p->cap = cap;
+    }
     if (p->kind == SD_Y_MAP) {
-        char **k = realloc(p->keys, (size_t)(p->n + 1) * sizeof(*k));
-        if (!k) return -1;
-        p->keys = k;
-        int *l = realloc(p->key_line, (size_t)(p->n + 1) * sizeof(int));
-        if (!l) return -1;
-        p->key_line = l;
-        int *c2 = realloc(p->key_col, (size_t)(p->n + 1) * sizeof(int));
-        if (!c2) return -1;
-        p->key_col = c2;
         p->keys[p->n] = key;
         p->key_line[p->n] = kl;
         p->key_col[p->n] = kc;
@@ -54,10 +60,39 @@ static int push_child(sd_ynode *p, sd_ynode *c, char *key, int kl, int kc)
     return 0;
 }
 
-/* Recursive descent over parser events. */
-static sd_ynode *parse_node(yaml_parser_t *ps, yaml_event_t *ev, const char *name, char *err, int errlen);
+/* Recursive descent over parser events, at most SD_YAML_MAX_DEPTH collections deep. */
+static sd_ynode *parse_node(yaml_parser_t *ps, yaml_event_t *ev, const char *name, char *err, int errlen, int depth);
 
-static sd_ynode *parse_collection(yaml_parser_t *ps, sd_ynode *n, const char *name, char *err, int errlen)
+typedef struct {
+    const char *key;
+    int i;
+} key_at;
+
+static int cmp_key(const void *a, const void *b)
+{
+    const key_at *x = a, *y = b;
+    const int c = strcmp(x->key, y->key);
+    return c ? c : (x->i > y->i) - (x->i < y->i);
+}
+
+/* A key that a map holds twice: its second place (reported), or -1. Sorted, in O(n log n):
+ * a map of 30,000 keys took ~19 s when each key was compared with those before it. */
+static int duplicate_key(const sd_ynode *n)
+{
+    if (n->n < 2) return -1;
+    key_at *ix = malloc((size_t)n->n * sizeof *ix);
+    if (!ix) return -1;
+    for (int i = 0; i < n->n; i++)
+        ix[i] = (key_at){n->keys[i], i};
+    qsort(ix, (size_t)n->n, sizeof *ix, cmp_key);
+    int dup = -1;
+    for (int k = 1; k < n->n; k++)
+        if (!strcmp(ix[k - 1].key, ix[k].key) && (dup < 0 || ix[k].i < dup)) dup = ix[k].i;
+    free(ix);
+    return dup;
+}
+
+static sd_ynode *parse_collection(yaml_parser_t *ps, sd_ynode *n, const char *name, char *err, int errlen, int depth)
 {
     for (;;) {
         yaml_event_t ev;
@@ -69,6 +104,13 @@ static sd_ynode *parse_collection(yaml_parser_t *ps, sd_ynode *n, const char *na
         }
         if (ev.type == YAML_SEQUENCE_END_EVENT || ev.type == YAML_MAPPING_END_EVENT) {
             yaml_event_delete(&ev);
+            const int d = n->kind == SD_Y_MAP ? duplicate_key(n) : -1;
+            if (d >= 0) {
+                snprintf(err, (size_t)errlen, "%s:%d:%d: duplicate key '%s'", name, n->key_line[d], n->key_col[d],
+                         n->keys[d]);
+                sd_yaml_free(n);
+                return NULL;
+            }
             return n;
         }
         char *key = NULL;
@@ -84,14 +126,6 @@ static sd_ynode *parse_collection(yaml_parser_t *ps, sd_ynode *n, const char *na
             key = strdup((const char *)ev.data.scalar.value);
             kl = (int)ev.start_mark.line + 1;
             kc = (int)ev.start_mark.column + 1;
-            for (int i = 0; i < n->n; i++)
-                if (strcmp(n->keys[i], key) == 0) {
-                    snprintf(err, (size_t)errlen, "%s:%d:%d: duplicate key '%s'", name, kl, kc, key);
-                    free(key);
-                    yaml_event_delete(&ev);
-                    sd_yaml_free(n);
-                    return NULL;
-                }
             yaml_event_delete(&ev);
             if (!yaml_parser_parse(ps, &ev)) {
                 snprintf(err, (size_t)errlen, "%s:%d:%d: %s", name, (int)ps->problem_mark.line + 1,
@@ -101,7 +135,7 @@ static sd_ynode *parse_collection(yaml_parser_t *ps, sd_ynode *n, const char *na
                 return NULL;
             }
         }
-        sd_ynode *c = parse_node(ps, &ev, name, err, errlen);
+        sd_ynode *c = parse_node(ps, &ev, name, err, errlen, depth);
         if (!c || push_child(n, c, key, kl, kc)) {
             free(key);
             sd_yaml_free(c);
@@ -111,9 +145,15 @@ static sd_ynode *parse_collection(yaml_parser_t *ps, sd_ynode *n, const char *na
     }
 }
 
-static sd_ynode *parse_node(yaml_parser_t *ps, yaml_event_t *ev, const char *name, char *err, int errlen)
+static sd_ynode *parse_node(yaml_parser_t *ps, yaml_event_t *ev, const char *name, char *err, int errlen, int depth)
 {
     sd_ynode *n = NULL;
+    if ((ev->type == YAML_SEQUENCE_START_EVENT || ev->type == YAML_MAPPING_START_EVENT) && depth >= SD_YAML_MAX_DEPTH) {
+        snprintf(err, (size_t)errlen, "%s:%d:%d: nested deeper than %d levels", name, (int)ev->start_mark.line + 1,
+                 (int)ev->start_mark.column + 1, SD_YAML_MAX_DEPTH);
+        yaml_event_delete(ev);
+        return NULL;
+    }
     switch (ev->type) {
     case YAML_SCALAR_EVENT:
         n = node_new(SD_Y_SCALAR, &ev->start_mark);
@@ -123,11 +163,11 @@ static sd_ynode *parse_node(yaml_parser_t *ps, yaml_event_t *ev, const char *nam
     case YAML_SEQUENCE_START_EVENT:
         n = node_new(SD_Y_SEQ, &ev->start_mark);
         yaml_event_delete(ev);
-        return n ? parse_collection(ps, n, name, err, errlen) : NULL;
+        return n ? parse_collection(ps, n, name, err, errlen, depth + 1) : NULL;
     case YAML_MAPPING_START_EVENT:
         n = node_new(SD_Y_MAP, &ev->start_mark);
         yaml_event_delete(ev);
-        return n ? parse_collection(ps, n, name, err, errlen) : NULL;
+        return n ? parse_collection(ps, n, name, err, errlen, depth + 1) : NULL;
     case YAML_ALIAS_EVENT:
         snprintf(err, (size_t)errlen, "%s:%d:%d: YAML aliases are not supported", name, (int)ev->start_mark.line + 1,
                  (int)ev->start_mark.column + 1);
@@ -166,7 +206,7 @@ static sd_ynode *parse_all(yaml_parser_t *ps, const char *name, char *err, int e
                 sd_yaml_free(root);
                 return NULL;
             }
-            root = parse_node(ps, &ev, name, err, errlen);
+            root = parse_node(ps, &ev, name, err, errlen, 0);
             if (!root) return NULL;
             continue;
         }

@@ -9,11 +9,14 @@ typedef struct sd_ynode {
     sd_ynode_kind kind;
     int line, col; /* 1-based */
     char *value;   /* scalar text */
-    int n;         /* children (seq items, or map values) */
+    int n, cap;    /* children (seq items, or map values), and the room for them */
     char **keys;   /* map keys */
     int *key_line, *key_col;
     struct sd_ynode **items;
 } sd_ynode;
+
+/* Collections nest at most this deep: deeper input is refused (the reader recurses). */
+#define SD_YAML_MAX_DEPTH 64
 
 /* Parse a file; returns NULL and writes "file:line:col: message" into err on failure. */
 sd_ynode *sd_yaml_load(const char *path, char *err, int errlen);

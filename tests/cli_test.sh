@@ -79,6 +79,29 @@ if [ "$code" -eq 130 ] && /usr/bin/python3 -c "import json,sys; d=json.load(open
    && /usr/bin/python3 "$src_dir/scripts/check_vtk.py" "$tmp/int/series.pvd" >/dev/null && [ -z "$(ls "$tmp/int" | grep -E '\.tmp|XXXX')" ]; then
   pass=$((pass + 1)); else echo "FAIL ctrl-c: exit $code"; cat "$tmp/int.log"; ls "$tmp/int"; fail=$((fail + 1)); fi
 
+# a closed pipe downstream (SIGPIPE) and a closed terminal (SIGHUP) stop a run as Ctrl-C does:
+# exit 130 and a summary that says so, not a run killed without one
+"$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/pipe" --set output.png=false --set output.log_interval=0.001 \
+  --set phases.capture_limit=60 2>&1 | head -n 3 >/dev/null
+if /usr/bin/python3 -c "import json,sys; d=json.load(open('$tmp/pipe/summary.json')); sys.exit(d['status']!='interrupted')"; then
+  pass=$((pass + 1)); else echo "FAIL sigpipe: no interrupted summary"; ls "$tmp/pipe"; fail=$((fail + 1)); fi
+"$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/hup" --set output.png=false --set phases.capture_limit=60 \
+  >"$tmp/hup.log" 2>&1 &
+pid=$!
+for _ in $(seq 600); do grep -q '^phase=flow' "$tmp/hup.log" 2>/dev/null && break; sleep 0.1; done
+kill -HUP $pid
+wait $pid
+code=$?
+if [ "$code" -eq 130 ] && /usr/bin/python3 -c "import json,sys; d=json.load(open('$tmp/hup/summary.json')); sys.exit(d['status']!='interrupted')"; then
+  pass=$((pass + 1)); else echo "FAIL sighup: exit $code"; fail=$((fail + 1)); fi
+
+# inputs that once crashed or hung the readers: refused with a clear message
+python3 -c "print('solver: ' + '[' * 60000 + ']' * 60000)" > "$tmp/deep.yaml"
+expect yaml-too-deep 2 "deep.yaml:1:[0-9]+: nested deeper than 64 levels" check "$tmp/deep.yaml"
+printf 'solver:\n  dt: 1.0e-5\n  margin: 5.0e-3\n  dt: 2.0e-5\n' > "$tmp/dup.yaml"
+expect yaml-duplicate 2 "dup.yaml:4:3: duplicate key 'dt'" check "$tmp/dup.yaml"
+expect restart-device 2 "/dev/zero: not a regular file" run "$src_dir/examples/flume_small.yaml" --restart /dev/zero -o "$tmp/rz-out"
+
 # the side views of the arrival and the end, drawn together when the run ends: both PNGs there
 # (with Debian's python3-matplotlib, which scripts/setup.sh installs), or the note for each
 "$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/png" --set output.png=true --set phases.capture_limit=0.05 \

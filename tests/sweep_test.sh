@@ -124,5 +124,23 @@ if [ "$code" -eq 0 ] && [ -n "$a" ] && [ "$a" = "$b" ] && [ ! -e "$tmp/one/branc
 "$bin" sweep "$tmp/small.yaml" --parallel zero > "$tmp/bad.log" 2>&1
 [ $? -eq 2 ] && grep -q "parallel" "$tmp/bad.log" && ok || bad "--parallel zero accepted"
 
+# a sweep killed outright (SIGKILL: no handler runs) takes its running children with it
+sed 's/phases.packing_time: 0.25/phases.packing_time: 60/' "$tmp/small.yaml" > "$tmp/long.yaml" # (children that live)
+"$bin" sweep "$tmp/long.yaml" -o "$tmp/killed" --parallel 2 > "$tmp/killed.log" 2>&1 &
+kp=$!
+for _ in $(seq 300); do grep -q "started" "$tmp/killed.log" 2>/dev/null && break; sleep 0.1; done
+children=$(pgrep -P "$kp" | tr '\n' ' ')
+kill -KILL "$kp"
+wait "$kp" 2>/dev/null
+left=""
+for _ in $(seq 30); do
+  left=""
+  for c in $children; do kill -0 "$c" 2>/dev/null && left="$left $c"; done
+  [ -z "$left" ] && break
+  sleep 0.1
+done
+[ -n "$children" ] && [ -z "$left" ] && ok || bad "killed sweep: children '$children' left running:$left"
+for c in $left; do kill -KILL "$c" 2>/dev/null; done
+
 echo "sweep: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
