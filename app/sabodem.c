@@ -1,5 +1,6 @@
 /* sabodem: the only main(). Subcommands: run, check, params. Exit codes: 0 ok, 1 run failed,
  * 2 bad input or usage, 130 interrupted. */
+#include <errno.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -30,32 +31,83 @@ static void stop_on_signals(struct sigaction *sa)
     sigaction(SIGPIPE, sa, NULL);
 }
 
+/* The subcommands' help, one table: usage lines, then what each does and its options. */
+static const struct {
+    const char *name, *usage, *help;
+} commands[] = {
+    {"run", "sabodem run FILE [-o DIR] [--set key=value]... [--threads N] [--seed S]\n"
+            "                 [--checkpoint-at flow_end] [--restart CHECKPOINT]",
+     "simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
+     "  -o, --output DIR          the output directory\n"
+     "  --set key=value           override a scenario key (sabodem params lists them)\n"
+     "  --threads N               threads (solver.threads; 0: all cores)\n"
+     "  --seed S                  the random seed (solver.seed)\n"
+     "  --checkpoint-at flow_end  also write DIR/flow_end.ckpt when the flow reaches the dam\n"
+     "  --restart CHECKPOINT      continue from such a checkpoint (the capture phase only); FILE may\n"
+     "                            differ from the writer's scenario only in the dam layout and\n"
+     "                            capture-phase keys (docs/sweep.md)"},
+    {"check", "sabodem check FILE [--set key=value]...",
+     "validate the scenario and build its scene without running"},
+    {"sweep", "sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch]",
+     "run a matrix of cases x seeds in parallel (resumable), with CSV and figures; runs that\n"
+     "differ only in the dam layout share one packing + flow (docs/sweep.md)\n"
+     "  --parallel N  processes at once (default: the sweep file's, else the cores)\n"
+     "  --dry-run     list the runs and shared flows, and what is already done\n"
+     "  --no-branch   every run packs and flows on its own"},
+    {"params", "sabodem params [--markdown]", "list every scenario key with its type, unit, default and range"},
+};
+enum { N_COMMANDS = sizeof commands / sizeof commands[0] };
+
 static void usage(FILE *f)
 {
-    fprintf(f,
-            "usage: sabodem run FILE [-o DIR] [--set key=value]... [--threads N] [--seed S]\n"
-            "                        [--checkpoint-at flow_end] [--restart CHECKPOINT]\n"
-            "       sabodem check FILE [--set key=value]...\n"
-            "       sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch]\n"
-            "       sabodem params [--markdown]\n"
-            "\n"
-            "run     simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
-            "          --checkpoint-at flow_end  also write DIR/flow_end.ckpt when the flow reaches the dam\n"
-            "          --restart CHECKPOINT      continue from such a checkpoint (the capture phase only);\n"
-            "                                    FILE may differ from the writer's scenario only in the\n"
-            "                                    dam layout and capture-phase keys (docs/sweep.md)\n"
-            "check   validate the scenario and build its scene without running\n"
-            "sweep   run a matrix of cases x seeds in parallel (resumable), with CSV and figures; runs\n"
-            "        that differ only in the dam layout share one packing + flow (docs/sweep.md)\n"
-            "          --dry-run    list the runs and shared flows, and what is already done\n"
-            "          --no-branch  every run packs and flows on its own\n"
-            "params  list every scenario key with its type, unit, default and range\n"
-            "\n"
-            "environment (how the engine runs; the results are the same bits whatever they say):\n"
-            "  SD_SIMD=scalar|avx2|avx512|auto   the hand-written kernels' width (auto: the CPU's best,\n"
-            "                                    AVX2 on AMD CPUs)\n"
-            "  SD_PREFETCH=on|off|auto           the contact pass's prefetch (auto: tried during the run)\n"
-            "  OMP_NUM_THREADS                   threads when --threads is not given\n");
+    for (int k = 0; k < N_COMMANDS; k++)
+        fprintf(f, "%s %s\n", k ? "      " : "usage:", commands[k].usage);
+    fprintf(f, "       sabodem --version\n\n");
+    for (int k = 0; k < N_COMMANDS; k++) {
+        const char *h = commands[k].help;
+        fprintf(f, "%-7s ", commands[k].name);
+        for (; *h; h++) { /* (the help's lines indented under the name) */
+            fputc(*h, f);
+            if (*h == '\n') fputs("        ", f);
+        }
+        fputc('\n', f);
+    }
+    fprintf(f, "\n"
+               "sabodem COMMAND --help shows one command.\n"
+               "environment (how the engine runs; the results are the same bits whatever they say):\n"
+               "  SD_SIMD=scalar|avx2|avx512|auto   the hand-written kernels' width (auto: the CPU's best,\n"
+               "                                    AVX2 on AMD CPUs)\n"
+               "  SD_PREFETCH=on|off|auto           the contact pass's prefetch (auto: tried during the run)\n"
+               "  OMP_NUM_THREADS                   threads when --threads is not given\n"
+               "  SABODEM_SCRIPTS                   where the plotting scripts are, if not beside the program\n");
+}
+
+/* `sabodem COMMAND --help`: 1 when argv asks for it (and it was printed) */
+static int command_help(const char *cmd, int argc, char **argv)
+{
+    for (int i = 2; i < argc; i++)
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h"))
+            for (int k = 0; k < N_COMMANDS; k++)
+                if (!strcmp(cmd, commands[k].name)) {
+                    printf("usage: %s\n\n%s\n", commands[k].usage, commands[k].help);
+                    return 1;
+                }
+    return 0;
+}
+
+/* A count option's value: 0 and *v set when it is an integer in [lo, hi], else a message naming
+ * the option and 2. */
+static int int_option(const char *opt, const char *text, long lo, long hi, long *v)
+{
+    char *end;
+    errno = 0;
+    const long x = strtol(text, &end, 10);
+    if (errno || end == text || *end || x < lo || x > hi) {
+        fprintf(stderr, "sabodem: %s: expected an integer from %ld to %ld, got '%s'\n", opt, lo, hi, text);
+        return 2;
+    }
+    *v = x;
+    return 0;
 }
 
 /* The engine's tuning from the environment (SD_SIMD, SD_PREFETCH; sd_tuning_from_env): how it
@@ -89,6 +141,11 @@ int main(int argc, char **argv)
         usage(stdout);
         return 0;
     }
+    if (!strcmp(cmd, "--version") || !strcmp(cmd, "version")) {
+        printf("sabodem %s\n", SD_VERSION);
+        return 0;
+    }
+    if (command_help(cmd, argc, argv)) return 0;
     if (!strcmp(cmd, "params")) {
         sd_scenario_print_params(stdout, argc > 2 && !strcmp(argv[2], "--markdown"));
         return 0;
@@ -152,10 +209,20 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--set") && i + 1 < argc) sets[nsets++] = argv[++i];
         else if (!strncmp(a, "--set=", 6)) sets[nsets++] = a + 6;
         else if (!strcmp(a, "--threads") && i + 1 < argc) {
-            snprintf(thrbuf, sizeof thrbuf, "solver.threads=%s", argv[++i]);
+            long v;
+            if (int_option("--threads", argv[++i], 0, 1024, &v)) {
+                free(sets);
+                return 2;
+            }
+            snprintf(thrbuf, sizeof thrbuf, "solver.threads=%ld", v);
             sets[nsets++] = thrbuf;
         } else if (!strcmp(a, "--seed") && i + 1 < argc) {
-            snprintf(seedbuf, sizeof seedbuf, "solver.seed=%s", argv[++i]);
+            long v;
+            if (int_option("--seed", argv[++i], 0, 2147483647L, &v)) {
+                free(sets);
+                return 2;
+            }
+            snprintf(seedbuf, sizeof seedbuf, "solver.seed=%ld", v);
             sets[nsets++] = seedbuf;
         } else if (!strcmp(a, "--checkpoint-at") && i + 1 < argc && !strcmp(cmd, "run")) {
             if (strcmp(argv[++i], "flow_end")) {

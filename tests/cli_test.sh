@@ -51,6 +51,11 @@ expect set-override 2 "--set:1:[0-9]+: contact.k_n: must be > 0" check "$tmp/goo
 expect set-unknown 2 "--set:1:1: unknown key 'contact.kn'" check "$tmp/good.yaml" --set contact.kn=5
 expect bad-option 2 "unknown or incomplete option" run "$tmp/good.yaml" --frobnicate
 expect params 0 "solver.dt" params
+expect version 0 "^sabodem [0-9]+\.[0-9]+\.[0-9]+$" --version
+expect run-help 0 "usage: sabodem run FILE.*--restart CHECKPOINT" run --help
+expect sweep-help 0 "--no-branch   every run packs and flows on its own" sweep --help
+expect threads-bad 2 "--threads: expected an integer from 0 to 1024, got 'x'" run "$tmp/good.yaml" --threads x
+expect seed-bad 2 "--seed: expected an integer from 0 to 2147483647, got '1.5'" run "$tmp/good.yaml" --seed 1.5
 
 # branching flags: bad values and files are refused, naming them
 expect checkpoint-at-bad 2 "--checkpoint-at: unknown point 'capture'" run "$src_dir/examples/flume_small.yaml" --checkpoint-at capture
