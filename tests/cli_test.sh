@@ -52,7 +52,7 @@ expect set-unknown 2 "--set:1:1: unknown key 'contact.kn'" check "$tmp/good.yaml
 expect bad-option 2 "unknown or incomplete option" run "$tmp/good.yaml" --frobnicate
 expect params 0 "solver.dt" params
 expect version 0 "^sabodem [0-9]+\.[0-9]+\.[0-9]+$" --version
-expect run-help 0 "usage: sabodem run FILE.*--restart CHECKPOINT" run --help
+expect run-help 0 "--restart CHECKPOINT      continue from such a checkpoint" run --help
 expect sweep-help 0 "--no-branch   every run packs and flows on its own" sweep --help
 expect threads-bad 2 "--threads: expected an integer from 0 to 1024, got 'x'" run "$tmp/good.yaml" --threads x
 expect seed-bad 2 "--seed: expected an integer from 0 to 2147483647, got '1.5'" run "$tmp/good.yaml" --seed 1.5
