@@ -29,13 +29,7 @@ build "$base/tree"
 build "$here"
 ref=../shared/reference/lammps
 bash bench/settle.sh "$work/settled.data"
-pin="taskset -c 0"
-command -v taskset >/dev/null || pin=""
-bind="env OMP_PROC_BIND=true OMP_PLACES=cores"
-median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
-lammps_rates() {
-  awk '/^Loop time of/ {n++; t=$4; s=$9; a=$12; if (n==3) d=a*s/t; if (n==4) f=a*s/t} END {print d, f}' "$1"
-}
+. bench/common.sh
 out=bench/results/compare.txt
 {
   echo "machine: $(lscpu | awk -F: '/Model name/ {gsub(/^ +/,"",$2); print $2}'), $(nproc) cores; $(date -u '+%Y-%m-%d %H:%M UTC')"

@@ -28,16 +28,7 @@ ref=../shared/reference/lammps
 # settle once with LAMMPS (drop + settle); both codes then start from this settled bed
 bash bench/settle.sh "$work/settled.data"
 
-# one thread / one rank: both codes pinned to the same CPU (this VM's two vCPUs differ in speed
-# for minutes at a time, performance pass P4, in the git history, and a ratio across them measures that too)
-pin="taskset -c 0"
-command -v taskset >/dev/null || pin=""
-bind="env OMP_PROC_BIND=true OMP_PLACES=cores"
-median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
-# LAMMPS "Loop time of T on P procs for N steps with A atoms" for the dense (3rd) and flow (4th) runs
-lammps_rates() {
-  awk '/^Loop time of/ {n++; t=$4; s=$9; a=$12; if (n==3) d=a*s/t; if (n==4) f=a*s/t} END {print d, f}' "$1"
-}
+. bench/common.sh
 echo "machine: $(lscpu | awk -F: '/Model name/ {gsub(/^ +/,"",$2); print $2}'), $(nproc) cores" | tee "$out/side_by_side.txt"
 # what the machine itself takes from two threads this hour (interruptions, both CPUs busy, a
 # barrier a step), before the codes run

@@ -72,33 +72,28 @@ expect sweep-parallel-bad 2 "--parallel: expected a positive integer" sweep "$sr
 
 # Ctrl-C: exit 130, summary and VTK series closed and valid. The interrupt comes once the
 # flow phase has started (not after a fixed time: a faster engine would finish first), and a
-# long capture limit keeps the run from ending on its own.
-"$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/int" --set output.png=false --set phases.capture_limit=60 \
-  >"$tmp/int.log" 2>&1 &
-pid=$!
-for _ in $(seq 600); do grep -q '^phase=flow' "$tmp/int.log" 2>/dev/null && break; sleep 0.1; done
-kill -INT $pid
-wait $pid
-code=$?
-if [ "$code" -eq 130 ] && /usr/bin/python3 -c "import json,sys; d=json.load(open('$tmp/int/summary.json')); sys.exit(d['status']!='interrupted')" \
-   && /usr/bin/python3 "$src_dir/scripts/check_vtk.py" "$tmp/int/series.pvd" >/dev/null && [ -z "$(ls "$tmp/int" | grep -E '\.tmp|XXXX')" ]; then
-  pass=$((pass + 1)); else echo "FAIL ctrl-c: exit $code"; cat "$tmp/int.log"; ls "$tmp/int"; fail=$((fail + 1)); fi
+# long capture limit keeps the run from ending on its own. A closed terminal (SIGHUP) the same.
+interrupted() { # name, signal
+  "$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/$1" --set output.png=false --set phases.capture_limit=60 \
+    >"$tmp/$1.log" 2>&1 &
+  local pid=$! code
+  for _ in $(seq 600); do grep -q '^phase=flow' "$tmp/$1.log" 2>/dev/null && break; sleep 0.1; done
+  kill "-$2" $pid
+  wait $pid
+  code=$?
+  if [ "$code" -eq 130 ] && /usr/bin/python3 -c "import json,sys; d=json.load(open('$tmp/$1/summary.json')); sys.exit(d['status']!='interrupted')" \
+     && /usr/bin/python3 "$src_dir/scripts/check_vtk.py" "$tmp/$1/series.pvd" >/dev/null && [ -z "$(ls "$tmp/$1" | grep -E '\.tmp|XXXX')" ]; then
+    pass=$((pass + 1)); else echo "FAIL $1 (SIG$2): exit $code"; cat "$tmp/$1.log"; ls "$tmp/$1"; fail=$((fail + 1)); fi
+}
+interrupted int INT
+interrupted hup HUP
 
-# a closed pipe downstream (SIGPIPE) and a closed terminal (SIGHUP) stop a run as Ctrl-C does:
-# exit 130 and a summary that says so, not a run killed without one
+# a closed pipe downstream (SIGPIPE) stops a run as Ctrl-C does: a summary that says so, not a
+# run killed without one
 "$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/pipe" --set output.png=false --set output.log_interval=0.001 \
   --set phases.capture_limit=60 2>&1 | head -n 3 >/dev/null
 if /usr/bin/python3 -c "import json,sys; d=json.load(open('$tmp/pipe/summary.json')); sys.exit(d['status']!='interrupted')"; then
   pass=$((pass + 1)); else echo "FAIL sigpipe: no interrupted summary"; ls "$tmp/pipe"; fail=$((fail + 1)); fi
-"$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/hup" --set output.png=false --set phases.capture_limit=60 \
-  >"$tmp/hup.log" 2>&1 &
-pid=$!
-for _ in $(seq 600); do grep -q '^phase=flow' "$tmp/hup.log" 2>/dev/null && break; sleep 0.1; done
-kill -HUP $pid
-wait $pid
-code=$?
-if [ "$code" -eq 130 ] && /usr/bin/python3 -c "import json,sys; d=json.load(open('$tmp/hup/summary.json')); sys.exit(d['status']!='interrupted')"; then
-  pass=$((pass + 1)); else echo "FAIL sighup: exit $code"; fail=$((fail + 1)); fi
 
 # inputs that once crashed or hung the readers: refused with a clear message
 python3 -c "print('solver: ' + '[' * 60000 + ']' * 60000)" > "$tmp/deep.yaml"

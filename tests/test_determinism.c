@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "scenes.h"
 #include "core/vmath.h"
 #include "sabodem.h"
 #include "world_internal.h" /* (sd_world_switch) */
@@ -15,54 +16,24 @@
 #include <omp.h>
 #endif
 
-static uint64_t rng_state;
-static double urand(void)
-{
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    return (double)((rng_state * 2685821657736338717ULL) >> 11) / 9007199254740992.0;
-}
-
-static void add_quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d, int group)
-{
-    sd_world_add_triangle(w, a, b, c, group);
-    sd_world_add_triangle(w, a, c, d, group);
-}
-
 /* 2400 spheres of 11.2–12.2 mm on a jittered lattice of 11.5 mm, touching and slightly overlapping, with random
  * velocities, in a box of triangles; a few logs on top. */
 static sd_world *make_pile(int threads, int rebuild_every_step)
 {
-    rng_state = 0x9E3779B97F4A7C15ULL;
+    scene_rng = 0x9E3779B97F4A7C15ULL;
     sd_world_def def = sd_world_def_default(); /* paper springs, 15° gravity, dt 1e-5 */
     def.threads = threads;
     sd_world *w = NULL;
     CHECK(sd_world_create(&def, &w) == SD_OK);
     sd_world_set_rebuild_every_step(w, rebuild_every_step);
     const int nx = 20, ny = 12, nz = 10;
-    const double sp = 0.0115, Lx = nx * sp, Ly = ny * sp, H = 0.2;
-    add_quad(w, v3(0, 0, 0), v3(Lx, 0, 0), v3(Lx, Ly, 0), v3(0, Ly, 0), 0);
-    add_quad(w, v3(0, 0, 0), v3(0, Ly, 0), v3(0, Ly, H), v3(0, 0, H), 1);
-    add_quad(w, v3(Lx, 0, 0), v3(Lx, Ly, 0), v3(Lx, Ly, H), v3(Lx, 0, H), 1);
-    add_quad(w, v3(0, 0, 0), v3(Lx, 0, 0), v3(Lx, 0, H), v3(0, 0, H), 1);
-    add_quad(w, v3(0, Ly, 0), v3(Lx, Ly, 0), v3(Lx, Ly, H), v3(0, Ly, H), 1);
-    for (int k = 0; k < nz; k++)
-        for (int j = 0; j < ny; j++)
-            for (int i = 0; i < nx; i++) {
-                sd_sphere_def s = sd_sphere_def_default();
-                s.radius = 0.0056 + 0.0005 * urand();
-                s.pos = v3(sp * (i + 0.5) + 0.0004 * (urand() - 0.5), sp * (j + 0.5) + 0.0004 * (urand() - 0.5),
-                           0.0062 + sp * k + 0.0004 * (urand() - 0.5));
-                s.vel = v3(0.3 * (urand() - 0.5), 0.3 * (urand() - 0.5), 0.3 * (urand() - 0.5));
-                s.omega = v3(20 * (urand() - 0.5), 20 * (urand() - 0.5), 20 * (urand() - 0.5));
-                s.tag = k;
-                CHECK(sd_world_add_sphere(w, &s) >= 0);
-            }
+    const double sp = 0.0115;
+    scene_open_box(w, nx * sp, ny * sp, 0.2);
+    scene_lattice(w, nx, ny, nz, sp);
     for (int q = 0; q < 6; q++) {
         sd_cylinder_def c = sd_cylinder_def_default();
         c.pos = v3(0.03 + 0.035 * q, 0.03 + 0.01 * (q % 3), 0.135);
-        c.axis = v3(urand() - 0.5, urand() - 0.5, 0.3 * (urand() - 0.5));
+        c.axis = v3(scene_urand() - 0.5, scene_urand() - 0.5, 0.3 * (scene_urand() - 0.5));
         c.vel = v3(0, 0, -0.5);
         CHECK(sd_world_add_cylinder(w, &c) >= 0);
     }

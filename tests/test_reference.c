@@ -17,6 +17,7 @@
 
 #include "build.h"
 #include "check.h"
+#include "scenes.h"
 #include "core/vmath.h"
 #include "sabodem.h"
 #include "scenario.h"
@@ -36,21 +37,6 @@ typedef struct {
     double ke;      /* kinetic energy after the hash's step, J (not part of the reference) */
 } result;
 
-static uint64_t rng_state;
-static double urand(void)
-{
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    return (double)((rng_state * 2685821657736338717ULL) >> 11) / 9007199254740992.0;
-}
-
-static void add_quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d, int group)
-{
-    CHECK(sd_world_add_triangle(w, a, b, c, group) >= 0);
-    CHECK(sd_world_add_triangle(w, a, c, d, group) >= 0);
-}
-
 /* the threads and the SIMD level of the scenes' worlds (run_scene) */
 static int scene_threads = 1, scene_simd = SD_SIMD_AUTO;
 
@@ -68,29 +54,14 @@ static sd_world *world_new(sd_world_def *def)
  * spins, in an open box; gravity 15 degrees off the floor's normal, as in the flume. */
 static sd_world *scene_bed(void)
 {
-    rng_state = 0x9E3779B97F4A7C15ULL;
+    scene_rng = 0x9E3779B97F4A7C15ULL;
     sd_world_def def = sd_world_def_default();
     def.dt = 5.0e-5;
     sd_world *w = world_new(&def);
     const int nx = 14, ny = 8, nz = 9;
-    const double sp = 0.0125, lx = nx * sp, ly = ny * sp, h = 0.2;
-    add_quad(w, v3(0, 0, 0), v3(lx, 0, 0), v3(lx, ly, 0), v3(0, ly, 0), 0);
-    add_quad(w, v3(0, 0, 0), v3(0, ly, 0), v3(0, ly, h), v3(0, 0, h), 1);
-    add_quad(w, v3(lx, 0, 0), v3(lx, ly, 0), v3(lx, ly, h), v3(lx, 0, h), 1);
-    add_quad(w, v3(0, 0, 0), v3(lx, 0, 0), v3(lx, 0, h), v3(0, 0, h), 1);
-    add_quad(w, v3(0, ly, 0), v3(lx, ly, 0), v3(lx, ly, h), v3(0, ly, h), 1);
-    for (int k = 0; k < nz; k++)
-        for (int j = 0; j < ny; j++)
-            for (int i = 0; i < nx; i++) {
-                sd_sphere_def s = sd_sphere_def_default();
-                s.radius = 0.0056 + 0.0005 * urand();
-                s.pos = v3(sp * (i + 0.5) + 0.0004 * (urand() - 0.5), sp * (j + 0.5) + 0.0004 * (urand() - 0.5),
-                           0.0062 + sp * k + 0.0004 * (urand() - 0.5));
-                s.vel = v3(0.3 * (urand() - 0.5), 0.3 * (urand() - 0.5), 0.3 * (urand() - 0.5));
-                s.omega = v3(20 * (urand() - 0.5), 20 * (urand() - 0.5), 20 * (urand() - 0.5));
-                s.tag = k;
-                CHECK(sd_world_add_sphere(w, &s) >= 0);
-            }
+    const double sp = 0.0125;
+    scene_open_box(w, nx * sp, ny * sp, 0.2);
+    scene_lattice(w, nx, ny, nz, sp);
     return w;
 }
 
@@ -115,14 +86,14 @@ static sd_world *scene_flume(sd_scenario *s, long n_pack)
  * block upstream, thrown downstream at 1.2 m/s. */
 static sd_world *scene_capture(void)
 {
-    rng_state = 0xD1B54A32D192ED03ULL;
+    scene_rng = 0xD1B54A32D192ED03ULL;
     sd_world_def def = sd_world_def_default();
     def.dt = 2.0e-5;
     sd_world *w = world_new(&def);
     const double lx = 0.5, ly = 0.2, h = 0.16;
-    add_quad(w, v3(0, 0, 0), v3(lx, 0, 0), v3(lx, ly, 0), v3(0, ly, 0), 0);
-    add_quad(w, v3(0, 0, 0), v3(lx, 0, 0), v3(lx, 0, h), v3(0, 0, h), 1);
-    add_quad(w, v3(0, ly, 0), v3(lx, ly, 0), v3(lx, ly, h), v3(0, ly, h), 1);
+    scene_quad(w, v3(0, 0, 0), v3(lx, 0, 0), v3(lx, ly, 0), v3(0, ly, 0), 0);
+    scene_quad(w, v3(0, 0, 0), v3(lx, 0, 0), v3(lx, 0, h), v3(0, 0, h), 1);
+    scene_quad(w, v3(0, ly, 0), v3(lx, ly, 0), v3(lx, ly, h), v3(0, ly, h), 1);
     const double rp = 0.009, xp = 0.3;
     for (int c = 0; c < 3; c++) {
         sd_cylinder_def p = sd_cylinder_def_default();
@@ -148,12 +119,12 @@ static sd_world *scene_capture(void)
         for (int j = 0; j < 6; j++)
             for (int i = 0; i < 10; i++) {
                 sd_sphere_def s = sd_sphere_def_default();
-                s.radius = 0.004 + 0.006 * urand();
+                s.radius = 0.004 + 0.006 * scene_urand();
                 const double room = cell - 2.0 * s.radius;
-                s.pos = v3(0.02 + cell * (i + 0.5) + room * (urand() - 0.5),
-                           0.034 + cell * (j + 0.5) + room * (urand() - 0.5),
-                           0.012 + cell * (k + 0.5) + room * (urand() - 0.5));
-                s.vel = v3(1.2, 0.1 * (urand() - 0.5), 0.1 * (urand() - 0.5));
+                s.pos = v3(0.02 + cell * (i + 0.5) + room * (scene_urand() - 0.5),
+                           0.034 + cell * (j + 0.5) + room * (scene_urand() - 0.5),
+                           0.012 + cell * (k + 0.5) + room * (scene_urand() - 0.5));
+                s.vel = v3(1.2, 0.1 * (scene_urand() - 0.5), 0.1 * (scene_urand() - 0.5));
                 s.tag = 1 + (int)(s.radius > 0.007);
                 CHECK(sd_world_add_sphere(w, &s) >= 0);
             }
@@ -161,9 +132,9 @@ static sd_world *scene_capture(void)
     for (int q = 0; q < 12; q++) {
         sd_cylinder_def c = sd_cylinder_def_default();
         c.pos = v3(0.08 + 0.03 * (q % 4), 0.05 + 0.05 * (q / 4), 0.135 + 0.012 * (q % 2));
-        c.axis = q % 2 ? v3(0.1 * urand(), 1, 0.1 * urand()) : v3(1, 0.2 * (urand() - 0.5), 0.1 * urand());
+        c.axis = q % 2 ? v3(0.1 * scene_urand(), 1, 0.1 * scene_urand()) : v3(1, 0.2 * (scene_urand() - 0.5), 0.1 * scene_urand());
         c.vel = v3(1.2, 0, 0);
-        c.omega = v3(0, 0, 2.0 * (urand() - 0.5));
+        c.omega = v3(0, 0, 2.0 * (scene_urand() - 0.5));
         c.tag = 200;
         CHECK(sd_world_add_cylinder(w, &c) >= 0);
     }
