@@ -238,6 +238,12 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
             res->interrupted = 1;
             break;
         }
+        if (sd_output_failed(&c)) { /* a full disk: stop, with an error, not a run that says done */
+            fprintf(o->err, "%s/%s: cannot write: %s\n", c.dir, c.out_file, strerror(c.out_errno));
+            code = 1;
+            msg = "output failed";
+            break;
+        }
         if (c.phase == PH_RUN && sd_world_time(c.w) >= s->duration - 0.5 * dt) break;
         if (c.phase == PH_DONE) break;
         if (c.flow_ended && !c.dam_built) {
@@ -349,14 +355,11 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         sd_output_series_row(&c);
         sd_output_snapshot(&c, "final");
         if (s->flume_on && code == 0) sd_output_picture(&c, "final", "side_final.png", s->x_dam - 1.0, s->x_end);
-        fclose(c.series);
-        c.series = NULL;
-        if (c.traj) fclose(c.traj);
-        c.traj = NULL;
-        if (c.pvd_on) {
-            sd_vtk_series_flush(&c.pvd);
-            sd_vtk_series_free(&c.pvd);
-            c.pvd_on = 0;
+        const int failed_before = sd_output_failed(&c);
+        if (sd_output_finish(&c) && !failed_before) {
+            fprintf(o->err, "%s/%s: cannot write: %s\n", c.dir, c.out_file, strerror(c.out_errno));
+            if (code == 0 || code == 130) code = 1;
+            msg = "output failed";
         }
     }
     if (sd_output_summary(&c, res, code, msg)) {

@@ -55,6 +55,10 @@ typedef struct {
     double flow_wall; /* wall time from the start to the flow end, build included (a restarted
                        * run: that of the run that wrote the checkpoint) */
     sd_water fluid; /* what the step's water forces need (set_fluid) */
+    /* the first output that could not be written (a full disk): its errno and file; the run
+     * stops with an error at the next step (sd_output_failed) */
+    int out_errno;
+    char out_file[280];
     /* the side views asked for so far (the arrival's, the end's), for the caller to draw */
     int n_plots;
     sd_run_picture plots[SD_RUN_PICTURES];
@@ -96,6 +100,10 @@ void sd_output_picture(run_ctx *c, const char *name, const char *png, double xmi
 void sd_output_progress(run_ctx *c, double t_end_est);
 int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg);
 void sd_output_close(run_ctx *c);
+/* the first failed write: nonzero (its errno) once one failed, the file in c->out_file */
+int sd_output_failed(const run_ctx *c);
+/* series.csv and trajectories.csv flushed and closed; nonzero when either could not be written */
+int sd_output_finish(run_ctx *c);
 
 /* run_state.c: the driver's state in a flow-end checkpoint */
 void sd_run_state_free(sd_run_restored *r);

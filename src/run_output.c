@@ -9,6 +9,16 @@
 #include "core/vmath.h"
 #include "run_ctx.h"
 
+/* the first write that failed is kept (a full disk fails every later one too) */
+static void out_failed(run_ctx *c, const char *file, int e)
+{
+    if (c->out_errno) return;
+    c->out_errno = e ? e : EIO;
+    snprintf(c->out_file, sizeof c->out_file, "%s", file);
+}
+
+int sd_output_failed(const run_ctx *c) { return c->out_errno; }
+
 void sd_output_series_row(run_ctx *c)
 {
     if (!c->series) return;
@@ -22,6 +32,7 @@ void sd_output_series_row(run_ctx *c)
     fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d\n", sd_world_time(c->w), sd_run_phase_name(c->phase),
             sd_world_body_count(c->w) ? sd_trap_front_x(c) : 0.0, up, sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w),
             c->dam_force_now, pv, c->h_d, sd_world_body_count(c->w), c->n_passed);
+    if (ferror(c->series)) out_failed(c, "series.csv", errno);
 }
 
 void sd_output_traj(run_ctx *c)
@@ -35,6 +46,7 @@ void sd_output_traj(run_ctx *c)
                 sd_world_time(c->w), st.gid, st.pos.x, st.pos.y, st.pos.z, st.vel.x, st.vel.y, st.vel.z, st.omega.x, st.omega.y,
                 st.omega.z, st.axis.x, st.axis.y, st.axis.z, st.force.x, st.force.y, st.force.z);
     }
+    if (ferror(c->traj)) out_failed(c, "trajectories.csv", errno);
 }
 
 int sd_output_snapshot(run_ctx *c, const char *name)
@@ -67,12 +79,18 @@ int sd_output_snapshot(run_ctx *c, const char *name)
             snprintf(f, sizeof f, "%s/%s", c->dir, pass == 0 ? r1 : r2);
             rc = pass == 0 ? sd_vtk_write_spheres(f, m, pos, rad, vel, id, tag)
                            : sd_vtk_write_cylinders(f, m, pos, ax, len, rad, vel, id, tag);
-            if (rc) break;
+            if (rc) {
+                out_failed(c, pass == 0 ? r1 : r2, errno);
+                break;
+            }
         }
         if (!rc && c->pvd_on) {
             rc = sd_vtk_series_add(&c->pvd, sd_world_time(c->w), 0, r1);
             if (!rc) rc = sd_vtk_series_add(&c->pvd, sd_world_time(c->w), 1, r2);
+            if (rc) out_failed(c, "series.pvd", errno);
         }
+    } else {
+        out_failed(c, "snapshot", ENOMEM);
     }
     free(pos);
     free(vel);
@@ -230,6 +248,21 @@ int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const cha
     int bad = ferror(f);
     if (fclose(f) || bad) return -1;
     return rename(tmp, path);
+}
+
+int sd_output_finish(run_ctx *c)
+{
+    if (c->series && (fflush(c->series) || ferror(c->series))) out_failed(c, "series.csv", errno);
+    if (c->traj && (fflush(c->traj) || ferror(c->traj))) out_failed(c, "trajectories.csv", errno);
+    if (c->series && fclose(c->series)) out_failed(c, "series.csv", errno);
+    if (c->traj && fclose(c->traj)) out_failed(c, "trajectories.csv", errno);
+    c->series = c->traj = NULL;
+    if (c->pvd_on) {
+        if (sd_vtk_series_flush(&c->pvd)) out_failed(c, "series.pvd", errno);
+        sd_vtk_series_free(&c->pvd);
+        c->pvd_on = 0;
+    }
+    return c->out_errno;
 }
 
 void sd_output_close(run_ctx *c)

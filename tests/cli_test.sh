@@ -95,6 +95,14 @@ interrupted hup HUP
 if /usr/bin/python3 -c "import json,sys; d=json.load(open('$tmp/pipe/summary.json')); sys.exit(d['status']!='interrupted')"; then
   pass=$((pass + 1)); else echo "FAIL sigpipe: no interrupted summary"; ls "$tmp/pipe"; fail=$((fail + 1)); fi
 
+# a full disk (series.csv is /dev/full, which fails every write with ENOSPC): the run stops with
+# an error naming the file and exit 1, and its summary says so; not a run that says done
+mkdir -p "$tmp/full" && ln -s /dev/full "$tmp/full/series.csv"
+expect disk-full 1 "full/series.csv: cannot write: No space left on device" run "$src_dir/examples/flume_small.yaml" \
+  -o "$tmp/full" --set output.png=false
+/usr/bin/python3 -c "import json,sys; sys.exit(json.load(open('$tmp/full/summary.json'))['status'] != 'output failed')" \
+  && pass=$((pass + 1)) || { echo "FAIL disk-full: summary"; fail=$((fail + 1)); }
+
 # inputs that once crashed or hung the readers: refused with a clear message
 python3 -c "print('solver: ' + '[' * 60000 + ']' * 60000)" > "$tmp/deep.yaml"
 expect yaml-too-deep 2 "deep.yaml:1:[0-9]+: nested deeper than 64 levels" check "$tmp/deep.yaml"
