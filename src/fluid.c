@@ -80,7 +80,7 @@ void sd_fluid_sphere_batch(const sd_fluid_params *p, double h_D, int n, const do
         const double zc = z < 0.0 ? 0.0 : z;
         const int cap = capture[j] != 0.0;
         const double uf = (zc / h / 5.0 + 4.0 / 5.0) * U; /* eq 50 */
-        const double uc = (bma * zc / hd + a) * U;        /* eq 51 */
+        const double uc = (bma * zc / hd + a) * U;        /* eq 53 */
         const double wet = cap ? (cap_ok && zc <= hd) : (flow_ok && zc <= h);
         const double u = cap ? uc : uf;
         const double rx = dx * u - vx[j], ry = dy * u - vy[j], rz = dz * u - vz[j];

@@ -81,8 +81,8 @@ static inline void sd_fluid_capture_coeffs(double h, double h_D, double *alpha, 
 {
     if (!(h_D >= h)) h_D = h; /* never below h */
     double r = 1.8 * h / h_D;
-    double a = r - 1.0, b = 1.0; /* eq 52 */
-    if (a <= 0.1) {              /* eq 53 */
+    double a = r - 1.0, b = 1.0; /* eq 51 */
+    if (a <= 0.1) {              /* eq 52 */
         a = 0.1;
         b = r - a;
     }
@@ -102,7 +102,7 @@ static inline int sd_fluid_speed_capture(double U, double h, double h_D, double 
     }
     double a, b;
     sd_fluid_capture_coeffs(h, h_D, &a, &b);
-    *u = ((b - a) * z / h_D + a) * U; /* eq 51 */
+    *u = ((b - a) * z / h_D + a) * U; /* eq 53 */
     return 1;
 }
 

@@ -84,7 +84,7 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
          * other's divisions, the costliest part of this loop */
         __m512d u;
         if ((cap & sph) == sph)
-            u = _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_mul_pd(bma, zc), HD), A), U); /* eq 51 */
+            u = _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_mul_pd(bma, zc), HD), A), U); /* eq 53 */
         else if (!(cap & sph))
             u = _mm512_mul_pd(_mm512_add_pd(_mm512_div_pd(_mm512_div_pd(zc, H), five), c45), U); /* eq 50 */
         else
@@ -181,7 +181,7 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const sd_water *fc, 
             const int capm = _mm256_movemask_pd(cap) & sph;
             __m256d u;
             if (capm == sph)
-                u = _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_mul_pd(bma, zc), HD), A), U); /* eq 51 */
+                u = _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_mul_pd(bma, zc), HD), A), U); /* eq 53 */
             else if (!capm)
                 u = _mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(_mm256_div_pd(zc, H), five), c45), U); /* eq 50 */
             else
