@@ -1,45 +1,18 @@
 /* Candidate search (SPEC §4, sec. 2.4 (9)): uniform cell grids, margin r_dam, rebuild every
  * t_reset or when an element moved more than r_dam/2. Bodies and triangles have one grid each;
  * an element is registered in every cell its margin-expanded box covers, and a pair is taken
- * only in the lowest cell its two boxes share, so each pair is found once. Cost O(N). */
+ * only in the lowest cell its two boxes share, so each pair is found once. Cost O(N).
+ * This file: the rebuild's orchestration and its stage timers, the bed's cache, the springs
+ * carried across, the candidate scan, the store's re-sort by cell, the moving bodies' list; the
+ * grids are grid.c's (neighbor_internal.h). */
+
 #include <stdlib.h>
 #include <string.h>
 #include <threads.h>
 
-#include "world_internal.h"
-
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(SD_NO_CLONES)
-#include <immintrin.h>
-#define SD_SCAN512 1
-#endif
-
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
-/* The threads for one of the rebuild's parallel parts over n items: all the process has (at most
- * SD_MAX_OWNERS), or one for a small part (start-up costs more). */
-static int rebuild_threads(const sd_world *w, int n)
-{
-    int T = 1;
-#ifdef _OPENMP
-    T = w->nthreads;
-    if (T > SD_MAX_OWNERS) T = SD_MAX_OWNERS;
-    if (n <= w->def.parallel_min) T = 1;
-#else
-    (void)w, (void)n;
-#endif
-    return T;
-}
+#include "neighbor_internal.h"
 
 static const int hist_cap_of_kind[SD_PAIR_KINDS] = {1, 1, SD_MANIFOLD_MAX, 1, SD_MANIFOLD_MAX};
-
-void sd_grid_free(sd_grid *g)
-{
-    free(g->cell_start);
-    free(g->items);
-    memset(g, 0, sizeof(*g));
-}
 
 void sd_bed_cache_free(sd_bed_cache *c)
 {
@@ -50,302 +23,6 @@ void sd_bed_cache_free(sd_bed_cache *c)
     free(c->flags);
     memset(c, 0, sizeof(*c));
 }
-
-/* fmax(0.0, t) without the library call (gcc calls libm's on x86-64, for its NaN rules): the
- * same values, NaN included, up to the sign of a zero (sd_clamp01 likewise) */
-static inline double max0(double t) { return t > 0.0 ? t : 0.0; }
-
-static void body_box(const sd_bodies *b, int i, double half_margin, sd_vec3 *lo, sd_vec3 *hi)
-{
-    sd_vec3 c = b->pos[i];
-    double r = b->radius[i];
-    sd_vec3 e;
-    if (b->shape[i] == SD_SHAPE_SPHERE) {
-        e = v3(r, r, r);
-    } else {
-        /* exact box of a cylinder: hl|a_k| + r sqrt(1 - a_k^2) per axis */
-        sd_vec3 a = b->axis[i];
-        double hl = b->hl[i];
-        e = v3(hl * fabs(a.x) + r * sqrt(max0(1.0 - a.x * a.x)), hl * fabs(a.y) + r * sqrt(max0(1.0 - a.y * a.y)),
-               hl * fabs(a.z) + r * sqrt(max0(1.0 - a.z * a.z)));
-    }
-    e = v3_add(e, v3(half_margin, half_margin, half_margin));
-    *lo = v3_sub(c, e);
-    *hi = v3_add(c, e);
-}
-
-static void tri_box(const sd_tri *t, double half_margin, sd_vec3 *lo, sd_vec3 *hi)
-{
-    sd_vec3 l = t->v[0], h = t->v[0];
-    for (int k = 1; k < 3; k++) {
-        l = v3(fmin(l.x, t->v[k].x), fmin(l.y, t->v[k].y), fmin(l.z, t->v[k].z));
-        h = v3(fmax(h.x, t->v[k].x), fmax(h.y, t->v[k].y), fmax(h.z, t->v[k].z));
-    }
-    *lo = v3_sub(l, v3(half_margin, half_margin, half_margin));
-    *hi = v3_add(h, v3(half_margin, half_margin, half_margin));
-}
-
-static int clampi(long v, int lo, int hi) { return v < lo ? lo : (v > hi ? hi : (int)v); }
-
-#ifdef SD_SCAN512
-/* cell_range's six divisions and floors in two AVX2 operations (each lane correctly rounded, as
- * the scalar ones), clamped as doubles before the conversion: the same ranges (a NaN gives 0,
- * like the scalar conversion here). */
-__attribute__((target("avx2"))) static void cell_range256(const sd_grid *g, sd_vec3 lo, sd_vec3 hi, int32_t r[6])
-{
-    const __m256d o = _mm256_setr_pd(g->lo.x, g->lo.y, g->lo.z, g->lo.x), c = _mm256_set1_pd(g->cell),
-                  zero = _mm256_setzero_pd();
-    const __m256d top = _mm256_setr_pd(g->nx - 1, g->ny - 1, g->nz - 1, g->nx - 1);
-    const __m256d a = _mm256_setr_pd(lo.x, lo.y, lo.z, hi.x), b = _mm256_setr_pd(hi.y, hi.z, hi.y, hi.z);
-    const __m256d ob = _mm256_setr_pd(g->lo.y, g->lo.z, g->lo.y, g->lo.z),
-                  topb = _mm256_setr_pd(g->ny - 1, g->nz - 1, g->ny - 1, g->nz - 1);
-    __m256d fa = _mm256_round_pd(_mm256_div_pd(_mm256_sub_pd(a, o), c), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-    __m256d fb = _mm256_round_pd(_mm256_div_pd(_mm256_sub_pd(b, ob), c), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-    fa = _mm256_min_pd(_mm256_max_pd(fa, zero), top); /* (max_pd gives its second operand for a NaN) */
-    fb = _mm256_min_pd(_mm256_max_pd(fb, zero), topb);
-    int32_t ia[4], ib[4];
-    _mm_storeu_si128((__m128i *)ia, _mm256_cvttpd_epi32(fa));
-    _mm_storeu_si128((__m128i *)ib, _mm256_cvttpd_epi32(fb));
-    r[0] = ia[0], r[1] = ia[1], r[2] = ia[2], r[3] = ia[3], r[4] = ib[0], r[5] = ib[1];
-}
-#endif
-
-static void cell_range(const sd_grid *g, sd_vec3 lo, sd_vec3 hi, int32_t r[6], int simd)
-{
-#ifdef SD_SCAN512
-    if (simd >= SD_SIMD_AVX2) {
-        cell_range256(g, lo, hi, r);
-        return;
-    }
-#endif
-    r[0] = clampi((long)floor((lo.x - g->lo.x) / g->cell), 0, g->nx - 1);
-    r[1] = clampi((long)floor((lo.y - g->lo.y) / g->cell), 0, g->ny - 1);
-    r[2] = clampi((long)floor((lo.z - g->lo.z) / g->cell), 0, g->nz - 1);
-    r[3] = clampi((long)floor((hi.x - g->lo.x) / g->cell), 0, g->nx - 1);
-    r[4] = clampi((long)floor((hi.y - g->lo.y) / g->cell), 0, g->ny - 1);
-    r[5] = clampi((long)floor((hi.z - g->lo.z) / g->cell), 0, g->nz - 1);
-}
-
-/* Size the grid over [lo, hi] with cells of at least `cell`, enlarged if the count would
- * exceed max_cells (an element flung far away must not make the grid explode). */
-/* The grid's origin on one axis: the anchor less whole cells, as few as cover lo. */
-static double snap_origin(double lo, double anchor, double cell)
-{
-    return lo >= anchor ? anchor : anchor - ceil((anchor - lo) / cell) * cell;
-}
-
-/* With an anchor (the low corner of the bed's boxes, which never move), the origin is the
- * anchor less whole cells: bodies moving about near the low faces of the box (the flow along
- * the side walls) no longer shift every cell of the grid by micrometres at each rebuild, and
- * the bed keeps its cells (the bed cache). */
-static sd_status grid_layout(sd_grid *g, sd_vec3 lo, sd_vec3 hi, double cell, long max_cells, const sd_vec3 *anchor)
-{
-    sd_vec3 ext = v3_sub(hi, lo);
-    /* a body flung to infinity (or NaN) would make the grid unbounded: report the blow-up */
-    if (!(isfinite(ext.x) && isfinite(ext.y) && isfinite(ext.z)) || !(cell > 0.0) || !isfinite(cell))
-        return SD_ERR_NONFINITE;
-    const sd_vec3 lo0 = lo;
-    for (;;) {
-        if (anchor) {
-            lo = v3(snap_origin(lo0.x, anchor->x, cell), snap_origin(lo0.y, anchor->y, cell),
-                    snap_origin(lo0.z, anchor->z, cell));
-            ext = v3_sub(hi, lo);
-        }
-        double nx = floor(ext.x / cell) + 1, ny = floor(ext.y / cell) + 1, nz = floor(ext.z / cell) + 1;
-        if (nx * ny * nz <= (double)max_cells) {
-            g->nx = (int)nx;
-            g->ny = (int)ny;
-            g->nz = (int)nz;
-            break;
-        }
-        cell *= 1.5;
-    }
-    g->cell = cell;
-    g->lo = lo;
-    int ncell = g->nx * g->ny * g->nz;
-    if (sd_grow((void **)&g->cell_start, &g->cap_cells, ncell + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    memset(g->cell_start, 0, (size_t)(ncell + 1) * sizeof(int32_t));
-    return SD_OK;
-}
-
-/* room past a grid's last entry in its items and flags (and the body grid's gq): the scan's
- * prefilter reads 8 entries at a time, past a cell's end into the next cell or this pad */
-#define SD_GRID_PAD 8
-
-/* Counting sort of items into cells given each item's range. With reg0 and slot: item i's
- * entries are reg0[i] .. reg0[i+1]-1 in the order z, y, x of its range, and slot[r] is where
- * entry r went in items (so the items after it in that cell are exactly those above i). */
-static inline uint8_t range_begins(const int32_t *r, int x, int y, int z)
-{
-    return (uint8_t)((x == r[0]) | (y == r[1]) << 1 | (z == r[2]) << 2);
-}
-
-static sd_status grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const uint8_t *skip, int32_t *reg0,
-                           int32_t **slot, int *slot_cap, uint8_t **flag, int *flag_cap, const sd_bed_cache *bed)
-{
-    int ncell = g->nx * g->ny * g->nz;
-    long total = 0;
-    /* with the bed's cache, bodies nd .. n-1 (the bed) go in from its lists, after the others
-     * in each cell as their higher indices put them (no entry of theirs in reg0 / slot: the
-     * scans never start from the bed) */
-    const int nd = bed ? bed->nb0 : n;
-    for (int i = 0; i < nd; i++) {
-        if (reg0) reg0[i] = (int32_t)total;
-        if (skip && skip[i]) continue;
-        const int32_t *r = range[i];
-        for (int z = r[2]; z <= r[5]; z++)
-            for (int y = r[1]; y <= r[4]; y++)
-                for (int x = r[0]; x <= r[3]; x++)
-                    g->cell_start[(z * g->ny + y) * g->nx + x + 1]++;
-        total += (long)(r[3] - r[0] + 1) * (r[4] - r[1] + 1) * (r[5] - r[2] + 1);
-    }
-    if (reg0)
-        for (int i = nd; i <= n; i++)
-            reg0[i] = (int32_t)total;
-    if (bed)
-        for (int q = 0; q < bed->ncells; q++)
-            g->cell_start[bed->cells[q] + 1] += bed->off[q + 1] - bed->off[q];
-    for (int c = 0; c < ncell; c++)
-        g->cell_start[c + 1] += g->cell_start[c];
-    const long all = total + (bed ? bed->nitems : 0);
-    if (sd_grow((void **)&g->items, &g->cap_items, (int)all + SD_GRID_PAD, sizeof(int32_t))) return SD_ERR_NOMEM;
-    if (slot && sd_grow((void **)slot, slot_cap, (int)total + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
-    if (flag && sd_grow((void **)flag, flag_cap, (int)all + SD_GRID_PAD, sizeof(uint8_t))) return SD_ERR_NOMEM;
-    uint8_t *fl = flag ? *flag : NULL;
-    /* fill using cell_start as a cursor, then shift back */
-    int32_t *sl = slot ? *slot : NULL;
-    long e = 0;
-    for (int i = 0; i < nd; i++) {
-        if (skip && skip[i]) continue;
-        const int32_t *r = range[i];
-        for (int z = r[2]; z <= r[5]; z++)
-            for (int y = r[1]; y <= r[4]; y++)
-                for (int x = r[0]; x <= r[3]; x++) {
-                    const int at = g->cell_start[(z * g->ny + y) * g->nx + x]++;
-                    g->items[at] = i;
-                    if (sl) sl[e++] = at;
-                    if (fl) fl[at] = range_begins(r, x, y, z);
-                }
-    }
-    if (bed)
-        for (int q = 0; q < bed->ncells; q++) {
-            const int c = bed->cells[q], m = bed->off[q + 1] - bed->off[q];
-            memcpy(g->items + g->cell_start[c], bed->items + bed->off[q], (size_t)m * sizeof(int32_t));
-            if (fl) memcpy(fl + g->cell_start[c], bed->flags + bed->off[q], (size_t)m);
-            g->cell_start[c] += m;
-        }
-    for (int c = ncell; c > 0; c--)
-        g->cell_start[c] = g->cell_start[c - 1];
-    g->cell_start[0] = 0;
-    return SD_OK;
-}
-
-#ifdef _OPENMP
-/* grid_fill of the body grid (reg0, slot and flags made) by T threads: the same grid, entry
- * for entry. The bodies before the bed are cut into T runs; each thread counts its run's
- * entries per cell, the cells' starts and each run's place in each cell follow (serial, over
- * the cells), then each thread places its run (a cell lists its bodies ascending: lower runs
- * first) and the bed's cached lists go in after them. */
-static sd_status grid_fill_par(sd_grid *g, int n, const int32_t (*range)[6], int32_t *reg0, int32_t **slot,
-                               int *slot_cap, uint8_t **flag, int *flag_cap, const sd_bed_cache *bed, int T)
-{
-    const int ncell = g->nx * g->ny * g->nz;
-    const int nd = bed ? bed->nb0 : n;
-    /* cur[t * (ncell + 1) + c]: run t's entries in cell c, then its cursor there; cur[T * ..]
-     * the bed's count per cell */
-    int32_t *cur = malloc(((size_t)T + 1) * ((size_t)ncell + 1) * sizeof(int32_t));
-    long tot[SD_MAX_OWNERS + 1];
-    if (!cur) return SD_ERR_NOMEM;
-    int32_t *bedc = cur + (size_t)T * (ncell + 1);
-    memset(bedc, 0, ((size_t)ncell + 1) * sizeof(int32_t));
-    if (bed)
-        for (int q = 0; q < bed->ncells; q++)
-            bedc[bed->cells[q]] = bed->off[q + 1] - bed->off[q];
-#pragma omp parallel num_threads(T)
-    {
-        const int nthr = omp_get_num_threads();
-        for (int t = omp_get_thread_num(); t < T; t += nthr) {
-            int32_t *cnt = cur + (size_t)t * (ncell + 1);
-            memset(cnt, 0, ((size_t)ncell + 1) * sizeof(int32_t));
-            const int i0 = (int)((long)nd * t / T), i1 = (int)((long)nd * (t + 1) / T);
-            long e = 0;
-            for (int i = i0; i < i1; i++) {
-                const int32_t *r = range[i];
-                for (int z = r[2]; z <= r[5]; z++)
-                    for (int y = r[1]; y <= r[4]; y++)
-                        for (int x = r[0]; x <= r[3]; x++)
-                            cnt[(z * g->ny + y) * g->nx + x]++;
-                e += (long)(r[3] - r[0] + 1) * (r[4] - r[1] + 1) * (r[5] - r[2] + 1);
-            }
-            tot[t] = e;
-        }
-    }
-    long total = 0;
-    for (int t = 0; t < T; t++) {
-        const long e = tot[t];
-        tot[t] = total;
-        total += e;
-    }
-    /* the cells' starts; each run's cursor in each cell; the bed's place (in bedc) */
-    int32_t at = 0;
-    for (int c = 0; c < ncell; c++) {
-        g->cell_start[c] = at;
-        for (int t = 0; t < T; t++) {
-            int32_t *q = cur + (size_t)t * (ncell + 1) + c;
-            const int32_t m = *q;
-            *q = at;
-            at += m;
-        }
-        const int32_t m = bedc[c];
-        bedc[c] = at;
-        at += m;
-    }
-    g->cell_start[ncell] = at;
-    const long all = at;
-    if (sd_grow((void **)&g->items, &g->cap_items, (int)all + SD_GRID_PAD, sizeof(int32_t)) ||
-        sd_grow((void **)slot, slot_cap, (int)total + 1, sizeof(int32_t)) ||
-        sd_grow((void **)flag, flag_cap, (int)all + SD_GRID_PAD, sizeof(uint8_t))) {
-        free(cur);
-        return SD_ERR_NOMEM;
-    }
-    uint8_t *fl = *flag;
-    int32_t *sl = *slot;
-#pragma omp parallel num_threads(T)
-    {
-        const int nthr = omp_get_num_threads();
-        for (int t = omp_get_thread_num(); t < T; t += nthr) {
-            int32_t *cnt = cur + (size_t)t * (ncell + 1);
-            const int i0 = (int)((long)nd * t / T), i1 = (int)((long)nd * (t + 1) / T);
-            long e = tot[t];
-            for (int i = i0; i < i1; i++) {
-                reg0[i] = (int32_t)e;
-                const int32_t *r = range[i];
-                for (int z = r[2]; z <= r[5]; z++)
-                    for (int y = r[1]; y <= r[4]; y++)
-                        for (int x = r[0]; x <= r[3]; x++) {
-                            const int a = cnt[(z * g->ny + y) * g->nx + x]++;
-                            g->items[a] = i;
-                            sl[e++] = a;
-                            fl[a] = range_begins(r, x, y, z);
-                        }
-            }
-        }
-        /* the bed's lists, cell by cell */
-        if (bed) {
-#pragma omp for schedule(static)
-            for (int q = 0; q < bed->ncells; q++) {
-                const int c = bed->cells[q], m = bed->off[q + 1] - bed->off[q];
-                memcpy(g->items + bedc[c], bed->items + bed->off[q], (size_t)m * sizeof(int32_t));
-                memcpy(fl + bedc[c], bed->flags + bed->off[q], (size_t)m);
-            }
-        }
-    }
-    for (int i = nd; i <= n; i++)
-        reg0[i] = (int32_t)total;
-    free(cur);
-    return SD_OK;
-}
-#endif
 
 static uint64_t pair_key(int32_t gid_a, int kind, int32_t id_b)
 {
@@ -584,50 +261,8 @@ sd_status sd_neighbor_tgrid_flags(sd_world *w)
     const sd_grid *g = &w->tgrid;
     const int nitems = g->cell_start[g->nx * g->ny * g->nz];
     if (sd_grow((void **)&w->tflag, &w->tflag_cap, nitems + 1, sizeof(uint8_t))) return SD_ERR_NOMEM;
-    for (int z = 0; z < g->nz; z++)
-        for (int y = 0; y < g->ny; y++)
-            for (int x = 0; x < g->nx; x++) {
-                const int c = (z * g->ny + y) * g->nx + x;
-                for (int k = g->cell_start[c]; k < g->cell_start[c + 1]; k++)
-                    w->tflag[k] = range_begins(w->trange[g->items[k]], x, y, z);
-            }
+    sd_grid_flags(g, (const int32_t(*)[6])w->trange, w->tflag);
     return SD_OK;
-}
-
-static sd_status rebuild_triangle_grid(sd_world *w, double cell)
-{
-    sd_walls *wl = &w->w;
-    double hm = 0.5 * w->def.margin;
-    sd_vec3 lo = v3(1e300, 1e300, 1e300), hi = v3(-1e300, -1e300, -1e300);
-    int any = 0;
-    for (int t = 0; t < wl->n; t++) {
-        if (!wl->active[t]) continue;
-        sd_vec3 l, h;
-        tri_box(&wl->tri[t], hm, &l, &h);
-        lo = v3(fmin(lo.x, l.x), fmin(lo.y, l.y), fmin(lo.z, l.z));
-        hi = v3(fmax(hi.x, h.x), fmax(hi.y, h.y), fmax(hi.z, h.z));
-        any = 1;
-    }
-    if (!any) lo = hi = v3(0, 0, 0);
-    sd_status st = grid_layout(&w->tgrid, lo, hi, cell, 2000000, NULL);
-    if (st) return st;
-    if (sd_grow((void **)&w->trange, &w->trange_cap, wl->n + 1, sizeof(*w->trange))) return SD_ERR_NOMEM;
-    for (int t = 0; t < wl->n; t++) {
-        sd_vec3 l, h;
-        tri_box(&wl->tri[t], hm, &l, &h);
-        cell_range(&w->tgrid, l, h, w->trange[t], w->simd);
-    }
-    uint8_t *skip = malloc((size_t)(wl->n + 1));
-    if (!skip) return SD_ERR_NOMEM;
-    for (int t = 0; t < wl->n; t++)
-        skip[t] = !wl->active[t];
-    st = grid_fill(&w->tgrid, wl->n, (const int32_t(*)[6])w->trange, skip, NULL, NULL, NULL, &w->tflag, &w->tflag_cap,
-                   NULL);
-    free(skip);
-    if (st) return st;
-    st = sd_walls_weld(wl);
-    wl->dirty = 0;
-    return st;
 }
 
 /* Re-sort the store by the grid cell of each centre (stable counting sort), so that
@@ -1334,7 +969,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     double cell = dmax + w->def.margin;
 
     if (w->w.dirty) {
-        st = rebuild_triangle_grid(w, cell);
+        st = sd_grid_tri_rebuild(w, cell);
         if (st) return st;
     }
 
@@ -1365,7 +1000,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     if (b->n == 0) lo = hi = v3(0, 0, 0);
     const sd_vec3 anchor = v3(ax, ay, az);
     long max_cells = 8L * b->n + 4096;
-    st = grid_layout(&w->grid, lo, hi, cell, max_cells, nbed ? &anchor : NULL);
+    st = sd_grid_layout(&w->grid, lo, hi, cell, max_cells, nbed ? &anchor : NULL);
     if (st) return st;
     RB_STAGE(SD_RB_LAYOUT);
     const sd_grid *g = &w->grid;
@@ -1394,12 +1029,12 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         const int T = rebuild_threads(w, nr);
 #ifdef _OPENMP
         if (T > 1)
-            st = grid_fill_par(&w->grid, b->n, (const int32_t(*)[6])w->range, w->reg0, &w->slot, &w->slot_cap,
-                               &w->gflag, &w->gflag_cap, bed ? bc : NULL, T);
+            st = sd_grid_fill_par(&w->grid, b->n, (const int32_t(*)[6])w->range, w->reg0, &w->slot, &w->slot_cap,
+                                  &w->gflag, &w->gflag_cap, bed ? bc : NULL, T);
         else
 #endif
-            st = grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL, w->reg0, &w->slot, &w->slot_cap,
-                           &w->gflag, &w->gflag_cap, bed ? bc : NULL);
+            st = sd_grid_fill(&w->grid, b->n, (const int32_t(*)[6])w->range, NULL, w->reg0, &w->slot, &w->slot_cap,
+                              &w->gflag, &w->gflag_cap, bed ? bc : NULL);
     }
     if (st) return st;
     if (bed)
