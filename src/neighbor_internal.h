@@ -1,6 +1,6 @@
 /* The candidate search's files among themselves: neighbor.c (the rebuild), grid.c (the cell
- * grids). The helpers that several of them use in their hot loops are here, inline; the rest of
- * the engine sees world_internal.h only. */
+ * grids), bed_cache.c (the bed's cache). The helpers that several of them use in their hot
+ * loops are here, inline; the rest of the engine sees world_internal.h only. */
 #ifndef SD_NEIGHBOR_INTERNAL_H
 #define SD_NEIGHBOR_INTERNAL_H
 
@@ -112,5 +112,9 @@ sd_status sd_grid_fill_par(sd_grid *g, int n, const int32_t (*range)[6], int32_t
 #endif
 void sd_grid_flags(const sd_grid *g, const int32_t (*range)[6], uint8_t *flag);
 sd_status sd_grid_tri_rebuild(sd_world *w, double cell);
+
+/* bed_cache.c */
+int sd_bed_cache_fits(const sd_bed_cache *c, const sd_grid *g);
+sd_status sd_bed_cache_make(sd_world *w, double hm);
 
 #endif

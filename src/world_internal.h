@@ -441,11 +441,13 @@ int sd_neighbor_needs_rebuild(const sd_world *w);
 /* Take the live tangential history out of the pair lists, keyed by gids (before the body
  * store changes order); the next rebuild puts it back. */
 sd_status sd_neighbor_collect_history(sd_world *w);
-void sd_bed_cache_free(sd_bed_cache *c);
 void sd_scan_bufs_free(sd_world *w);
 
 /* grid.c */
 void sd_grid_free(sd_grid *g);
+
+/* bed_cache.c */
+void sd_bed_cache_free(sd_bed_cache *c);
 
 /* contact_law.c */
 typedef struct {
