@@ -1,6 +1,7 @@
 /* The candidate search's files among themselves: neighbor.c (the rebuild), grid.c (the cell
- * grids), bed_cache.c (the bed's cache). The helpers that several of them use in their hot
- * loops are here, inline; the rest of the engine sees world_internal.h only. */
+ * grids), bed_cache.c (the bed's cache), pair_history.c (the springs carried across a rebuild).
+ * The helpers that several of them use in their hot loops are here, inline; the rest of the
+ * engine sees world_internal.h only. */
 #ifndef SD_NEIGHBOR_INTERNAL_H
 #define SD_NEIGHBOR_INTERNAL_H
 
@@ -116,5 +117,8 @@ sd_status sd_grid_tri_rebuild(sd_world *w, double cell);
 /* bed_cache.c */
 int sd_bed_cache_fits(const sd_bed_cache *c, const sd_grid *g);
 sd_status sd_bed_cache_make(sd_world *w, double hm);
+
+/* pair_history.c (and sd_neighbor_collect_history, world_internal.h) */
+sd_status sd_history_restore(sd_world *w, int by_index);
 
 #endif
