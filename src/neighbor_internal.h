@@ -1,7 +1,8 @@
-/* The candidate search's files among themselves: neighbor.c (the rebuild), grid.c (the cell
- * grids), bed_cache.c (the bed's cache), pair_history.c (the springs carried across a rebuild).
- * The helpers that several of them use in their hot loops are here, inline; the rest of the
- * engine sees world_internal.h only. */
+/* The candidate search's files among themselves: neighbor.c (the rebuild's orchestration, the
+ * sort by cell, the moving list), grid.c (the cell grids), bed_cache.c (the bed's cache),
+ * pair_history.c (the springs carried across a rebuild), candidates.c (the scan). The helpers
+ * that several of them use in their hot loops are here, inline; the rest of the engine sees
+ * world_internal.h only. */
 #ifndef SD_NEIGHBOR_INTERNAL_H
 #define SD_NEIGHBOR_INTERNAL_H
 
@@ -120,5 +121,12 @@ sd_status sd_bed_cache_make(sd_world *w, double hm);
 
 /* pair_history.c (and sd_neighbor_collect_history, world_internal.h) */
 sd_status sd_history_restore(sd_world *w, int by_index);
+
+/* candidates.c (and sd_scan_bufs_free, world_internal.h) */
+#ifdef SD_SCAN512
+sd_status sd_cand_grid_coords(sd_world *w);
+#endif
+sd_status sd_cand_scan(sd_world *w, double hm, int K, int T);
+sd_status sd_cand_join(sd_world *w, int K, int T);
 
 #endif

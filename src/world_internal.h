@@ -438,7 +438,6 @@ const char *sd_neighbor_stage_name(int k);
  * the grid, not the flags). */
 sd_status sd_neighbor_tgrid_flags(sd_world *w);
 int sd_neighbor_needs_rebuild(const sd_world *w);
-void sd_scan_bufs_free(sd_world *w);
 
 /* grid.c */
 void sd_grid_free(sd_grid *g);
@@ -450,6 +449,9 @@ void sd_bed_cache_free(sd_bed_cache *c);
 /* Take the live tangential history out of the pair lists, keyed by gids (before the body
  * store changes order); the next rebuild puts it back. */
 sd_status sd_neighbor_collect_history(sd_world *w);
+
+/* candidates.c */
+void sd_scan_bufs_free(sd_world *w);
 
 /* contact_law.c */
 typedef struct {
