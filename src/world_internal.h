@@ -460,11 +460,19 @@ const char *sd_neighbor_stage_name(int k);
  * the grid, not the flags). */
 sd_status sd_neighbor_tgrid_flags(sd_world *w);
 int sd_neighbor_needs_rebuild(const sd_world *w);
+
+/* grid.c */
+void sd_grid_free(sd_grid *g);
+
+/* bed_cache.c */
+void sd_bed_cache_free(sd_bed_cache *c);
+
+/* pair_history.c */
 /* Take the live tangential history out of the pair lists, keyed by gids (before the body
  * store changes order); the next rebuild puts it back. */
 sd_status sd_neighbor_collect_history(sd_world *w);
-void sd_grid_free(sd_grid *g);
-void sd_bed_cache_free(sd_bed_cache *c);
+
+/* candidates.c */
 void sd_scan_bufs_free(sd_world *w);
 
 /* sd_contact_law (contact_law.h, inline in the contact loop): force on A from one contact. */
