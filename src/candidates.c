@@ -29,7 +29,7 @@ typedef struct {
 static cand_buf *scan_bufs(sd_world *w, int m)
 {
     if (w->scan_bufs_n < m) {
-        sd_scan_bufs_free(w);
+        sd_cand_bufs_free(w);
         w->scan_bufs = aligned_alloc(64, (size_t)m * sizeof(cand_buf));
         if (!w->scan_bufs) return NULL;
         memset(w->scan_bufs, 0, (size_t)m * sizeof(cand_buf));
@@ -41,7 +41,7 @@ static cand_buf *scan_bufs(sd_world *w, int m)
     return buf;
 }
 
-void sd_scan_bufs_free(sd_world *w)
+void sd_cand_bufs_free(sd_world *w)
 {
     cand_buf *buf = w->scan_bufs;
     for (int c = 0; c < w->scan_bufs_n; c++)

@@ -1,6 +1,6 @@
 /* What the files of the contact pass share (contact.c orchestrates it; contact_bb.c,
  * contact_bt.c, owners.c, near_list.c, lane_law.c, contact_manifold.c, contact_mesh.c,
- * contact_prefetch.c, pair_records.c and the SIMD kernels in contact_simd_avx2.c and
+ * front_prefetch.c, pair_records.c and the SIMD kernels in contact_simd_avx2.c and
  * contact_simd_avx512.c): the batches' and records' types, the chunk sizes, and the functions
  * each file exports to the others. The hot helpers several of them inline are in
  * contact_kernels.h. Nothing here is used outside the pass (world_internal.h holds what is). */
@@ -112,7 +112,7 @@ typedef struct {
 } bb_scratch;
 
 #define NEAR_BLOCK 512 /* candidates whose answers are made at a time, then kept (sd_owned_update, near_filter) */
-/* the chunks ahead of the pass that the front prefetch reaches (contact_prefetch.c) */
+/* the chunks ahead of the pass that the front prefetch reaches (front_prefetch.c) */
 #define PF_CHUNKS 2
 
 /* contact_manifold.c: the shape-pair dispatch (a pair's manifold) and the law applied to a
@@ -159,7 +159,7 @@ sd_status sd_owned_update(sd_world *w, int T);
 long sd_owned_pass(sd_world *w, const sd_law *law, int T, bb_scratch *scratch, int *moved_out, sd_moves *mv);
 int sd_owned_count(const sd_world *w);
 
-/* contact_prefetch.c: the front prefetch of the bodies' rows that entries j0 .. j1 of a list's
+/* front_prefetch.c: the front prefetch of the bodies' rows that entries j0 .. j1 of a list's
  * records touch (the slots': contact_kernels.h pf_hist) */
 void sd_front_prefetch_rows(const sd_bodies *b, const int32_t *pa, const int32_t *pb, int j0, int j1, int lim,
                             int *front);

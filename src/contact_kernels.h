@@ -203,7 +203,7 @@ static inline sd_hist *springs_of(const sd_world *w, int out, sd_hist *h)
 /* The slots of entries j0 .. j1 that hold a spring (act), with the front: the gather reads them
  * for the touching lanes only, about one candidate slot in three (the slots are the candidates',
  * 5.4 a sphere in the tiled bed, 2.8 near pairs, 1.7 touching), a sparse walk the hardware
- * prefetchers do not follow. Part of the front prefetch (contact_prefetch.c), so the run's trial weighs it too.
+ * prefetchers do not follow. Part of the front prefetch (front_prefetch.c), so the run's trial weighs it too.
  * `bench_scale --ab prefetch` (on/off) at 1e5 went from 0.92 (the front alone) to 0.83 on one
  * thread and from 0.99 to 0.81-0.85 on two; at 1e4, where the trial leaves it off, from 1.07-1.09
  * to 1.08-1.11. Without a branch: a test on act, true for three

@@ -313,7 +313,7 @@ sd_status sd_checkpoint_write_capped(const char *path, const sd_world *w, const 
     if (!path || !*path || !w || (extra_len > 0 && !extra)) return SD_ERR_ARG;
     /* the sphere pairs' springs into bb.hist, where the section reads them (where they are
      * kept, not what they are: the world is const to the caller) */
-    sd_contact_springs_home((sd_world *)w);
+    sd_near_springs_home((sd_world *)w);
     sd_contact_gather((sd_world *)w); /* the wall loads are a cache, summed when asked for */
     size_t plen = strlen(path);
     char *tmp = malloc(plen + sizeof(".tmp.XXXXXX"));

@@ -142,7 +142,7 @@ int sd_near_walls(sd_world *w, double skin, int i0, int i1, int32_t *list, long 
  * step, which past the last-level cache came from DRAM. In the list's order the springs are
  * one stream, read and written in step with the records (at 1e5 spheres the step 0.87-0.89x). They go out as a list is
  * made (near_filter, sd_owned_update: the slot's line is read there for the flag), or at a pass's start when they were
- * put back since (sd_near_springs_to), and back (sd_contact_springs_home) before the list is remade or anything reads
+ * put back since (sd_near_springs_to), and back (sd_near_springs_home) before the list is remade or anything reads
  * bb.hist. Below: entries k0 .. k1 of a list (candidate indices, an owner's cross entry negative) whose records s are
  * of a sphere pair (ck kind 0; the others keep their slots in bb.hist). */
 static void springs_out_range(sd_world *w, sd_pair_soa *s, sd_hist *h, int k0, int k1)
@@ -167,7 +167,7 @@ static void springs_home_range(sd_world *w, const int32_t *list, sd_pair_soa *s,
         }
 }
 
-void sd_contact_springs_home(sd_world *w)
+void sd_near_springs_home(sd_world *w)
 {
     if (w->springs_out == 1)
         springs_home_range(w, w->near, &w->near_soa, w->near_hist, 0, w->near_n);
@@ -188,7 +188,7 @@ void sd_contact_springs_home(sd_world *w)
 sd_status sd_near_springs_to(sd_world *w, int out)
 {
     if (w->springs_out == out && w->sw[SD_SW_SPRINGS_LIST] && w->springs_lsq == w->sw[SD_SW_SLOT_SQM]) return SD_OK;
-    sd_contact_springs_home(w);
+    sd_near_springs_home(w);
     if (!w->sw[SD_SW_SPRINGS_LIST]) return SD_OK;
     w->springs_lsq = w->sw[SD_SW_SLOT_SQM];
     if (out == 1) {
@@ -232,7 +232,7 @@ sd_status sd_near_update(sd_world *w)
     /* (near_soa_version: not remade since by the owners' path, which keeps its own lists) */
     if (sd_near_still_good(w) && w->near_nbb == nbb && w->near && w->near_soa_version == w->near_version + 1)
         return SD_OK;
-    sd_contact_springs_home(w); /* (from the list about to go) */
+    sd_near_springs_home(w); /* (from the list about to go) */
     const double skin = SD_NEAR_SKIN * w->def.margin;
     if (sd_grow((void **)&w->near, &w->near_cap, nbb + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
     const int fresh = sd_near_mark_ready(w);

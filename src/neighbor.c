@@ -152,7 +152,7 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     sd_bodies *b = &w->b;
     double rb_t = sd_now();
     const int fresh = !w->keys_collected; /* the collect is this rebuild's own */
-    sd_status st = sd_neighbor_collect_history(w);
+    sd_status st = sd_history_collect(w);
     if (st) return st;
     RB_STAGE(SD_RB_COLLECT);
     w->keys_collected = 0;

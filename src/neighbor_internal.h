@@ -119,10 +119,10 @@ sd_status sd_grid_tri_rebuild(sd_world *w, double cell);
 int sd_bed_cache_fits(const sd_bed_cache *c, const sd_grid *g);
 sd_status sd_bed_cache_make(sd_world *w, double hm);
 
-/* pair_history.c (and sd_neighbor_collect_history, world_internal.h) */
+/* pair_history.c (and sd_history_collect, world_internal.h) */
 sd_status sd_history_restore(sd_world *w, int by_index);
 
-/* candidates.c (and sd_scan_bufs_free, world_internal.h) */
+/* candidates.c (and sd_cand_bufs_free, world_internal.h) */
 #ifdef SD_SCAN512
 sd_status sd_cand_grid_coords(sd_world *w);
 #endif

@@ -137,7 +137,7 @@ sd_status sd_owned_update(sd_world *w, int T)
     sd_owned *o = w->owned;
     const int same = o && o->T == T && o->n == n && o->nbb == nbb && o->pairs == w->bb.p && o->rb == w->timers.rebuilds;
     if (same && o->stamp == w->near_version && sd_near_still_good(w) && !uneven(o)) return SD_OK;
-    sd_contact_springs_home(w); /* (from the lists about to go) */
+    sd_near_springs_home(w); /* (from the lists about to go) */
     if (!(o = owned_get(w))) return SD_ERR_NOMEM;
     if (o->T != T) { /* new: even shares */
         for (int t = 0; t <= T; t++)

@@ -39,9 +39,9 @@ static inline const sd_hist *any_hist(const sd_pairlist *const *lists, int k, co
  * follow, the writes went anywhere: the collect took 109-186 ms a rebuild at 1e6 spheres,
  * 50-55 since, performance pass P41, in the git history). restore_history finds a body's entries through the rebuild's
  * sort, or, when the store changed since the collect, through the gid in the keys. */
-sd_status sd_neighbor_collect_history(sd_world *w)
+sd_status sd_history_collect(sd_world *w)
 {
-    sd_contact_springs_home(w); /* (the near list's springs into their slots) */
+    sd_near_springs_home(w); /* (the near list's springs into their slots) */
     if (w->keys_collected) return SD_OK;
     sd_contact_gather(w); /* the wall loads of the last step, before its pairs go */
     const sd_pairlist *lists[2] = {&w->bb, &w->bt};

@@ -117,7 +117,7 @@ void sd_world_destroy(sd_world *w)
     free(w->range);
     free(w->box);
     sd_bed_cache_free(&w->bed);
-    sd_scan_bufs_free(w);
+    sd_cand_bufs_free(w);
     free(w->reg0);
     free(w->slot);
     free(w->gflag);
@@ -141,7 +141,7 @@ static int add_body(sd_world *w, int shape, sd_vec3 pos, sd_vec3 vel, sd_vec3 om
         return -SD_ERR_ARG;
     if (shape == SD_SHAPE_CYLINDER && !(v3_norm(axis) > 0.0)) return -SD_ERR_ARG;
     /* history taken before the store grows; pairs are rebuilt before the next force pass */
-    if (sd_neighbor_collect_history(w)) return -SD_ERR_NOMEM;
+    if (sd_history_collect(w)) return -SD_ERR_NOMEM;
     sd_bodies *b = &w->b;
     if (sd_bodies_reserve(b, b->n + 1)) return -SD_ERR_NOMEM;
     if (sd_grow((void **)&w->gid_map, &w->gid_cap, w->next_gid + 1, sizeof(int32_t))) return -SD_ERR_NOMEM;
@@ -215,7 +215,7 @@ int sd_world_add_triangle(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, int grou
 {
     if (!finite3(a) || !finite3(b) || !finite3(c)) return -SD_ERR_ARG;
     if (!(v3_norm(v3_cross(v3_sub(b, a), v3_sub(c, a))) > 0.0)) return -SD_ERR_ARG; /* degenerate */
-    if (sd_neighbor_collect_history(w)) return -SD_ERR_NOMEM;
+    if (sd_history_collect(w)) return -SD_ERR_NOMEM;
     sd_walls *wl = &w->w;
     if (sd_walls_reserve(wl, wl->n + 1)) return -SD_ERR_NOMEM;
     int t = wl->n++;
@@ -238,7 +238,7 @@ sd_status sd_world_set_group_active(sd_world *w, int group, int active)
         }
     if (!found) return SD_ERR_NOTFOUND;
     /* pairs keep triangle indices; the grid is rebuilt without the inactive ones */
-    sd_status st = sd_neighbor_collect_history(w);
+    sd_status st = sd_history_collect(w);
     if (st) return st;
     w->w.dirty = 1;
     w->need_rebuild = 1;
@@ -248,7 +248,7 @@ sd_status sd_world_set_group_active(sd_world *w, int group, int active)
 sd_status sd_world_remove_body(sd_world *w, int gid)
 {
     if (gid < 0 || gid >= w->next_gid || w->gid_map[gid] < 0) return SD_ERR_NOTFOUND;
-    sd_status st = sd_neighbor_collect_history(w);
+    sd_status st = sd_history_collect(w);
     if (st) return st;
     int i = w->gid_map[gid];
     int last = w->b.n - 1;
@@ -295,54 +295,6 @@ double sd_world_front_x(const sd_world *w)
     for (int i = 0; i < b->n; i++)
         if (!b->fixed[i] && b->pos[i].x + sd_body_x_extent(b, i) > f) f = b->pos[i].x + sd_body_x_extent(b, i);
     return f;
-}
-
-/* The front prefetch's trial (sd_pf_trial): a block lasts about 2e6 particle-steps (2 to 100
- * steps), so that a trial takes a few seconds at any size. */
-void sd_pf_trial_before(sd_world *w)
-{
-    sd_pf_trial *p = &w->pf;
-    const int n = w->b.n;
-    if (w->sw[SD_SW_PREFETCH] != SD_PREFETCH_AUTO) {
-        p->blk = -1; /* (a trial under a forced setting would time one mode against itself) */
-        return;
-    }
-    if (p->blk >= 0 || n < SD_PF_MIN_BODIES) return;
-    if (w->step < p->next && 4 * labs((long)n - p->n) <= n) return;
-    const long s = 2000000L / n;
-    p->blk_steps = s < 2 ? 2 : s > 100 ? 100 : (int)s;
-    p->blk = p->in_blk = 0;
-    p->n = n;
-    p->acc = 0.0;
-}
-
-static int cmp_dbl(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-void sd_pf_trial_after(sd_world *w, double pass_s)
-{
-    sd_pf_trial *p = &w->pf;
-    if (p->blk < 0) return;
-    p->acc += pass_s;
-    if (++p->in_blk < p->blk_steps) return;
-    p->t[p->blk & 3] = p->acc;
-    p->acc = 0.0;
-    p->in_blk = 0;
-    if ((++p->blk & 3) == 0) {
-        const double off = p->t[0] + p->t[3];
-        p->r[p->blk / 4 - 1] = off > 0.0 ? (p->t[1] + p->t[2]) / off : 1.0;
-    }
-    if (p->blk < 4 * SD_PF_GROUPS) return;
-    double r[SD_PF_GROUPS];
-    memcpy(r, p->r, sizeof r);
-    qsort(r, SD_PF_GROUPS, sizeof r[0], cmp_dbl);
-    p->ratio = 0.5 * (r[(SD_PF_GROUPS - 1) / 2] + r[SD_PF_GROUPS / 2]); /* (the median) */
-    p->verdict = p->ratio < 1.0;
-    p->blk = -1;
-    p->next = w->step + SD_PF_RETRY;
 }
 
 #ifndef NDEBUG
@@ -392,11 +344,11 @@ sd_status sd_world_step(sd_world *w)
     }
     double t1 = sd_now();
     if ((st = sd_neighbor_moving_update(w))) return st;
-    sd_pf_trial_before(w);
+    sd_front_prefetch_trial_before(w);
     int integrated;
     if ((st = sd_contact_compute(w, &integrated))) return st;
     double t2 = sd_now();
-    sd_pf_trial_after(w, t2 - t1);
+    sd_front_prefetch_trial_after(w, t2 - t1);
     /* (the wall loads are summed when asked for, sd_contact_gather) */
     if (!integrated) sd_integrate(w);
     double t3 = sd_now();
@@ -517,7 +469,7 @@ static double manifold_energy(const sd_world *w, const sd_pair *p, const sd_hist
 
 double sd_world_spring_energy(const sd_world *w)
 {
-    sd_contact_springs_home((sd_world *)w); /* (where the springs sit, not what they are) */
+    sd_near_springs_home((sd_world *)w); /* (where the springs sit, not what they are) */
     double e = 0.0;
     const sd_bodies *b = &w->b;
     for (int k = 0; k < w->bb.n; k++) {
@@ -564,7 +516,7 @@ double sd_world_spring_energy(const sd_world *w)
 /* FNV-1a (core/hash.h) over the bytes of the dynamic state, in gid order. */
 uint64_t sd_world_state_hash(const sd_world *w)
 {
-    sd_contact_springs_home((sd_world *)w); /* (where the springs sit, not what they are) */
+    sd_near_springs_home((sd_world *)w); /* (where the springs sit, not what they are) */
     uint64_t h = sd_hash_init();
     const sd_bodies *b = &w->b;
     for (int g = 0; g < w->next_gid; g++) {

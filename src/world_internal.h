@@ -382,7 +382,7 @@ struct sd_world {
     /* The sphere pairs' springs of a near list, in its own order (contact.c springs_to):
      * near_hist[k] for entry k of the serial list (springs_out 1), sd_owned's hist for the
      * owners' lists (springs_out 2); their records' off then points there, and those pairs'
-     * slots in bb.hist are stale until sd_contact_springs_home puts them back (springs_out 0).
+     * slots in bb.hist are stale until sd_near_springs_home puts them back (springs_out 0).
      * The pass reads and writes them in list order instead of the candidates' sparse slots. */
     sd_hist *near_hist;
     int near_hist_cap;
@@ -441,7 +441,7 @@ sd_status sd_neighbor_rebuild(sd_world *w);
 /* The stages of sd_neighbor_rebuild, in order: their wall times, summed over the calling
  * thread's rebuilds since sd_neighbor_stages_take last took them (for bench_rebuild). */
 enum {
-    SD_RB_COLLECT, /* the springs taken out (sd_neighbor_collect_history) */
+    SD_RB_COLLECT, /* the springs taken out (sd_history_collect) */
     SD_RB_LAYOUT,  /* the cell size, the bodies' box, the grid's layout */
     SD_RB_SORT,    /* the bodies sorted by cell */
     SD_RB_RANGES,  /* each body's box and cell range */
@@ -470,10 +470,10 @@ void sd_bed_cache_free(sd_bed_cache *c);
 /* pair_history.c */
 /* Take the live tangential history out of the pair lists, keyed by gids (before the body
  * store changes order); the next rebuild puts it back. */
-sd_status sd_neighbor_collect_history(sd_world *w);
+sd_status sd_history_collect(sd_world *w);
 
 /* candidates.c */
-void sd_scan_bufs_free(sd_world *w);
+void sd_cand_bufs_free(sd_world *w);
 
 /* sd_contact_law (contact_law.h, inline in the contact loop): force on A from one contact. */
 
@@ -492,7 +492,7 @@ void sd_pair_soa_free(sd_pair_soa *s);
  * list's records pointed at them again: called before anything reads bb.hist or changes the
  * pairs (the rebuild's collect, a checkpoint, the hash and the spring energy, a near remake).
  * It changes where the springs sit, not what they are: the const readers call it too. */
-void sd_contact_springs_home(sd_world *w);
+void sd_near_springs_home(sd_world *w);
 
 /* The bed roughness (fixed spheres, never made free): nobody reads its load, so nothing is
  * added to it and its force and torque stay at the zero they were created with (half the
@@ -539,8 +539,8 @@ long sd_contact_sc_lanes_count(long *redo);
 int sd_front_prefetch_on(const sd_world *w);
 int sd_front_prefetch_verdict(const sd_world *w, double *ratio);
 /* world.c: the trial's bookkeeping around one step's pass (pass_s: its time) */
-void sd_pf_trial_before(sd_world *w);
-void sd_pf_trial_after(sd_world *w, double pass_s);
+void sd_front_prefetch_trial_before(sd_world *w);
+void sd_front_prefetch_trial_after(sd_world *w, double pass_s);
 /* the first k with mov[k] >= i (mov ascends) */
 static inline int sd_mov_lower(const int32_t *mov, int n, int i)
 {

@@ -234,7 +234,7 @@ static void remake_checksum(unsigned char *data, size_t n)
 static void remove_body_in_contact(sd_world *w)
 {
     int victim = -1;
-    sd_contact_springs_home(w); /* (a near list's springs into their slots) */
+    sd_near_springs_home(w); /* (a near list's springs into their slots) */
     for (int k = 0; k < w->bb.n && victim < 0; k++)
         if (w->bb.hist[w->bb.p[k].off].feature >= 0 && !w->b.fixed[w->bb.p[k].a]) victim = w->b.gid[w->bb.p[k].a];
     CHECK(victim >= 0);

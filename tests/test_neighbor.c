@@ -223,7 +223,7 @@ static void near_check(const sd_world *w, long *checked, long *shorter, long *mi
     }
     /* each near sphere pair's flag (sd_pair_soa.act) says whether its slot holds a spring,
      * as the slot does: the touch filter reads the flag instead */
-    sd_contact_springs_home((sd_world *)w); /* (the list's springs into their slots) */
+    sd_near_springs_home((sd_world *)w); /* (the list's springs into their slots) */
     const sd_hist *hist = w->bb.hist;
     if (w->near_soa_version == w->near_version + 1) {
         for (int j = 0; j < w->near_n; j++) {
@@ -462,7 +462,7 @@ static void test_dynamic(void)
 /* first live history slot of the pair (kind, body gid) */
 static int find_hist(const sd_world *w, int bt, int gid, sd_vec3 *shear)
 {
-    sd_contact_springs_home((sd_world *)w); /* (a near list's springs into their slots) */
+    sd_near_springs_home((sd_world *)w); /* (a near list's springs into their slots) */
     const sd_pairlist *l = bt ? &w->bt : &w->bb;
     int i = w->gid_map[gid];
     for (int k = 0; k < l->n; k++) {
@@ -583,7 +583,7 @@ static int cmp_held(const void *x, const void *y)
 /* every held spring of both lists (pairs only, feature -2: the pairs themselves) */
 static held_spring *held_springs(sd_world *w, int pairs, int *n_out)
 {
-    sd_contact_springs_home(w);
+    sd_near_springs_home(w);
     int n = 0, cap = 1024;
     held_spring *h = malloc((size_t)cap * sizeof *h);
     CHECK(h != NULL);
@@ -620,7 +620,7 @@ static void test_history_sorted(void)
         int nb, na, np;
         held_spring *before = held_springs(w, 0, &nb);
         if (r % 3 == 2) { /* taken out first: the lookup by gid */
-            CHECK(sd_neighbor_collect_history(w) == SD_OK);
+            CHECK(sd_history_collect(w) == SD_OK);
             by_gid_rounds += nb > 0;
         }
         CHECK(sd_neighbor_rebuild(w) == SD_OK);

@@ -160,7 +160,7 @@ static void run(int threads, int simd, cases *c, long *bad)
         /* a slot without a held spring (feature != 0) may keep any old spring: a contact that
          * starts again must not see it (the springs into their slots first: the pass takes
          * them from there) */
-        sd_contact_springs_home(w);
+        sd_near_springs_home(w);
         for (int k = 0; k < nh; k++)
             if (w->bb.hist[k].feature != 0)
                 w->bb.hist[k].shear =
@@ -168,7 +168,7 @@ static void run(int threads, int simd, cases *c, long *bad)
         memcpy(old, w->bb.hist, (size_t)nh * sizeof *old);
         reference(w, old, F, T, hist, c);
         CHECK(sd_contact_compute(w, NULL) == SD_OK);
-        sd_contact_springs_home(w);
+        sd_near_springs_home(w);
         *bad += mismatches(w, F, T, hist);
     }
     free(old);

@@ -249,11 +249,11 @@ static void check_pf_trial(double t_on, double t_off)
     CHECK(sd_front_prefetch_verdict(w, NULL) == -1);
     int steps = 0, bad = 0;
     while (sd_front_prefetch_verdict(w, NULL) < 0 && steps < 10000) {
-        sd_pf_trial_before(w);
+        sd_front_prefetch_trial_before(w);
         CHECK(w->pf.blk >= 0);
         const int on = sd_front_prefetch_on(w);
         bad += on != order[w->pf.blk & 3];
-        sd_pf_trial_after(w, on ? t_on * (0.8 + 0.1 * (w->pf.blk / 4)) : t_off);
+        sd_front_prefetch_trial_after(w, on ? t_on * (0.8 + 0.1 * (w->pf.blk / 4)) : t_off);
         w->step++;
         steps++;
     }
@@ -271,24 +271,24 @@ static void check_pf_trial(double t_on, double t_off)
     /* no new trial until SD_PF_RETRY steps on */
     CHECK(w->pf.next == w->step - 1 + SD_PF_RETRY);
     w->step = w->pf.next - 1;
-    sd_pf_trial_before(w);
+    sd_front_prefetch_trial_before(w);
     CHECK(w->pf.blk == -1);
     w->step++;
-    sd_pf_trial_before(w);
+    sd_front_prefetch_trial_before(w);
     CHECK(w->pf.blk == 0);
     w->pf.blk = -1;
     /* ... or the body count moved by more than a quarter */
     w->pf.next = w->step + 1000;
     w->pf.n = n - n / 3;
-    sd_pf_trial_before(w);
+    sd_front_prefetch_trial_before(w);
     CHECK(w->pf.blk == 0);
     /* a setting other than auto runs no trial, and ends one that was running */
     CHECK(w->pf.blk == 0);
     sd_world_switch(w, SD_SW_PREFETCH, SD_PREFETCH_OFF);
-    sd_pf_trial_before(w);
+    sd_front_prefetch_trial_before(w);
     CHECK(w->pf.blk == -1);
     w->pf.n = 1;
-    sd_pf_trial_before(w);
+    sd_front_prefetch_trial_before(w);
     CHECK(w->pf.blk == -1);
     CHECK(sd_front_prefetch_on(w) == 0);
     sd_world_destroy(w);

@@ -1,5 +1,8 @@
-/* The body-body pass's front prefetch: when it runs, and the rows and slots it fetches. */
+/* The body-body pass's front prefetch: when it runs (by the size guess, or the trial that times
+ * it on and off during a run), and the rows and slots it fetches. */
 #include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include "contact_internal.h"
 
@@ -64,4 +67,52 @@ void sd_front_prefetch_rows(const sd_bodies *b, const int32_t *pa, const int32_t
     pf_rows(b->force + lo, b->force + hi + 1, 1);
     pf_rows(b->torque + lo, b->torque + hi + 1, 1);
     *front = hi;
+}
+
+/* The front prefetch's trial (sd_pf_trial): a block lasts about 2e6 particle-steps (2 to 100
+ * steps), so that a trial takes a few seconds at any size. */
+void sd_front_prefetch_trial_before(sd_world *w)
+{
+    sd_pf_trial *p = &w->pf;
+    const int n = w->b.n;
+    if (w->sw[SD_SW_PREFETCH] != SD_PREFETCH_AUTO) {
+        p->blk = -1; /* (a trial under a forced setting would time one mode against itself) */
+        return;
+    }
+    if (p->blk >= 0 || n < SD_PF_MIN_BODIES) return;
+    if (w->step < p->next && 4 * labs((long)n - p->n) <= n) return;
+    const long s = 2000000L / n;
+    p->blk_steps = s < 2 ? 2 : s > 100 ? 100 : (int)s;
+    p->blk = p->in_blk = 0;
+    p->n = n;
+    p->acc = 0.0;
+}
+
+static int cmp_dbl(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+void sd_front_prefetch_trial_after(sd_world *w, double pass_s)
+{
+    sd_pf_trial *p = &w->pf;
+    if (p->blk < 0) return;
+    p->acc += pass_s;
+    if (++p->in_blk < p->blk_steps) return;
+    p->t[p->blk & 3] = p->acc;
+    p->acc = 0.0;
+    p->in_blk = 0;
+    if ((++p->blk & 3) == 0) {
+        const double off = p->t[0] + p->t[3];
+        p->r[p->blk / 4 - 1] = off > 0.0 ? (p->t[1] + p->t[2]) / off : 1.0;
+    }
+    if (p->blk < 4 * SD_PF_GROUPS) return;
+    double r[SD_PF_GROUPS];
+    memcpy(r, p->r, sizeof r);
+    qsort(r, SD_PF_GROUPS, sizeof r[0], cmp_dbl);
+    p->ratio = 0.5 * (r[(SD_PF_GROUPS - 1) / 2] + r[SD_PF_GROUPS / 2]); /* (the median) */
+    p->verdict = p->ratio < 1.0;
+    p->blk = -1;
+    p->next = w->step + SD_PF_RETRY;
 }
