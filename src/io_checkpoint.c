@@ -2,6 +2,7 @@
 #include "io_checkpoint.h"
 
 #include <errno.h>
+#include <float.h>
 #include <fcntl.h>
 #include <limits.h>
 #include <math.h>
@@ -471,6 +472,41 @@ static void read_field(void *array, size_t elem, const char *name, void *ctx)
     fc->st = fail(fc->r, "body field '%s' is missing (written by an incompatible build)", name);
 }
 
+/* The bodies read back are checked value by value: a checksum proves the file is the one
+ * written, not that what was written makes sense (a crafted or buggy file with a body at
+ * z = 7.3e200 once restarted into a NaN cell index and another P_V). */
+#define CK_DOMAIN 1.0e6 /* m: no coordinate of a body lies farther from the origin */
+static int finite_vec(sd_vec3 v, double lim) { return fabs(v.x) <= lim && fabs(v.y) <= lim && fabs(v.z) <= lim; }
+
+static sd_status check_bodies(const rd_ctx *r, const sd_bodies *b)
+{
+    for (int i = 0; i < b->n; i++) {
+        const char *bad = NULL;
+        const sd_quat q = b->quat[i];
+        const double qn = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+        if (b->shape[i] != SD_SHAPE_SPHERE && b->shape[i] != SD_SHAPE_CYLINDER)
+            bad = "shape";
+        else if (!finite_vec(b->pos[i], CK_DOMAIN))
+            bad = "position (not finite, or beyond 1e6 m)";
+        else if (!finite_vec(b->vel[i], DBL_MAX) || !finite_vec(b->omega[i], DBL_MAX) ||
+                 !finite_vec(b->angmom[i], DBL_MAX))
+            bad = "velocity";
+        else if (!finite_vec(b->force[i], DBL_MAX) || !finite_vec(b->torque[i], DBL_MAX) ||
+                 !finite_vec(b->ext_force[i], DBL_MAX))
+            bad = "force";
+        else if (!(fabs(qn - 1.0) < 1e-6) || !finite_vec(b->axis[i], 1.0 + 1e-9))
+            bad = "attitude (not a unit quaternion)";
+        else if (!(b->radius[i] > 0.0 && b->radius[i] <= CK_DOMAIN) || !(b->hl[i] >= 0.0 && b->hl[i] <= CK_DOMAIN) ||
+                 !(b->bound_r[i] >= b->radius[i] && b->bound_r[i] <= 2.0 * CK_DOMAIN))
+            bad = "size";
+        else if (!(b->mass[i] > 0.0 && b->mass[i] < DBL_MAX) || !(b->inv_mass[i] >= 0.0 && b->inv_mass[i] < DBL_MAX) ||
+                 !(b->inv_i_ax[i] >= 0.0 && b->inv_i_ax[i] < DBL_MAX) || !(b->inv_i_tr[i] >= 0.0 && b->inv_i_tr[i] < DBL_MAX))
+            bad = "mass or inertia";
+        if (bad) return fail(r, "body %d (gid %d): impossible %s", i, (int)b->gid[i], bad);
+    }
+    return SD_OK;
+}
+
 static sd_status read_bodies(const rd_ctx *r, sd_bin_reader *c, sd_world *w)
 {
     int n = get_count(c, 0);
@@ -511,7 +547,7 @@ static sd_status read_bodies(const rd_ctx *r, sd_bin_reader *c, sd_world *w)
     for (int k = 0; k < nf && !fc.st; k++)
         if (!ff[k].used) fc.st = fail(r, "unknown body field '%s' (written by an incompatible build)", ff[k].name);
     free(ff);
-    return fc.st;
+    return fc.st ? fc.st : check_bodies(r, &w->b);
 }
 
 static sd_status read_pairs(const rd_ctx *r, sd_bin_reader *c, sd_world *w, sd_pairlist *l, int bt, const char *tag)

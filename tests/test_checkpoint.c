@@ -508,6 +508,35 @@ static void test_refused(void)
         check_refused(bad, "trailing byte", NULL);
         free(longer);
     }
+    /* a file whose checksum matches but whose content is impossible: the first body 7.3e200 m
+     * up, then its attitude not a unit quaternion; each refused, naming the body and the value */
+    {
+        static const struct {
+            const char *name;
+            int len, at; /* the field's name, its length, the double changed in body 0's element */
+            double value;
+            const char *expect;
+        } bad_values[] = {{"pos", 3, 2, 7.3e200, "impossible position"},
+                          {"quat", 4, 0, 3.0, "impossible attitude"},
+                          {"mass", 4, 0, -1.0, "impossible mass"}};
+        for (size_t bv = 0; bv < sizeof bad_values / sizeof bad_values[0]; bv++) {
+            unsigned char *m = malloc(n);
+            if (!m) break;
+            memcpy(m, data, n);
+            size_t at = 0;
+            for (size_t k = 64; k + 1 + (size_t)bad_values[bv].len + 4 < n && !at; k++)
+                if (m[k] == bad_values[bv].len && !memcmp(m + k + 1, bad_values[bv].name, (size_t)bad_values[bv].len))
+                    at = k + 1 + (size_t)bad_values[bv].len + 4; /* (the name, then its element size) */
+            CHECK(at > 0);
+            if (at) {
+                memcpy(m + at + 8 * (size_t)bad_values[bv].at, &bad_values[bv].value, sizeof(double));
+                remake_checksum(m, n);
+                write_all(bad, m, n);
+                check_refused(bad, bad_values[bv].name, bad_values[bv].expect);
+            }
+            free(m);
+        }
+    }
     /* a damaged payload whose checksum was made to match (a bug, or a crafted file): every
      * count and index is range-checked, so the read refuses it or gives a usable world */
     {
