@@ -267,10 +267,11 @@ void sd_water_forces(void *ctx, const sd_world *w, const int32_t *mov, int k0, i
     int nlogs = 0;
     int32_t *lp = k1 - k0 <= SD_FLUID_LOGS ? logs : NULL;
 #ifdef SD_FLUID512
-    if (sd_world_simd_level(w) == SD_SIMD_AVX512) {
+    const int simd = sd_world_simd_level(w); /* (one call a block, not two) */
+    if (simd == SD_SIMD_AVX512) {
         fluid_spheres512(fc, b, mov, k0, k1, lp, &nlogs, out);
         kv = k1;
-    } else if (sd_world_simd_level(w) == SD_SIMD_AVX2)
+    } else if (simd == SD_SIMD_AVX2)
         kv = fluid_spheres256(fc, b, mov, k0, k1, lp, &nlogs, out);
 #else
     lp = NULL;

@@ -108,12 +108,12 @@ typedef struct {
     int cap_cells, cap_items;
 } sd_grid;
 
-/* Pair records, field by field (contact.c) */
+/* Pair records, field by field (pair_records.c; filled by contact_kernels.h pair_soa_set) */
 typedef struct {
     int32_t *a, *b, *off, *ck; /* ck: cap in the low half, kind in the high half */
     double *sqm;
     float *rs2; /* (r_a + r_b)^2 as a float (a sphere pair touches when its centres are nearer);
-                 * -1 for any other entry (contact.c entry_rs2) */
+                 * -1 for any other entry (contact_kernels.h entry_rs2) */
     /* a sphere pair's slot holds a spring (its feature is 0, else -1): set from the slot when
      * the list is made, then by the touch filter at each step (touching now, a spring after
      * the step), so that the filter does not read the slot of every near pair */
@@ -121,12 +121,12 @@ typedef struct {
     int cap;
 } sd_pair_soa;
 
-/* Body ranges, near lists and cross pairs of the parallel body-body pass (contact.c), derived
+/* Body ranges, near lists and cross pairs of the parallel body-body pass (owners.c), derived
  * from the pair list: remade with the near pairs, never saved. */
 #define SD_MAX_OWNERS 64
 /* The bodies before the trailing bed (nf, sd_bed_start: the passes stop there) and the sums'
  * bed test (bed_lim: nf where no body before it is of the bed, what the rebuild's sort
- * leaves, else -1), as found (contact.c bed_split) for n bodies after `stamp` rebuilds. */
+ * leaves, else -1), as found (contact_bb.c sd_bb_bed_split) for n bodies after `stamp` rebuilds. */
 typedef struct {
     int nf, bed_lim, n;
     long stamp;
@@ -201,7 +201,7 @@ typedef struct {
     long used; /* rebuilds that took the bed from here (for the tests) */
 } sd_bed_cache;
 
-/* The body pass's front prefetch (contact.c) in auto mode is tried, not guessed from the cache
+/* The body pass's front prefetch (front_prefetch.c) in auto mode is tried, not guessed from the cache
  * sizes: SD_PF_GROUPS groups of four blocks of steps, off on on off, each block's pass time
  * summed; the verdict is the median over the groups of (on) / (off) below 1. Tried again every
  * SD_PF_RETRY steps and when the body count moves by a quarter. A hint to the memory system
@@ -317,7 +317,7 @@ struct sd_world {
     sd_ext_force_fn ext_fn; /* NULL: ext_force applies (set by the driver, not saved) */
     void *ext_ctx;
     sd_owned *owned;  /* NULL until a parallel pass needs it */
-    void *bb_scratch; /* per-thread scratch of the body-body pass (contact.c) */
+    void *bb_scratch; /* per-thread scratch of the body-body pass (contact_internal.h bb_scratch) */
     int bb_scratch_n;
     sd_grid grid;     /* bodies */
     /* the old entries are grouped by the first body's store index at the collect (any one
@@ -370,7 +370,7 @@ struct sd_world {
     long front_step;      /* ... valid while step == front_step and b.n == front_bn */
     int front_bn;
     /* derived, never saved: the body-body pairs that can touch before the spheres have
-     * drifted by half the near skin (contact.c: every non-sphere pair, and the sphere pairs
+     * drifted by half the near skin (near_list.c: every non-sphere pair, and the sphere pairs
      * with a gap below near_skin), ascending; near_drift bounds how far any moving sphere has
      * gone since the list was made (the largest |v| dt of each step, summed) */
     int32_t *near;
@@ -379,7 +379,7 @@ struct sd_world {
      * field by field: the touch filter loads them 8 at a time instead of gathering them */
     sd_pair_soa near_soa;
     long near_soa_version; /* near_version + 1 when near and near_soa are the current near pairs */
-    /* The sphere pairs' springs of a near list, in its own order (contact.c springs_to):
+    /* The sphere pairs' springs of a near list, in its own order (near_list.c sd_near_springs_to):
      * near_hist[k] for entry k of the serial list (springs_out 1), sd_owned's hist for the
      * owners' lists (springs_out 2); their records' off then points there, and those pairs'
      * slots in bb.hist are stale until sd_near_springs_home puts them back (springs_out 0).
@@ -387,7 +387,7 @@ struct sd_world {
     sd_hist *near_hist;
     int near_hist_cap;
     int springs_out;
-    int springs_lsq; /* those springs' slots hold the pair's sqrt_m_eff where the feature was (contact.c slot_sqm) */
+    int springs_lsq; /* those springs' slots hold the pair's sqrt_m_eff where the feature was (contact_kernels.h slot_sqm) */
     long near_stamp, near_version;
     double near_drift, near_skin; /* near_skin: the skin it was made with */
     /* near_mark[k]: candidate k was near when the near pairs were last made (both paths), so
@@ -519,7 +519,7 @@ void sd_pairlist_free(sd_pairlist *l);
 sd_status sd_contact_near_remake(sd_world *w);
 void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold *man, int from, int to);
 /* The hand-written SIMD kernels run at w->simd: SD_SIMD_SCALAR (the scalar loops), _AVX2
- * (contact.c's touch filter, gather and sums, run.c's fluid forces, 4 lanes) or _AVX512 (the
+ * (the contact pass's touch filter, gather and sums, water.c's forces, 4 lanes) or _AVX512 (the
  * filter, gather and fluid forces in 8 lanes, the sums in 4, neighbor.c's cell scan). The same
  * bits at every level. */
 /* The groups of four the calling thread ran through the sphere law's AVX2 spring loop so far,
@@ -530,7 +530,7 @@ long sd_integrate_lanes_count(void); /* the groups of four spheres the calling t
 long sd_contact_sc_geom_count(void);
 /* the sphere-log lanes run so far, and of them the ones sent back to the scalar law (*redo) */
 long sd_contact_sc_lanes_count(long *redo);
-/* The body-body pass's prefetch of the bodies it is about to reach for the first time (contact.c),
+/* The body-body pass's prefetch of the bodies it is about to reach for the first time (front_prefetch.c),
  * as switch SD_SW_PREFETCH says: SD_PREFETCH_AUTO (the default: tried on and off during the run,
  * sd_pf_trial; before the first verdict, and below SD_PF_MIN_BODIES, on when the step's data
  * outgrow a quarter of the last-level cache), _OFF or _ON. A hint to the memory system only: the
@@ -538,7 +538,7 @@ long sd_contact_sc_lanes_count(long *redo);
  * sd_front_prefetch_verdict: the last trial's verdict for w (-1 none yet) and its ratio (on / off). */
 int sd_front_prefetch_on(const sd_world *w);
 int sd_front_prefetch_verdict(const sd_world *w, double *ratio);
-/* world.c: the trial's bookkeeping around one step's pass (pass_s: its time) */
+/* front_prefetch.c: the trial's bookkeeping around one step's pass (pass_s: its time) */
 void sd_front_prefetch_trial_before(sd_world *w);
 void sd_front_prefetch_trial_after(sd_world *w, double pass_s);
 /* the first k with mov[k] >= i (mov ascends) */
@@ -583,7 +583,7 @@ static inline double sd_clamp01(double t) { return t > 0.0 ? (t < 1.0 ? t : 1.0)
 
 /* Distance between the axis segments of two bodies (a sphere's segment is its centre): the
  * clamped closest points of the two segments (the candidates' capsule test, neighbor.c, and
- * the log pairs' near test, contact.c). fmin/fmax-free clamps: gcc calls libm for those. */
+ * the log pairs' near test, contact_kernels.h near_test). fmin/fmax-free clamps: gcc calls libm for those. */
 static inline double sd_axis_gap(const sd_bodies *b, int i, int j)
 {
     sd_vec3 p1 = v3_madd(b->pos[i], b->axis[i], -b->hl[i]), d1 = v3_scale(b->axis[i], 2.0 * b->hl[i]);
