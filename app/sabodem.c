@@ -11,6 +11,7 @@
 #include "run.h"
 #include "scenario.h"
 #include "plot.h"
+#include "ranks.h"
 #include "sweep.h"
 
 static volatile sig_atomic_t stop_flag = 0;
@@ -48,12 +49,19 @@ static const struct {
      "                            capture-phase keys (docs/sweep.md)"},
     {"check", "sabodem check FILE [--set key=value]...",
      "validate the scenario and build its scene without running"},
-    {"sweep", "sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch]",
+    {"sweep", "sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch]\n"
+              "                   [--shard U/N | --collect | --emit slurm]",
      "run a matrix of cases x seeds in parallel (resumable), with CSV and figures; runs that\n"
-     "differ only in the dam layout share one packing + flow (docs/sweep.md)\n"
-     "  --parallel N  processes at once (default: the sweep file's, else the cores)\n"
+     "differ only in the dam layout share one packing + flow (docs/sweep.md). Under mpirun the\n"
+     "ranks share the runs (one at a time each unless --parallel), rank 0 collects.\n"
+     "  --parallel N  processes at once (default: the sweep file's, else the cores; 1 per rank\n"
+     "                under mpirun)\n"
      "  --dry-run     list the runs and shared flows, and what is already done\n"
-     "  --no-branch   every run packs and flows on its own"},
+     "  --no-branch   every run packs and flows on its own\n"
+     "  --shard U/N   run only work unit U, U+N, U+2N, ... (a shared flow and its runs, or a\n"
+     "                run); no results.csv (--collect writes it)\n"
+     "  --collect     run nothing: results.csv, cases.csv and figures from the finished runs\n"
+     "  --emit slurm  write DIR/slurm/: a job array (one task per unit) and a collect job"},
     {"params", "sabodem params [--markdown]", "list every scenario key with its type, unit, default and range"},
 };
 enum { N_COMMANDS = sizeof commands / sizeof commands[0] };
@@ -166,6 +174,17 @@ int main(int argc, char **argv)
                 so.parallel = (int)p;
             } else if (!strcmp(argv[i], "--dry-run")) so.dry_run = 1;
             else if (!strcmp(argv[i], "--no-branch")) so.no_branch = 1;
+            else if (!strcmp(argv[i], "--collect")) so.collect = 1;
+            else if (!strcmp(argv[i], "--emit") && i + 1 < argc) so.emit = argv[++i];
+            else if (!strcmp(argv[i], "--shard") && i + 1 < argc) {
+                int u, n, len = 0;
+                if (sscanf(argv[++i], "%d/%d%n", &u, &n, &len) != 2 || argv[i][len] || n < 1 || u < 0 || u >= n) {
+                    fprintf(stderr, "sabodem: --shard: expected U/N with 0 <= U < N, got '%s'\n", argv[i]);
+                    return 2;
+                }
+                so.shard = u;
+                so.shards = n;
+            }
             else if (argv[i][0] == '-') {
                 fprintf(stderr, "sabodem: unknown or incomplete option '%s'\n", argv[i]);
                 return 2;
@@ -186,10 +205,48 @@ int main(int argc, char **argv)
         stop_on_signals(&sa);
         tuning_from_env(&so.tuning);
         so.run_done = draw_run_pictures;
+        char self[4096];
+        ssize_t nself = readlink("/proc/self/exe", self, sizeof self - 1);
+        if (nself > 0) {
+            self[nself] = 0;
+            so.program = self;
+        }
+        if ((so.collect != 0) + (so.emit != NULL) + (so.shards > 0) + (so.dry_run != 0) > 1) {
+            fprintf(stderr, "sabodem: --shard, --collect, --emit and --dry-run exclude each other\n");
+            return 2;
+        }
+        app_ranks ranks;
+        if (app_ranks_start(&ranks, &argc, &argv)) return 2;
+        if (ranks.active && ranks.size > 1) {
+            if (so.collect || so.emit || so.shards || so.dry_run) {
+                if (ranks.rank == 0)
+                    fprintf(stderr, "sabodem: under mpirun the ranks are the shards: no --shard, --collect, --emit "
+                                    "or --dry-run\n");
+                app_ranks_finish(&ranks);
+                return 2;
+            }
+            so.shard = ranks.rank;
+            so.shards = ranks.size;
+            if (so.parallel == 0) so.parallel = 1;
+        }
         int code = sd_sweep_run(file, outdir, &so, &stop_flag, stdout, stderr);
-        if ((code == 0 || code == 1) && !so.dry_run && app_draw_sweep(outdir))
-            fprintf(stdout, "note: figures not drawn (see %s/plot.log)\n", outdir);
-        if ((code == 0 || code == 1) && !so.dry_run) printf("sweep results in %s/results.csv, %s/cases.csv\n", outdir, outdir);
+        if (so.shards > 1 && ranks.active) { /* every rank's part done: rank 0 collects */
+            code = app_ranks_max(&ranks, code);
+            if (ranks.rank == 0 && code != 2 && code != 130) {
+                sd_sweep_opts co = so;
+                co.shard = co.shards = 0;
+                co.collect = 1;
+                int c = sd_sweep_run(file, outdir, &co, &stop_flag, stdout, stderr);
+                if (c > code) code = c;
+            } else if (ranks.rank != 0) {
+                app_ranks_finish(&ranks);
+                return code;
+            }
+        }
+        app_ranks_finish(&ranks);
+        const int summarised = (code == 0 || code == 1) && !so.dry_run && !so.emit && (so.shards <= 1 || ranks.size > 1);
+        if (summarised && app_draw_sweep(outdir)) fprintf(stdout, "note: figures not drawn (see %s/plot.log)\n", outdir);
+        if (summarised) printf("sweep results in %s/results.csv, %s/cases.csv\n", outdir, outdir);
         return code;
     }
     if (strcmp(cmd, "run") && strcmp(cmd, "check")) {

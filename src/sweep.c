@@ -131,7 +131,8 @@ static int load_sweep(const char *path, sweep_def *d, FILE *err)
     return bad ? -1 : 0;
 }
 
-enum { ST_PENDING = 0, ST_RUNNING, ST_DONE, ST_FAILED, ST_SKIPPED, ST_READY, ST_UNNEEDED };
+/* ST_OTHER: another shard's run */
+enum { ST_PENDING = 0, ST_RUNNING, ST_DONE, ST_FAILED, ST_SKIPPED, ST_READY, ST_UNNEEDED, ST_OTHER };
 
 typedef struct {
     int case_id, seed, seed_idx;
@@ -329,6 +330,121 @@ static int split_csv(char *line, char **f, int max)
     return n;
 }
 
+/* a string as one word of a POSIX shell script: in single quotes, each ' as '\'' */
+static void put_shell_word(FILE *f, const char *s)
+{
+    fputc('\'', f);
+    for (; *s; s++)
+        if (*s == '\'') fputs("'\\''", f);
+        else fputc(*s, f);
+    fputc('\'', f);
+}
+
+/* p as an absolute path (the working directory before a relative one); 0, or -1 */
+static int absolute_path(const char *p, char *out, size_t n)
+{
+    char cwd[2048];
+    if (p[0] == '/') return snprintf(out, n, "%s", p) < (int)n ? 0 : -1;
+    if (!getcwd(cwd, sizeof cwd)) return -1;
+    return snprintf(out, n, "%s/%s", cwd, p) < (int)n ? 0 : -1;
+}
+
+/* DIR/slurm/: a job array with one task per work unit (`--shard U/N`), a job that collects
+ * results.csv when the array is over, a script that submits both, and the list of units.
+ * Paths are absolute and quoted (no string of the user's is ever run as shell code). */
+static int emit_slurm(const sweep_def *d, const char *sweep_file, const char *outdir, const sd_sweep_opts *so,
+                      int n_units, const run_item *items, int total, const branch_item *groups, int ng, FILE *err)
+{
+    (void)d;
+    if (strcmp(so->emit, "slurm")) {
+        fprintf(err, "sweep: --emit %s: unknown (the one known is slurm)\n", so->emit);
+        return 2;
+    }
+    char dir[1200], abs_file[4096], abs_out[4096], prog[4096];
+    snprintf(dir, sizeof dir, "%s/slurm", outdir);
+    if (sd_mkdir_p(dir)) {
+        fprintf(err, "%s: cannot create: %s\n", dir, strerror(errno));
+        return 1;
+    }
+    if (absolute_path(sweep_file, abs_file, sizeof abs_file) || absolute_path(outdir, abs_out, sizeof abs_out)) {
+        fprintf(err, "sweep: cannot make %s and %s absolute paths: %s\n", sweep_file, outdir, strerror(errno));
+        return 1;
+    }
+    snprintf(prog, sizeof prog, "%s", so->program ? so->program : "sabodem");
+    static const char *names[] = {"units.txt", "array.sh", "collect.sh", "submit.sh", "README"};
+    int bad = 0;
+    for (int k = 0; k < 5 && !bad; k++) {
+        char path[1400], tmp[1500];
+        snprintf(path, sizeof path, "%s/%s", dir, names[k]);
+        snprintf(tmp, sizeof tmp, "%s.tmp", path);
+        FILE *f = fopen(tmp, "w");
+        if (!f) {
+            fprintf(err, "%s: cannot write: %s\n", tmp, strerror(errno));
+            return 1;
+        }
+        switch (k) {
+        case 0: /* unit, what it computes, its runs */
+            fprintf(f, "# work units of %s: unit<TAB>what<TAB>runs (task U of the array runs unit U)\n", abs_file);
+            for (int u = 0; u < n_units; u++) {
+                if (ng > 0) fprintf(f, "%d\tflow %s\t", u, groups[u].key);
+                else fprintf(f, "%d\trun\t", u);
+                int first = 1;
+                for (int i = 0; i < total; i++)
+                    if ((ng > 0 ? items[i].group : i) == u) {
+                        fprintf(f, "%s%s", first ? "" : " ", items[i].name);
+                        first = 0;
+                    }
+                fputc('\n', f);
+            }
+            break;
+        case 1:
+            fprintf(f, "#!/bin/bash\n#SBATCH --job-name=sabodem-sweep\n#SBATCH --array=0-%d\n", n_units - 1);
+            fprintf(f, "#SBATCH --cpus-per-task=1\n#SBATCH --output=%s/slurm/unit_%%a.log\n", abs_out);
+            fprintf(f, "# one work unit of the sweep per task (units.txt); a task run again skips the runs done\n");
+            fprintf(f, "exec ");
+            put_shell_word(f, prog);
+            fprintf(f, " sweep ");
+            put_shell_word(f, abs_file);
+            fprintf(f, " -o ");
+            put_shell_word(f, abs_out);
+            fprintf(f, " --shard \"$SLURM_ARRAY_TASK_ID/%d\" --parallel 1%s\n", n_units, so->no_branch ? " --no-branch" : "");
+            break;
+        case 2:
+            fprintf(f, "#!/bin/bash\n#SBATCH --job-name=sabodem-collect\n#SBATCH --cpus-per-task=1\n");
+            fprintf(f, "#SBATCH --output=%s/slurm/collect.log\n", abs_out);
+            fprintf(f, "# results.csv, cases.csv and the figures from the finished runs\nexec ");
+            put_shell_word(f, prog);
+            fprintf(f, " sweep ");
+            put_shell_word(f, abs_file);
+            fprintf(f, " -o ");
+            put_shell_word(f, abs_out);
+            fprintf(f, " --collect%s\n", so->no_branch ? " --no-branch" : "");
+            break;
+        case 3:
+            fprintf(f, "#!/bin/sh\n# submit the job array, then the collect job once the array is over\nset -e\ncd ");
+            put_shell_word(f, dir);
+            fprintf(f, "\njid=$(sbatch --parsable array.sh)\nsbatch --dependency=afterany:\"${jid%%%%;*}\" collect.sh\n");
+            break;
+        default:
+            fprintf(f,
+                    "Sweep %s as a Slurm job array: %d tasks, one per work unit (units.txt: a shared flow\n"
+                    "and the runs that branch from it, or one run), then a job that collects results.csv.\n"
+                    "Submit with: sh %s/submit.sh\n"
+                    "Each task runs `sabodem sweep --shard U/%d`; a task run again skips the runs already done,\n"
+                    "so a failed or cancelled task is resubmitted with: sbatch --array=U array.sh\n",
+                    abs_file, n_units, dir, n_units);
+        }
+        if (ferror(f) | fclose(f)) bad = 1;
+        if (bad || rename(tmp, path)) {
+            fprintf(err, "%s: cannot write: %s\n", path, strerror(errno));
+            remove(tmp);
+            return 1;
+        }
+        if (k == 1 || k == 2 || k == 3) chmod(path, 0755);
+    }
+    return 0;
+}
+
 int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts *so, volatile sig_atomic_t *stop,
                  FILE *log, FILE *err)
 {
@@ -406,15 +522,40 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
             }
         }
     }
-    int skipped = 0;
+    /* work units: a branch group (its flow and its runs) or one unbranched run */
+    const int n_units = branching ? ng : total;
+    const int shards = so->shards > 1 ? so->shards : 1;
+    if (so->shards > 1 && (so->shard < 0 || so->shard >= so->shards)) {
+        fprintf(err, "sweep: shard %d of %d does not exist (shards are 0 to %d)\n", so->shard, so->shards,
+                so->shards - 1);
+        free(groups);
+        free(items);
+        return 2;
+    }
+    int skipped = 0, others = 0;
     for (int i = 0; i < total; i++) {
         char p[1300];
+        const int unit = items[i].group >= 0 ? items[i].group : i;
         snprintf(p, sizeof p, "%s/result.csv", items[i].dir);
         if (file_exists(p)) {
             items[i].state = ST_SKIPPED;
             skipped++;
+        } else if (so->collect || unit % shards != so->shard % shards) {
+            items[i].state = ST_OTHER;
+            others++;
         } else if (items[i].group >= 0)
             groups[items[i].group].n_todo++;
+    }
+    if (so->emit) {
+        int code = emit_slurm(&d, sweep_file, outdir, so, n_units, items, total, groups, ng, err);
+        if (!code)
+            fprintf(log,
+                    "sweep %s: %d runs in %d work units (%s); job array and collect job written to %s/slurm/ "
+                    "(see %s/slurm/README)\n",
+                    sweep_file, total, n_units, branching ? "one per shared flow" : "one per run", outdir, outdir);
+        free(groups);
+        free(items);
+        return code;
     }
     int reused = 0, to_compute = 0;
     for (int g = 0; g < ng; g++) {
@@ -510,12 +651,16 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
     double t0 = sd_now();
     fprintf(log, "sweep %s: %d cases x %d runs = %d runs, %d already done, %d in parallel\n", sweep_file, ncase, d.runs,
             total, skipped, parallel);
+    if (shards > 1)
+        fprintf(log, "sweep: shard %d of %d: work units %d, %d + %d, ... of %d; %d runs left to other shards\n",
+                so->shard, shards, so->shard, so->shard, shards, n_units, others);
     if (branching)
         fprintf(log,
                 "sweep: branching on %s: %d groups of %d layouts share their packing and flow (%d to compute, %d "
                 "checkpoints reused)\n",
                 branch_keys, ng, layouts, to_compute, reused);
     int interrupted = 0;
+    if (so->collect) goto collect;
     while (1) {
         while (!interrupted && running < parallel) {
             /* shared flows first: each unlocks several runs */
@@ -631,6 +776,15 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
             kill_children(items, total, groups, ng);
         }
     }
+collect:
+    if (shards > 1) { /* the collecting process writes results.csv */
+        fprintf(log, "sweep: shard %d of %d: %d flow(s) and %d run(s) in %.1f s, %d failed\n", so->shard, shards,
+                flows_run, runs_run, sd_now() - t0, failed + flows_failed);
+        free(groups);
+        free(items);
+        if (interrupted) return 130;
+        return failed || flows_failed ? 1 : 0;
+    }
     /* results.csv from every finished run, in run order; and what branching saved */
     double cost_straight = 0.0, saved = 0.0;
     int n_branched = 0;
@@ -683,6 +837,17 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
         }
     free(gflow);
     free(gdone);
+    if (so->collect) {
+        fprintf(log, "sweep: collected %d of %d runs into %s\n", skipped, total, path);
+        free(groups);
+        free(items);
+        if (skipped < total) {
+            fprintf(err, "sweep: %d of %d runs have not finished (no result.csv); results.csv lists the others\n",
+                    total - skipped, total);
+            return 1;
+        }
+        return 0;
+    }
     fprintf(log,
             "sweep: this invocation started %d flow(s) and %d run(s) in %.1f s; %d run(s) were already done, %d flow "
             "checkpoint(s) reused\n",
