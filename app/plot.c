@@ -101,3 +101,11 @@ int app_draw_sweep(const char *outdir)
     char *argv[] = {NULL, script, (char *)outdir, NULL};
     return wait_ok(spawn_python(argv, out)) ? 0 : -1;
 }
+
+int app_draw_design(const char *data_dir, const char *png, const char *log_path)
+{
+    char script[PATH_MAX + 64];
+    if (script_path("plot_design.py", script, sizeof script)) return -1;
+    char *argv[] = {NULL, script, (char *)data_dir, (char *)png, NULL};
+    return wait_ok(spawn_python(argv, log_path)) ? 0 : -1;
+}

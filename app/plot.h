@@ -15,5 +15,8 @@ int app_draw_pictures(const sd_run_result *r, FILE *log);
 /* The sweep's figures from DIR/results.csv and cases.csv (scripts/plot_sweep.py), its output in
  * DIR/plot.log. Returns 0 when drawn. */
 int app_draw_sweep(const char *outdir);
+/* The design view of `check --png` (scripts/plot_design.py) from the CSV files in data_dir
+ * (sd_scene_write_design) into png; the script's output goes to log_path. 0 when drawn. */
+int app_draw_design(const char *data_dir, const char *png, const char *log_path);
 
 #endif

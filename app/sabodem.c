@@ -10,6 +10,7 @@
 #include "build.h"
 #include "run.h"
 #include "scenario.h"
+#include "scene_report.h"
 #include "plot.h"
 #include "ranks.h"
 #include "sweep.h"
@@ -47,8 +48,11 @@ static const struct {
      "  --restart CHECKPOINT      continue from such a checkpoint (the capture phase only); FILE may\n"
      "                            differ from the writer's scenario only in the dam layout and\n"
      "                            capture-phase keys (docs/sweep.md)"},
-    {"check", "sabodem check FILE [--set key=value]...",
-     "validate the scenario and build its scene without running"},
+    {"check", "sabodem check FILE [--set key=value]... [--png OUT.png]",
+     "validate the scenario, build its scene without running and describe it: the debris\n"
+     "(counts, solid volume, K_w), the dam (axes, clear gaps, l_H/d_max, l_V/d_max)\n"
+     "  --png OUT.png  also draw the dam's front view (with the largest boulder and a log to\n"
+     "                 scale) and a side view of the initial state (python3-matplotlib)"},
     {"sweep", "sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch]\n"
               "                   [--shard U/N | --collect | --emit slurm]",
      "run a matrix of cases x seeds in parallel (resumable), with CSV and figures; runs that\n"
@@ -136,6 +140,44 @@ static const char *basename_noext(const char *path, char *buf, size_t n)
     char *dot = strrchr(buf, '.');
     if (dot && dot != buf) *dot = 0;
     return buf;
+}
+
+/* `check --png`: the design's data into a fresh temporary directory, drawn by
+ * scripts/plot_design.py, then removed. 0 when drawn, else 1 with the script's output. */
+static int draw_design(const sd_scenario *s, const sd_world *w, const char *png)
+{
+    if (!s->flume_on) {
+        fprintf(stderr, "sabodem: --png draws a flume and its dam; %s has no flume (flume.on: false)\n", s->path);
+        return 2;
+    }
+    const char *tmpdir = getenv("TMPDIR");
+    char dir[1024], logp[1100];
+    snprintf(dir, sizeof dir, "%s/sabodem-design-XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
+    if (!mkdtemp(dir)) {
+        fprintf(stderr, "sabodem: cannot create a temporary directory in %s: %s\n", tmpdir ? tmpdir : "/tmp",
+                strerror(errno));
+        return 1;
+    }
+    snprintf(logp, sizeof logp, "%s/plot.log", dir);
+    int code = sd_scene_write_design(dir, s, w, stderr) ? 1 : 0;
+    if (!code && app_draw_design(dir, png, logp)) {
+        fprintf(stderr, "sabodem: %s not drawn (python3-matplotlib missing, or scripts/plot_design.py not found):\n", png);
+        FILE *l = fopen(logp, "r");
+        char line[512];
+        while (l && fgets(line, sizeof line, l))
+            fputs(line, stderr);
+        if (l) fclose(l);
+        code = 1;
+    } else if (!code)
+        printf("design drawn: %s\n", png);
+    static const char *files[] = {"design.csv", "members.csv", "bodies.csv", "plot.log"};
+    for (int k = 0; k < 4; k++) {
+        char p[1200];
+        snprintf(p, sizeof p, "%s/%s", dir, files[k]);
+        remove(p);
+    }
+    rmdir(dir);
+    return code;
 }
 
 int main(int argc, char **argv)
@@ -254,7 +296,7 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    const char *file = NULL, *outdir = NULL, *restart = NULL;
+    const char *file = NULL, *outdir = NULL, *restart = NULL, *png = NULL;
     int ckpt_flow_end = 0;
     const char **sets = calloc((size_t)argc + 2, sizeof(char *));
     char seedbuf[64], thrbuf[64];
@@ -289,6 +331,7 @@ int main(int argc, char **argv)
             }
             ckpt_flow_end = 1;
         } else if (!strcmp(a, "--restart") && i + 1 < argc && !strcmp(cmd, "run")) restart = argv[++i];
+        else if (!strcmp(a, "--png") && i + 1 < argc && !strcmp(cmd, "check")) png = argv[++i];
         else if (a[0] == '-') {
             fprintf(stderr, "sabodem: unknown or incomplete option '%s'\n", a);
             usage(stderr);
@@ -326,14 +369,19 @@ int main(int argc, char **argv)
         sd_status st = sd_build_scene(w, &s, &info, stderr);
         if (!st) st = sd_world_check(w);
         int n = sd_world_body_count(w), t = sd_world_triangle_count(w);
-        sd_world_destroy(w);
-        sd_scenario_free(&s);
         if (st) {
+            sd_world_destroy(w);
+            sd_scenario_free(&s);
             fprintf(stderr, "%s: %s\n", file, sd_status_message(st));
             return 2;
         }
         printf("%s: ok (%d elements, %d triangles)\n", file, n, t);
-        return 0;
+        sd_scene_report(stdout, &s, &info, n, t);
+        int code = 0;
+        if (png) code = draw_design(&s, w, png);
+        sd_world_destroy(w);
+        sd_scenario_free(&s);
+        return code;
     }
     char name[256], dirbuf[512];
     if (!outdir) {

@@ -126,6 +126,33 @@ fi
 if [ "$code" -eq 0 ] && [ "$png_ok" -eq 1 ]; then pass=$((pass + 1)); else
   echo "FAIL side views: exit $code"; cat "$tmp/png.log"; ls "$tmp/png"; fail=$((fail + 1)); fi
 
+# check describes the paper's flume in design terms; the numbers by hand (SPEC §8): 4 columns
+# of pitch 50 + 18 mm centred across 300 mm (axes 150 -/+ 34, 102); wall gaps 48 - 9 = 39 mm;
+# beam axes at 40 + 9 and 118 + 9 mm; 150 logs of 10 x 100 mm = 1.178 L against the spheres'
+# 4.748 L: K_w = 19.88 %
+expect check-dam-columns 0 "4 columns, axes at y = 48.0, 116.0, 184.0, 252.0 mm" check "$src_dir/examples/shibuya2009.yaml"
+for pat in "clear gaps across \(wall, between columns, wall\): 39.0, 50.0, 50.0, 50.0, 39.0 mm" \
+           "2 beams, axes at z = 49.0, 127.0 mm" "l_H/d_max = 2.50, l_H/L_log = 0.50" "l_V/d_max = 2.00" \
+           "logs: 150, d = 10.0 mm, L = 100.0 mm, solid volume 1.178 L" "K_w = .* = 19.88 %" \
+           "spheres class 2: d = 10.0 mm, 3010, solid volume 1.576 L"; do
+  if grep -Eq -- "$pat" "$tmp/out"; then pass=$((pass + 1)); else echo "FAIL check report: no '$pat'"; cat "$tmp/out"; fail=$((fail + 1)); fi
+done
+expect check-no-beam 0 "no intermediate beam: bed to the top beam 118.0 mm = 5.90 d_max" check "$src_dir/examples/shibuya2009.yaml" --set dam.l_v=0
+expect check-png-noflume 2 "has no flume" check "$tmp/good.yaml" --png "$tmp/x.png"
+# check --png: the design drawn (a PNG), or, without matplotlib, exit 1 saying so; its
+# temporary data removed either way
+"$bin" check "$src_dir/examples/flume_small.yaml" --png "$tmp/design.png" >"$tmp/design.log" 2>&1
+code=$?
+if /usr/bin/python3 -c "import matplotlib" 2>/dev/null; then
+  [ "$code" -eq 0 ] && [ "$(head -c 8 "$tmp/design.png" 2>/dev/null | od -An -tx1 | tr -d ' \n')" = "89504e470d0a1a0a" ]
+else
+  [ "$code" -eq 1 ] && grep -q "not drawn" "$tmp/design.log"
+fi
+png_ok=$?
+left=$(ls "${TMPDIR:-/tmp}" | grep -c "^sabodem-design-")
+if [ "$png_ok" -eq 0 ] && [ "$left" -eq 0 ]; then pass=$((pass + 1)); else
+  echo "FAIL check --png: exit $code, $left temporary directories left"; cat "$tmp/design.log"; fail=$((fail + 1)); fi
+
 # docs/scenario.md carries the same table the loader checks
 "$bin" params --markdown > "$tmp/params.md"
 if awk '/^## Keys/{f=1;next} f && NF' "$src_dir/docs/scenario.md" | diff -q - "$tmp/params.md" >/dev/null; then

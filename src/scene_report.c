@@ -1,0 +1,143 @@
+/* `sabodem check`'s report: the scene in a designer's terms (see scene_report.h). */
+#include "scene_report.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "core/vmath.h"
+
+void sd_dam_report_make(const sd_scenario *s, sd_dam_report *d)
+{
+    memset(d, 0, sizeof *d);
+    for (int k = 0; k < s->n_classes; k++)
+        if (s->class_count[k] > 0 && s->class_diam[k] > d->d_max) d->d_max = s->class_diam[k];
+    if (!s->flume_on || !s->dam_on) return;
+    sd_build_dam_layout(s, d->col_y, &d->n_col, d->beam_z, &d->n_beam);
+    const double dp = s->pipe_diam;
+    double prev = 0.0; /* the near wall, then each column's far side */
+    for (int k = 0; k < d->n_col; k++) {
+        d->gap_y[k] = d->col_y[k] - 0.5 * dp - prev;
+        prev = d->col_y[k] + 0.5 * dp;
+    }
+    d->gap_y[d->n_col] = s->width - prev;
+    prev = 0.0; /* the bed, then each beam's top */
+    for (int k = 0; k < d->n_beam; k++) {
+        d->gap_z[k] = d->beam_z[k] - 0.5 * dp - prev;
+        prev = d->beam_z[k] + 0.5 * dp;
+    }
+    d->gap_z[d->n_beam] = s->wall_height - prev;
+}
+
+static void list_mm(FILE *f, const double *v, int n)
+{
+    for (int k = 0; k < n; k++)
+        fprintf(f, "%s%.1f", k ? ", " : "", 1e3 * v[k]);
+}
+
+void sd_scene_report(FILE *f, const sd_scenario *s, const sd_build_info *info, int n_bodies, int n_triangles)
+{
+    fprintf(f, "scene: %d elements (%d moving), %d triangles\n", n_bodies, n_bodies - info->n_rough - info->n_pipes,
+            n_triangles);
+    if (!s->flume_on) return;
+    fprintf(f, "flume: %.3f m to the end of the bed, %.3f m wide, walls %.3f m high, slope %.1f deg; gate at x = %.3f m, "
+               "dam face at x = %.3f m\n",
+            s->x_end, s->width, s->wall_height, s->slope_deg, s->x_gate, s->x_dam);
+    fprintf(f, "  bed roughness: %d fixed spheres\n", info->n_rough);
+    double vs = 0.0;
+    fprintf(f, "debris released at the gate:\n");
+    for (int k = 0; k < s->n_classes; k++) {
+        const double v = s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+        vs += v;
+        fprintf(f, "  spheres class %d: d = %.1f mm, %d, solid volume %.3f L\n", k, 1e3 * s->class_diam[k],
+                s->class_count[k], 1e3 * v);
+    }
+    const int n_logs = sd_build_log_count(s);
+    const double vlog = n_logs * M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
+    fprintf(f, "  logs: %d, d = %.1f mm, L = %.1f mm, solid volume %.3f L\n", n_logs, 1e3 * s->log_diam,
+            1e3 * s->log_length, 1e3 * vlog);
+    fprintf(f, "  solid volume %.3f L (spheres %.3f L); K_w = V_logs / (V_spheres + V_logs) = %.2f %%\n",
+            1e3 * (vs + vlog), 1e3 * vs, vs + vlog > 0 ? 100.0 * vlog / (vs + vlog) : 0.0);
+    sd_dam_report d;
+    sd_dam_report_make(s, &d);
+    if (d.n_col == 0) {
+        fprintf(f, "dam: none\n");
+        return;
+    }
+    fprintf(f, "dam: steel pipes d = %.1f mm, upstream face at x = %.3f m; d_max = %.1f mm (largest sphere)\n",
+            1e3 * s->pipe_diam, s->x_dam, 1e3 * d.d_max);
+    fprintf(f, "  %d columns, axes at y = ", d.n_col);
+    list_mm(f, d.col_y, d.n_col);
+    fprintf(f, " mm\n  clear gaps across (wall, between columns, wall): ");
+    list_mm(f, d.gap_y, d.n_col + 1);
+    fprintf(f, " mm\n");
+    fprintf(f, "  %d beams, axes at z = ", d.n_beam);
+    list_mm(f, d.beam_z, d.n_beam);
+    fprintf(f, " mm above the bed\n  clear gaps up (bed, between beams, above the top beam to the wall top): ");
+    list_mm(f, d.gap_z, d.n_beam + 1);
+    fprintf(f, " mm\n");
+    /* the openings a designer compares with the debris: the widest column gap and the lowest
+     * (bed to first beam) gap, against the largest boulder and the log length */
+    double wide = 0.0;
+    for (int k = 1; k < d.n_col; k++)
+        if (d.gap_y[k] > wide) wide = d.gap_y[k];
+    if (d.n_col < 2) wide = fmax(d.gap_y[0], d.gap_y[1]);
+    if (d.d_max > 0)
+        fprintf(f, "  l_H = %.1f mm: l_H/d_max = %.2f", 1e3 * wide, wide / d.d_max);
+    else
+        fprintf(f, "  l_H = %.1f mm", 1e3 * wide);
+    if (n_logs > 0) fprintf(f, ", l_H/L_log = %.2f", wide / s->log_length);
+    fputc('\n', f);
+    if (d.n_beam > 1) {
+        if (d.d_max > 0)
+            fprintf(f, "  l_V = %.1f mm (bed to the lowest beam): l_V/d_max = %.2f\n", 1e3 * d.gap_z[0],
+                    d.gap_z[0] / d.d_max);
+        else
+            fprintf(f, "  l_V = %.1f mm (bed to the lowest beam)\n", 1e3 * d.gap_z[0]);
+    } else if (d.d_max > 0)
+        fprintf(f, "  no intermediate beam: bed to the top beam %.1f mm = %.2f d_max\n", 1e3 * d.gap_z[0],
+                d.gap_z[0] / d.d_max);
+}
+
+static FILE *open_in(const char *dir, const char *name, char *path, size_t n, FILE *err)
+{
+    snprintf(path, n, "%s/%s", dir, name);
+    FILE *f = fopen(path, "w");
+    if (!f && err) fprintf(err, "%s: cannot write\n", path);
+    return f;
+}
+
+static int close_checked(FILE *f, const char *path, FILE *err)
+{
+    const int bad = ferror(f) | fclose(f);
+    if (bad && err) fprintf(err, "%s: write failed\n", path);
+    return bad ? -1 : 0;
+}
+
+int sd_scene_write_design(const char *dir, const sd_scenario *s, const sd_world *w, FILE *err)
+{
+    char path[1200];
+    sd_dam_report d;
+    sd_dam_report_make(s, &d);
+    FILE *f = open_in(dir, "design.csv", path, sizeof path, err);
+    if (!f) return -1;
+    fprintf(f, "key,value\nflume,%d\nwidth,%.17g\nwall_height,%.17g\nslope_deg,%.17g\nx_gate,%.17g\n"
+               "x_dam,%.17g\nx_end,%.17g\npipe_diameter,%.17g\nd_max,%.17g\nlog_diameter,%.17g\n"
+               "log_length,%.17g\nlogs,%d\n",
+            s->flume_on, s->width, s->wall_height, s->slope_deg, s->x_gate, s->x_dam, s->x_end, s->pipe_diam, d.d_max,
+            s->log_diam, s->log_length, sd_build_log_count(s));
+    if (close_checked(f, path, err)) return -1;
+    if (!(f = open_in(dir, "members.csv", path, sizeof path, err))) return -1;
+    fprintf(f, "kind,axis_m\n");
+    for (int k = 0; k < d.n_col; k++)
+        fprintf(f, "column,%.17g\n", d.col_y[k]);
+    for (int k = 0; k < d.n_beam; k++)
+        fprintf(f, "beam,%.17g\n", d.beam_z[k]);
+    if (close_checked(f, path, err)) return -1;
+    if (!(f = open_in(dir, "bodies.csv", path, sizeof path, err))) return -1;
+    const sd_body_view b = sd_world_bodies(w);
+    fprintf(f, "x,y,z,radius,half_length,ax,ay,az,fixed,tag\n");
+    for (int i = 0; i < b.n; i++)
+        fprintf(f, "%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d\n", b.pos[i].x, b.pos[i].y, b.pos[i].z, b.radius[i],
+                b.half_length[i], b.axis[i].x, b.axis[i].y, b.axis[i].z, b.fixed[i], b.tag[i]);
+    return close_checked(f, path, err);
+}
