@@ -223,7 +223,8 @@ static int child_flow(const sweep_def *d, const run_item *r, const branch_item *
         fclose(log);
         return 2;
     }
-    sd_run_opts o = {.outdir = g->dir, .stop = &child_stop, .log = log, .err = log};
+    /* (the directory is the sweep's: what a killed flow left there goes) */
+    sd_run_opts o = {.outdir = g->dir, .stop = &child_stop, .log = log, .err = log, .overwrite = 1};
     o.checkpoint_flow_end = g->ckpt;
     o.stop_at_flow_end = 1;
     sd_run_result res;
@@ -247,7 +248,8 @@ static int child_run(const sweep_def *d, const run_item *r, const char *restart)
         fclose(log);
         return 2;
     }
-    sd_run_opts o = {.outdir = r->dir, .stop = &child_stop, .log = log, .err = log};
+    /* (the directory is the sweep's: what a killed run left there goes) */
+    sd_run_opts o = {.outdir = r->dir, .stop = &child_stop, .log = log, .err = log, .overwrite = 1};
     o.restart = restart;
     sd_run_result res;
     double t0 = sd_now();
