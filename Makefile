@@ -16,10 +16,11 @@ build: setup
 	  set -x; cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $$pgo
 	cmake --build $(BUILD) -j $(JOBS)
 
-# the paper's flume (examples/shibuya2009.yaml); its threads pinned one per core unless the
-# environment says otherwise (OMP_PROC_BIND=false to leave them free on a shared machine)
+# the paper's flume (examples/shibuya2009.yaml), replacing the last `make run`'s outputs; its
+# threads pinned one per core unless the environment says otherwise (OMP_PROC_BIND=false to
+# leave them free on a shared machine)
 run: build
-	OMP_PROC_BIND=$${OMP_PROC_BIND:-true} OMP_PLACES=$${OMP_PLACES:-cores} ./$(BUILD)/sabodem run examples/shibuya2009.yaml -o out/shibuya2009
+	OMP_PROC_BIND=$${OMP_PROC_BIND:-true} OMP_PLACES=$${OMP_PLACES:-cores} ./$(BUILD)/sabodem run examples/shibuya2009.yaml -o out/shibuya2009 --overwrite
 
 # the whole suite, then again under AddressSanitizer + UndefinedBehaviorSanitizer
 test: build

@@ -37,17 +37,20 @@ static void stop_on_signals(struct sigaction *sa)
 static const struct {
     const char *name, *usage, *help;
 } commands[] = {
-    {"run", "sabodem run FILE [-o DIR] [--set key=value]... [--threads N] [--seed S]\n"
+    {"run", "sabodem run FILE [-o DIR] [--overwrite] [--set key=value]... [--threads N] [--seed S]\n"
             "                 [--checkpoint-at flow_end] [--restart CHECKPOINT]",
      "simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
-     "  -o, --output DIR          the output directory\n"
+     "  -o, --output DIR          the output directory (refused if it holds another run's files)\n"
+     "  --overwrite               delete another run's files in DIR first\n"
      "  --set key=value           override a scenario key (sabodem params lists them)\n"
      "  --threads N               threads (solver.threads; 0: all cores)\n"
      "  --seed S                  the random seed (solver.seed)\n"
      "  --checkpoint-at flow_end  also write DIR/flow_end.ckpt when the flow reaches the dam\n"
-     "  --restart CHECKPOINT      continue from such a checkpoint (the capture phase only); FILE may\n"
+     "  --restart CHECKPOINT      continue from such a checkpoint (the capture phase only; FILE may\n"
      "                            differ from the writer's scenario only in the dam layout and\n"
-     "                            capture-phase keys (docs/sweep.md)"},
+     "                            capture-phase keys, docs/sweep.md) or from a periodic one\n"
+     "                            (output.checkpoint_interval: DIR/checkpoint_<step>.ckpt, the same\n"
+     "                            scenario, any phase, the same bits as a run never stopped)"},
     {"check", "sabodem check FILE [--set key=value]... [--png OUT.png]",
      "validate the scenario, build its scene without running and describe it: the debris\n"
      "(counts, solid volume, K_w), the dam (axes, clear gaps, l_H/d_max, l_V/d_max)\n"
@@ -297,7 +300,7 @@ int main(int argc, char **argv)
         return 2;
     }
     const char *file = NULL, *outdir = NULL, *restart = NULL, *png = NULL;
-    int ckpt_flow_end = 0;
+    int ckpt_flow_end = 0, overwrite = 0;
     const char **sets = calloc((size_t)argc + 2, sizeof(char *));
     char seedbuf[64], thrbuf[64];
     int nsets = 0;
@@ -332,6 +335,7 @@ int main(int argc, char **argv)
             ckpt_flow_end = 1;
         } else if (!strcmp(a, "--restart") && i + 1 < argc && !strcmp(cmd, "run")) restart = argv[++i];
         else if (!strcmp(a, "--png") && i + 1 < argc && !strcmp(cmd, "check")) png = argv[++i];
+        else if (!strcmp(a, "--overwrite") && !strcmp(cmd, "run")) overwrite = 1;
         else if (a[0] == '-') {
             fprintf(stderr, "sabodem: unknown or incomplete option '%s'\n", a);
             usage(stderr);
@@ -392,8 +396,8 @@ int main(int argc, char **argv)
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_sigint;
     stop_on_signals(&sa);
-    if ((ckpt_flow_end || restart) && !s.flume_on) {
-        fprintf(stderr, "%s: --%s needs a flume scenario (flume.on: true)\n", file, restart ? "restart" : "checkpoint-at");
+    if (ckpt_flow_end && !s.flume_on) {
+        fprintf(stderr, "%s: --checkpoint-at needs a flume scenario (flume.on: true)\n", file);
         sd_scenario_free(&s);
         return 2;
     }
@@ -402,6 +406,7 @@ int main(int argc, char **argv)
     sd_run_opts o = {.outdir = outdir, .progress_tty = isatty(fileno(stderr)), .stop = &stop_flag, .log = stderr, .err = stderr};
     o.checkpoint_flow_end = ckpt_flow_end ? ckpt_path : NULL;
     o.restart = restart;
+    o.overwrite = overwrite;
     sd_run_result r;
     memset(&r, 0, sizeof r);
     int code = sd_run_scenario(&s, &o, &r);

@@ -92,14 +92,14 @@ fi
 hash_of() { grep -o '"state_hash": "[0-9a-f]*"' "$1/summary.json" | cut -d'"' -f4; }
 off=(--set output.vtk=false --set output.png=false)
 s=$(date +%s%N)
-OMP_PROC_BIND=true OMP_PLACES=cores "$dir/sabodem" run examples/shibuya2009.yaml --threads 2 -o "$out/full" \
+OMP_PROC_BIND=true OMP_PLACES=cores "$dir/sabodem" run examples/shibuya2009.yaml --threads 2 -o "$out/full" --overwrite \
     "${off[@]}" >"$out/full.log" 2>&1
 echo "paper run, 2 threads: $(ms "$s") ms, hash $(hash_of "$out/full")"
 tail -1 "$out/full.log"
 ref=
 for T in 1 2 4 16; do
     s=$(date +%s%N)
-    "$dir/sabodem" run examples/shibuya2009.yaml --threads "$T" -o "$out/short$T" --set phases.packing_time=0.3 \
+    "$dir/sabodem" run examples/shibuya2009.yaml --threads "$T" -o "$out/short$T" --overwrite --set phases.packing_time=0.3 \
         --set phases.flow_limit=0.1 --set phases.capture_limit=0.05 "${off[@]}" >"$out/short$T.log" 2>&1
     h=$(hash_of "$out/short$T")
     echo "short paper run, $T threads: $(ms "$s") ms, hash $h"

@@ -110,10 +110,6 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
     sd_run_restored rs;
     memset(&rs, 0, sizeof rs);
     if (o->restart) {
-        if (!s->flume_on) {
-            fprintf(o->err, "%s: a restart needs a flume scenario (flume.on)\n", s->path);
-            return 2;
-        }
         char msg[1600];
         void *blob = NULL;
         size_t blen = 0;
@@ -137,7 +133,10 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         if (threads > 0) sd_world_set_threads(c.w, threads);
         sd_world_set_tuning(c.w, &s->world.tuning); /* (and how it runs, too) */
         c.restarted_from = o->restart;
-        c.flow_wall = rs.wall_before;
+        if (rs.kind == SD_CKPT_PERIODIC) { /* the same run goes on: its wall times too */
+            c.wall0 = sd_now() - rs.wall_before;
+            c.phase_w0 = sd_now() - rs.phase_wall_in;
+        }
     } else {
         st = sd_world_create(&s->world, &c.w);
         if (st) {
@@ -158,11 +157,15 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
     }
     /* only now, with valid input, does the output directory appear */
     snprintf(c.dir, sizeof c.dir, "%s", o->outdir);
-    if (sd_mkdir_p(c.dir)) {
-        fprintf(o->err, "%s: cannot create output directory: %s\n", c.dir, strerror(errno));
-        sd_run_state_free(&rs);
-        sd_world_destroy(c.w);
-        return 2;
+    {
+        char msg[1800];
+        const int resume = c.restarted_from && sd_run_dir_holds(c.dir, c.restarted_from);
+        if (sd_run_dir_claim(c.dir, o->overwrite, resume, msg, sizeof msg)) {
+            fprintf(o->err, "%s\n", msg);
+            sd_run_state_free(&rs);
+            sd_world_destroy(c.w);
+            return 2;
+        }
     }
     if (c.restarted_from) {
         char msg[1600];
@@ -192,6 +195,7 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         for (int k = 0; c.pvd_on && k < rs.npvd; k++)
             if (sd_vtk_series_add(&c.pvd, rs.pvd_time[k], rs.pvd_part[k], rs.pvd_file[k])) pvd_bad = 1;
     }
+    const int rs_kind = rs.kind;
     sd_run_state_free(&rs);
     if (!c.series || (s->n_traj > 0 && !c.traj) || (s->vtk_on && !c.pvd_on) || pvd_bad ||
         (!c.restarted_from && sd_output_walls(&c))) {
@@ -213,13 +217,22 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         c.phase = s->flume_on ? PH_PACK : PH_RUN;
         c.h_d = s->water_h;
         c.phase_t0 = 0.0;
+        c.phase_w0 = sd_now();
+    } else if (rs_kind != SD_CKPT_PERIODIC) {
+        c.phase_w0 = sd_now();
     }
-    c.phase_w0 = sd_now();
+    if (c.restarted_from && c.dam_built) /* the arrival's side view, asked again for this process */
+        sd_output_picture(&c, "arrival", "side_arrival.png", s->x_dam - 1.2, s->x_end);
+    if (c.restarted_from && o->log)
+        fprintf(o->log, "restart from %s: t = %.4f s, step %ld, phase %s\n", c.restarted_from, sd_world_time(c.w),
+                sd_world_step_count(c.w), sd_run_phase_name(c.phase));
     long log_every = (long)llround(s->log_interval / dt);
     if (log_every < 1) log_every = 1;
     long traj_every = (long)llround(s->traj_interval / dt);
     if (traj_every < 1) traj_every = 1;
     long snap_every = s->snapshot_interval > 0 ? (long)llround(s->snapshot_interval / dt) : 0;
+    long ckpt_every = s->checkpoint_interval > 0 ? (long)llround(s->checkpoint_interval / dt) : 0;
+    if (s->checkpoint_interval > 0 && ckpt_every < 1) ckpt_every = 1;
     long progress_every = 2000;
     double t_end_est = s->flume_on ? s->packing_time + 4.0 + s->capture_limit : s->duration;
     int code = 0;
@@ -249,7 +262,7 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         if (c.flow_ended && !c.dam_built) {
             /* the branch point: a flow-end checkpoint holds the state of exactly this moment, and
              * a restart from it comes in here, so both go through capture_start alike */
-            if (o->checkpoint_flow_end && !c.restarted_from) {
+            if (o->checkpoint_flow_end && !c.flow_ckpt_written) {
                 st = sd_run_state_checkpoint(&c, o->checkpoint_flow_end);
                 if (st) {
                     fprintf(o->err, "%s: cannot write the flow-end checkpoint: %s (%s)\n", o->checkpoint_flow_end,
@@ -339,6 +352,18 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
             sd_output_snapshot(&c, name);
         }
         if (step % progress_every == 0) sd_output_progress(&c, t_end_est);
+        /* after this step's outputs: a restart from it goes on at the top of the loop, as this
+         * run does */
+        if (ckpt_every && step % ckpt_every == 0 && c.phase != PH_DONE && !sd_output_failed(&c)) {
+            st = sd_run_state_periodic(&c);
+            if (st) {
+                fprintf(o->err, "%s/checkpoint_%010ld.ckpt: cannot write: %s; the checkpoints written before are kept\n",
+                        c.dir, step, st == SD_ERR_IO ? strerror(errno) : sd_status_message(st));
+                code = 1;
+                msg = "checkpoint failed";
+                break;
+            }
+        }
     }
     if (o->log && o->progress_tty) fputc('\n', o->log);
     if (res->stopped_at_flow_end) {

@@ -19,10 +19,15 @@ typedef struct {
      * or capture-phase key (sd_scenario_is_capture_key). */
     const char *checkpoint_flow_end; /* write a checkpoint (world + driver state) here when the flow ends */
     int stop_at_flow_end;            /* 1: return (0) right after that point: the shared flow of a branch */
-    const char *restart;             /* continue from this flow-end checkpoint instead of building the
+    const char *restart;             /* continue from this checkpoint instead of building the
                                       * scene; the scenario may differ from the writer's only in capture
                                       * keys; the time series (and VTK files, from the checkpoint's
-                                      * directory) up to the checkpoint are carried into outdir */
+                                      * directory) up to the checkpoint are carried into outdir.
+                                      * A periodic checkpoint (output.checkpoint_interval) continues
+                                      * the same scenario in any phase. */
+    int overwrite;                   /* 1: an outdir holding another run's files is cleared, not
+                                      * refused (a restart into its checkpoint's directory continues
+                                      * there either way) */
 } sd_run_opts;
 
 /* A side view the run asks its caller to draw (the driver starts no program): the snapshot's
@@ -52,10 +57,11 @@ typedef struct {
     sd_run_picture pictures[SD_RUN_PICTURES];
 } sd_run_result;
 
-/* Build and run; returns 0 on success, 1 on a failed run, 2 on bad input, 130 when stopped. */
+/* Build and run; returns 0 on success, 1 on a failed run, 2 on bad input (an output directory
+ * that is not this run's included), 130 when stopped. */
 int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *res);
 
-/* Can the scenario continue from this flow-end checkpoint? Reads and checks it whole (format,
+/* Can the scenario continue from this checkpoint? Reads and checks it whole (format,
  * checksum, driver state, scenario fingerprint); 0 if so, else -1 and msg names the file and
  * what is wrong. */
 int sd_run_check_restart(const sd_scenario *s, const char *path, char *msg, size_t msglen);

@@ -50,6 +50,7 @@ typedef struct {
     double rate_wall0;         /* (a restart continues from the checkpoint's step) */
     double phase_t0, phase_w0; /* simulated and wall time at the start of the current phase */
     int flow_ended;            /* the flow phase has ended; the capture starts at the next step */
+    int flow_ckpt_written;     /* the flow-end checkpoint (opts.checkpoint_flow_end) is written */
     int dam_built;             /* the pipes are in the world (sd_build_dam at the capture start) */
     const char *restarted_from;
     double flow_wall; /* wall time from the start to the flow end, build included (a restarted
@@ -64,9 +65,13 @@ typedef struct {
     sd_run_picture plots[SD_RUN_PICTURES];
 } run_ctx;
 
+/* what a checkpoint's driver state holds beside run_ctx's fields */
+enum { SD_CKPT_FLOW_END = 0, SD_CKPT_PERIODIC = 1 };
 typedef struct {
+    int kind; /* SD_CKPT_FLOW_END or SD_CKPT_PERIODIC */
     long series_len, traj_len;
-    double wall_before;
+    double wall_before;   /* wall time of the run(s) before the checkpoint, s */
+    double phase_wall_in; /* of that, in the phase the checkpoint was taken in */
     int npvd;
     double *pvd_time;
     int *pvd_part;
@@ -105,10 +110,25 @@ int sd_output_failed(const run_ctx *c);
 /* series.csv and trajectories.csv flushed and closed; nonzero when either could not be written */
 int sd_output_finish(run_ctx *c);
 
-/* run_state.c: the driver's state in a flow-end checkpoint */
+/* run_state.c: the driver's state in a checkpoint (flow-end or periodic), and a restart */
 void sd_run_state_free(sd_run_restored *r);
 int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restored *r, char *msg, size_t msglen);
 int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg, size_t msglen);
+/* the flow-end checkpoint at path */
 sd_status sd_run_state_checkpoint(run_ctx *c, const char *path);
+/* a periodic checkpoint, DIR/checkpoint_<step>.ckpt, after the time series is synced to disk;
+ * then every older periodic checkpoint but the newest one is deleted (the last two are kept).
+ * On failure the file is not there (the older ones are untouched) and errno says why. */
+sd_status sd_run_state_periodic(run_ctx *c);
+
+/* run_dir.c: a run's output directory */
+/* Create dir and make it this run's. A directory holding files already is refused (-1, why in
+ * msg) unless overwrite (the old run's files are deleted: snapshots, series, summary,
+ * checkpoints, pictures, temporary files; other files stay) or resume (a restart into the
+ * directory of its checkpoint: the atomic writers' temporary files left by a kill and the
+ * stale summary.json are deleted, the rest continues). */
+int sd_run_dir_claim(const char *dir, int overwrite, int resume, char *msg, size_t msglen);
+/* 1 when path (a file) lies in directory dir */
+int sd_run_dir_holds(const char *dir, const char *path);
 
 #endif

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "core/status.h"
 #include "core/vmath.h"
@@ -246,8 +247,13 @@ int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const cha
     sd_scenario_echo_json(s, f);
     fprintf(f, "\n}\n");
     int bad = ferror(f);
-    if (fclose(f) || bad) return -1;
-    return rename(tmp, path);
+    if (fclose(f) || bad || rename(tmp, path)) { /* (no half-written summary left behind) */
+        const int e = errno;
+        unlink(tmp);
+        errno = e;
+        return -1;
+    }
+    return 0;
 }
 
 int sd_output_finish(run_ctx *c)

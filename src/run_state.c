@@ -1,5 +1,6 @@
-/* The driver's state in a flow-end checkpoint's blob, and a restart from it: the state read
- * back, the outputs of packing and flow carried into the new run's directory. */
+/* The driver's state in a checkpoint's blob (the flow-end one, periodic ones), and a restart
+ * from it: the state read back, the outputs so far carried into the new run's directory. */
+#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -11,11 +12,13 @@
 #include "core/vmath.h"
 #include "run_ctx.h"
 
-/* The driver's state in the checkpoint's extra blob: a tagged, versioned byte string. It is
- * written only at the flow end (before the pipes exist), so the pipe accumulators are zero and
- * not stored. The build's random numbers are spent before the first step; the driver draws
- * none later, so there is no rng state to carry. */
-#define BLOB_MAGIC "SDRUNv1"
+/* The driver's state in the checkpoint's extra blob: a tagged, versioned byte string with
+ * everything of run_ctx that is state (not how it runs): the phase and its flags, the build's
+ * element counts and pipes, the volumes, the pipe accumulators, the phase times, the flow
+ * length, the time series' lengths and the VTK series so far. The output timers are the world's
+ * step count (saved with the world). The build's random numbers are spent before the first
+ * step; the driver draws none later, so there is no rng state to carry. */
+#define BLOB_MAGIC "SDRUNv2"
 
 static long file_len(FILE *f)
 {
@@ -23,13 +26,17 @@ static long file_len(FILE *f)
     return ftell(f);
 }
 
-static void state_pack(const run_ctx *c, sd_bin_writer *b, long series_len, long traj_len)
+static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series_len, long traj_len)
 {
+    const double now = sd_now();
     sd_bin_put(b, BLOB_MAGIC, 8);
     sd_bin_put_u64(b, sd_scenario_branch_hash(c->s));
+    sd_bin_put_u64(b, sd_scenario_run_hash(c->s));
+    sd_bin_put_i32(b, kind);
     sd_bin_put_i32(b, c->phase);
     sd_bin_put_i32(b, c->flow_ended);
     sd_bin_put_i32(b, c->dam_built);
+    sd_bin_put_i32(b, c->flow_ckpt_written);
     sd_bin_put_i32(b, c->n_passed);
     sd_bin_put_i32(b, c->flow_len_done);
     sd_bin_put_i32(b, c->n_snap);
@@ -37,6 +44,18 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, long series_len, long
     sd_bin_put_i32(b, c->info.n_spheres);
     sd_bin_put_i32(b, c->info.n_logs);
     sd_bin_put_i32(b, c->info.first_moving_gid);
+    sd_bin_put_i32(b, c->info.n_pipes);
+    for (int k = 0; k < c->info.n_pipes; k++) {
+        sd_bin_put_i32(b, c->info.pipe_gid[k]);
+        sd_bin_put_i32(b, c->info.pipe_is_column[k]);
+        sd_bin_put_f64(b, c->info.pipe_coord[k]);
+        sd_bin_put_f64(b, c->pipe_peak[k]);
+        sd_bin_put_f64(b, c->pipe_peak_t[k]);
+        sd_bin_put_f64(b, c->pipe_impulse[k]);
+        sd_bin_put_f64(b, c->pipe_impulse_vec[k].x);
+        sd_bin_put_f64(b, c->pipe_impulse_vec[k].y);
+        sd_bin_put_f64(b, c->pipe_impulse_vec[k].z);
+    }
     for (int k = 0; k < SD_MAX_CLASSES; k++)
         sd_bin_put_f64(b, c->vol_total_class[k]);
     sd_bin_put_f64(b, c->vol_total_logs);
@@ -57,7 +76,9 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, long series_len, long
     sd_bin_put_f64(b, c->flow_front);
     sd_bin_put_f64(b, c->flow_len_time);
     sd_bin_put_f64(b, c->phase_t0);
-    sd_bin_put_f64(b, sd_now() - c->wall0);
+    sd_bin_put_f64(b, c->flow_wall);
+    sd_bin_put_f64(b, now - c->wall0);
+    sd_bin_put_f64(b, now - c->phase_w0);
     sd_bin_put_i64(b, series_len);
     sd_bin_put_i64(b, traj_len);
     /* the VTK series so far (file names relative to the output directory) */
@@ -91,11 +112,12 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     char magic[8];
     sd_bin_get(&b, magic, 8);
     if (b.bad || memcmp(magic, BLOB_MAGIC, 8)) {
-        snprintf(msg, msglen, "holds no run-driver state of this version (not written by 'sabodem run' at a flow end)");
+        snprintf(msg, msglen, "holds no run-driver state of this version (not written by this 'sabodem run')");
         return -1;
     }
-    uint64_t h = sd_bin_get_u64(&b);
-    if (h != sd_scenario_branch_hash(c->s)) {
+    const uint64_t branch = sd_bin_get_u64(&b), whole = sd_bin_get_u64(&b);
+    r->kind = sd_bin_get_i32(&b);
+    if (r->kind == SD_CKPT_FLOW_END && branch != sd_scenario_branch_hash(c->s)) {
         snprintf(msg, msglen,
                  "was written for other scenario parameters than %s (a restart may change only the capture-phase keys:"
                  " dam.l_h, dam.l_v, dam.top_beam, dam.columns, dam.beams, phases.capture_limit, phases.quiet_time,"
@@ -103,9 +125,17 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
                  c->s->path);
         return -1;
     }
+    if (r->kind == SD_CKPT_PERIODIC && whole != sd_scenario_run_hash(c->s)) {
+        snprintf(msg, msglen,
+                 "was written for other scenario parameters than %s (a restart from a periodic checkpoint continues"
+                 " the same run: only solver.threads and output.checkpoint_interval may differ)",
+                 c->s->path);
+        return -1;
+    }
     c->phase = sd_bin_get_i32(&b);
     c->flow_ended = sd_bin_get_i32(&b);
     c->dam_built = sd_bin_get_i32(&b);
+    c->flow_ckpt_written = sd_bin_get_i32(&b);
     c->n_passed = sd_bin_get_i32(&b);
     c->flow_len_done = sd_bin_get_i32(&b);
     c->n_snap = sd_bin_get_i32(&b);
@@ -113,6 +143,22 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     c->info.n_spheres = sd_bin_get_i32(&b);
     c->info.n_logs = sd_bin_get_i32(&b);
     c->info.first_moving_gid = sd_bin_get_i32(&b);
+    c->info.n_pipes = sd_bin_get_i32(&b);
+    if (b.bad || c->info.n_pipes < 0 || c->info.n_pipes > 2 * SD_MAX_PIPES) {
+        snprintf(msg, msglen, "run-driver state is truncated or malformed");
+        return -1;
+    }
+    for (int k = 0; k < c->info.n_pipes; k++) {
+        c->info.pipe_gid[k] = sd_bin_get_i32(&b);
+        c->info.pipe_is_column[k] = sd_bin_get_i32(&b);
+        c->info.pipe_coord[k] = sd_bin_get_f64(&b);
+        c->pipe_peak[k] = sd_bin_get_f64(&b);
+        c->pipe_peak_t[k] = sd_bin_get_f64(&b);
+        c->pipe_impulse[k] = sd_bin_get_f64(&b);
+        c->pipe_impulse_vec[k].x = sd_bin_get_f64(&b);
+        c->pipe_impulse_vec[k].y = sd_bin_get_f64(&b);
+        c->pipe_impulse_vec[k].z = sd_bin_get_f64(&b);
+    }
     for (int k = 0; k < SD_MAX_CLASSES; k++)
         c->vol_total_class[k] = sd_bin_get_f64(&b);
     c->vol_total_logs = sd_bin_get_f64(&b);
@@ -133,7 +179,9 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     c->flow_front = sd_bin_get_f64(&b);
     c->flow_len_time = sd_bin_get_f64(&b);
     c->phase_t0 = sd_bin_get_f64(&b);
+    c->flow_wall = sd_bin_get_f64(&b);
     r->wall_before = sd_bin_get_f64(&b);
+    r->phase_wall_in = sd_bin_get_f64(&b);
     r->series_len = (long)sd_bin_get_i64(&b);
     r->traj_len = (long)sd_bin_get_i64(&b);
     int np = sd_bin_get_i32(&b);
@@ -172,10 +220,15 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
         sd_run_state_free(r);
         return -1;
     }
-    int ok = c->phase == PH_FLOW && c->flow_ended == 1 && c->dam_built == 0 && c->n_passed >= 0 && c->n_snap >= 0 &&
-             r->series_len >= 0 && r->traj_len >= -1 && isfinite(c->phase_t0) && isfinite(c->h_d);
+    int ok = c->n_passed >= 0 && c->n_snap >= 0 && r->series_len >= 0 && r->traj_len >= -1 && isfinite(c->phase_t0) &&
+             isfinite(c->h_d) && isfinite(r->wall_before) && isfinite(r->phase_wall_in) && isfinite(c->flow_wall);
+    if (ok && r->kind == SD_CKPT_FLOW_END)
+        ok = c->phase == PH_FLOW && c->flow_ended == 1 && c->dam_built == 0;
+    else if (ok)
+        ok = r->kind == SD_CKPT_PERIODIC && (c->s->flume_on ? c->phase >= PH_PACK && c->phase <= PH_CAPTURE : c->phase == PH_RUN) &&
+             (c->dam_built == 0 || c->phase == PH_CAPTURE) && (c->flow_ended == 0 || c->phase != PH_PACK);
     if (!ok) {
-        snprintf(msg, msglen, "is not a flow-end checkpoint of a flume run");
+        snprintf(msg, msglen, "is not a checkpoint of a run of this scenario (its driver state is inconsistent)");
         sd_run_state_free(r);
         return -1;
     }
@@ -191,12 +244,6 @@ static void dir_of(const char *path, char *buf, size_t n)
         snprintf(buf, n, "/");
     else
         snprintf(buf, n, "%.*s", (int)(slash - path), path);
-}
-
-static int same_dir(const char *a, const char *b)
-{
-    struct stat sa, sb;
-    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }
 
 /* dst := the first len bytes of src (len < 0: all of it); src and dst may be the same file. */
@@ -252,9 +299,9 @@ static int copy_prefix(const char *src, const char *dst, long len, char *msg, si
     return 0;
 }
 
-/* The outputs of packing and flow continue in the new run's directory: the time series up to
- * the checkpoint (the recorded lengths) and, when the checkpoint lives elsewhere, the VTK
- * files listed in the series. */
+/* The outputs so far continue in the new run's directory: the time series up to the checkpoint
+ * (the recorded lengths: rows written after it, and a row cut by a kill, are dropped) and, when
+ * the checkpoint lives elsewhere, the VTK files listed in the series. */
 int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg, size_t msglen)
 {
     char src[1100], a[1300], b[1300];
@@ -267,7 +314,7 @@ int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg
         snprintf(b, sizeof b, "%s/trajectories.csv", c->dir);
         if (copy_prefix(a, b, r->traj_len, msg, msglen)) return -1;
     }
-    if (c->s->vtk_on && !same_dir(src, c->dir)) {
+    if (c->s->vtk_on && !sd_run_dir_holds(c->dir, c->restarted_from)) {
         for (int k = -1; k < r->npvd; k++) {
             const char *name = k < 0 ? "walls.vtp" : r->pvd_file[k];
             snprintf(a, sizeof a, "%s/%s", src, name);
@@ -280,14 +327,64 @@ int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg
     return 0;
 }
 
-sd_status sd_run_state_checkpoint(run_ctx *c, const char *path)
+static sd_status write_state(run_ctx *c, const char *path, int kind)
 {
     long sl = file_len(c->series), tl = c->traj ? file_len(c->traj) : -1;
     if (sl < 0 || (c->traj && tl < 0)) return SD_ERR_IO;
+    /* the rows the checkpoint counts are on the disk before the checkpoint that counts them */
+    if (kind == SD_CKPT_PERIODIC && (fsync(fileno(c->series)) || (c->traj && fsync(fileno(c->traj)))))
+        return SD_ERR_IO;
     sd_bin_writer b;
     sd_bin_writer_init(&b);
-    state_pack(c, &b, sl, tl);
+    state_pack(c, &b, kind, sl, tl);
     sd_status st = b.err ? SD_ERR_NOMEM : sd_checkpoint_write(path, c->w, b.p, b.n);
     sd_bin_writer_fini(&b);
     return st;
+}
+
+sd_status sd_run_state_checkpoint(run_ctx *c, const char *path)
+{
+    c->flow_ckpt_written = 1; /* (a restart from it does not write it again) */
+    return write_state(c, path, SD_CKPT_FLOW_END);
+}
+
+/* checkpoint_<step>.ckpt: its step, or -1 for another name */
+static long periodic_step(const char *name)
+{
+    const char *pre = "checkpoint_";
+    size_t lp = strlen(pre), n = strlen(name);
+    if (n != lp + 10 + 5 || strncmp(name, pre, lp) || strcmp(name + n - 5, ".ckpt")) return -1;
+    long v = 0;
+    for (size_t k = lp; k < lp + 10; k++) {
+        if (name[k] < '0' || name[k] > '9') return -1;
+        v = v * 10 + (name[k] - '0');
+    }
+    return v;
+}
+
+sd_status sd_run_state_periodic(run_ctx *c)
+{
+    const long step = sd_world_step_count(c->w);
+    char path[1400];
+    snprintf(path, sizeof path, "%s/checkpoint_%010ld.ckpt", c->dir, step);
+    sd_status st = write_state(c, path, SD_CKPT_PERIODIC);
+    if (st) return st;
+    /* keep this one and the newest before it */
+    DIR *d = opendir(c->dir);
+    if (!d) return SD_OK;
+    long prev = -1;
+    for (struct dirent *e; (e = readdir(d));) {
+        long k = periodic_step(e->d_name);
+        if (k >= 0 && k < step && k > prev) prev = k;
+    }
+    rewinddir(d);
+    for (struct dirent *e; (e = readdir(d));) {
+        long k = periodic_step(e->d_name);
+        if (k >= 0 && k < prev) {
+            snprintf(path, sizeof path, "%s/%s", c->dir, e->d_name);
+            (void)unlink(path);
+        }
+    }
+    closedir(d);
+    return SD_OK;
 }

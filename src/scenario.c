@@ -109,6 +109,8 @@ static const sd_param params[] = {
      "... and upstream kinetic energy below this fraction of its peak"},
     {"output.snapshot_interval", P_DOUBLE, OFF(snapshot_interval), 0, 0, "s", 0, INF, 0,
      "VTK snapshot interval (0: none)"},
+    {"output.checkpoint_interval", P_DOUBLE, OFF(checkpoint_interval), 0, 0, "s", 0, INF, 0,
+     "periodic checkpoint interval (0: none): DIR/checkpoint_<step>.ckpt, the last two kept, for --restart"},
     {"output.log_interval", P_DOUBLE, OFF(log_interval), 0, 0, "s", 0, INF, 1, "time-series and progress interval"},
     {"output.trajectory_ids", P_ILIST, OFF(traj_ids), OFF(n_traj), SD_MAX_IDS, "-", 0, 1e9, 0,
      "element ids whose trajectories are logged"},
@@ -727,14 +729,18 @@ int sd_scenario_is_capture_key(const char *key)
     return 0;
 }
 
-uint64_t sd_scenario_branch_hash(const sd_scenario *s)
+/* The scenario's keys hashed, but for those that never change the bits (the thread count,
+ * tests/test_threads.c; how often checkpoints are written) and, unless with_capture, the capture
+ * keys. */
+static uint64_t scenario_hash(const sd_scenario *s, int with_capture)
 {
     uint64_t h = sd_hash_init();
     const char *base = (const char *)s;
     for (int i = 0; i < N_PARAMS; i++) {
         const sd_param *p = &params[i];
-        /* threads never change the bits (tests/test_threads.c) */
-        if (sd_scenario_is_capture_key(p->key) || !strcmp(p->key, "solver.threads")) continue;
+        if ((!with_capture && sd_scenario_is_capture_key(p->key)) || !strcmp(p->key, "solver.threads") ||
+            !strcmp(p->key, "output.checkpoint_interval"))
+            continue;
         h = sd_hash_bytes(h, p->key, strlen(p->key) + 1);
         switch (p->type) {
         case P_DOUBLE:
@@ -782,3 +788,7 @@ uint64_t sd_scenario_branch_hash(const sd_scenario *s)
     h = sd_hash_bytes(h, &s->world.parallel_min, sizeof s->world.parallel_min);
     return h;
 }
+
+uint64_t sd_scenario_branch_hash(const sd_scenario *s) { return scenario_hash(s, 0); }
+
+uint64_t sd_scenario_run_hash(const sd_scenario *s) { return scenario_hash(s, 1); }

@@ -65,6 +65,7 @@ typedef struct {
     double packing_time, capture_limit, quiet_time, ke_fraction, flow_limit;
     /* output */
     double snapshot_interval, log_interval;
+    double checkpoint_interval; /* simulated s between periodic checkpoints (0: none) */
     int n_traj;
     int traj_ids[SD_MAX_IDS];
     double traj_interval;
@@ -90,5 +91,9 @@ int sd_scenario_is_capture_key(const char *key);
  * equal for two scenarios whose packing and flow are identical. Stored in a flow-end
  * checkpoint; a restart with a scenario of another fingerprint is refused. */
 uint64_t sd_scenario_branch_hash(const sd_scenario *s);
+/* The same with the capture keys too: equal for two scenarios whose whole runs are identical
+ * (neither counts solver.threads or output.checkpoint_interval, which change no bit). Stored in
+ * a periodic checkpoint. */
+uint64_t sd_scenario_run_hash(const sd_scenario *s);
 
 #endif

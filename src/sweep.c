@@ -1,6 +1,7 @@
 /* The sweep driver. Each run is a child process (fork) running one scenario with one thread,
  * so the runs share nothing and a crash of one does not take the others down. A run is done
- * when its directory holds result.csv; resuming skips those.
+ * when its directory holds result.csv; resuming skips those, and a run or flow killed on the way
+ * continues from its newest periodic checkpoint (output.checkpoint_interval) when it has one.
  *
  * Branching (docs/sweep.md): runs that differ only in capture-phase keys (the dam layout and
  * the capture settings, sd_scenario_is_capture_key) have the same packing and flow, bit for
@@ -11,7 +12,9 @@
  * damaged or foreign one is refused (the sweep stops before running anything and names it). */
 #include "sweep.h"
 
+#include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -211,10 +214,56 @@ static void child_signals(void)
     sigaction(SIGTERM, &sa, NULL);
 }
 
+/* The child holds DIR.lock (a POSIX record lock, which the kernel drops when the process ends,
+ * however it ends) while it works in DIR: a child left by a sweep killed outright, still
+ * stopping, and the resumed sweep's child for the same directory never write there at once.
+ * 0 once held; -1 when it cannot be taken or the sweep is stopping. */
+static int lock_dir(const char *dir)
+{
+    char p[1300];
+    snprintf(p, sizeof p, "%s.lock", dir);
+    int fd = open(p, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) return -1;
+    struct flock l;
+    memset(&l, 0, sizeof l);
+    l.l_type = F_WRLCK;
+    l.l_whence = SEEK_SET;
+    while (fcntl(fd, F_SETLKW, &l))
+        if (errno != EINTR || child_stop) return -1;
+    return 0; /* (fd stays open: the lock lives as long as the process) */
+}
+
+/* The newest periodic checkpoint in dir (output.checkpoint_interval: what a killed child left)
+ * that this run can continue from, into path; 0 if there is one. A damaged one is passed over
+ * for the one before it. */
+static int resume_point(const sd_scenario *s, const char *dir, char *path, size_t n)
+{
+    DIR *d = opendir(dir);
+    if (!d) return -1;
+    char best[2][64] = {"", ""}; /* the newest two (the run keeps two) */
+    for (struct dirent *e; (e = readdir(d));) {
+        const char *name = e->d_name;
+        if (strlen(name) != 26 || strncmp(name, "checkpoint_", 11) || strcmp(name + 21, ".ckpt")) continue;
+        if (strcmp(name, best[0]) > 0) {
+            memcpy(best[1], best[0], sizeof best[0]);
+            snprintf(best[0], sizeof best[0], "%s", name);
+        } else if (strcmp(name, best[1]) > 0)
+            snprintf(best[1], sizeof best[1], "%s", name);
+    }
+    closedir(d);
+    for (int k = 0; k < 2 && best[k][0]; k++) {
+        char msg[2048];
+        snprintf(path, n, "%s/%s", dir, best[k]);
+        if (sd_run_check_restart(s, path, msg, sizeof msg) == 0) return 0;
+    }
+    return -1;
+}
+
 /* Packing and flow of one branch group, up to the flow-end checkpoint. */
 static int child_flow(const sweep_def *d, const run_item *r, const branch_item *g)
 {
     child_signals();
+    if (lock_dir(g->dir)) return child_stop ? 130 : 1;
     char logp[1300];
     snprintf(logp, sizeof logp, "%s.log", g->dir);
     FILE *log = fopen(logp, "w");
@@ -224,9 +273,12 @@ static int child_flow(const sweep_def *d, const run_item *r, const branch_item *
         fclose(log);
         return 2;
     }
-    sd_run_opts o = {.outdir = g->dir, .stop = &child_stop, .log = log, .err = log};
+    /* (the directory is the sweep's: what a killed flow left there goes) */
+    sd_run_opts o = {.outdir = g->dir, .stop = &child_stop, .log = log, .err = log, .overwrite = 1};
     o.checkpoint_flow_end = g->ckpt;
     o.stop_at_flow_end = 1;
+    char resume[1400];
+    if (resume_point(&s, g->dir, resume, sizeof resume) == 0) o.restart = resume;
     sd_run_result res;
     int code = sd_run_scenario(&s, &o, &res);
     if (code == 0 && !res.stopped_at_flow_end) code = 1;
@@ -239,6 +291,7 @@ static int child_flow(const sweep_def *d, const run_item *r, const branch_item *
 static int child_run(const sweep_def *d, const run_item *r, const char *restart)
 {
     child_signals();
+    if (lock_dir(r->dir)) return child_stop ? 130 : 1;
     sd_scenario s;
     char logp[1300];
     snprintf(logp, sizeof logp, "%s.log", r->dir);
@@ -248,8 +301,11 @@ static int child_run(const sweep_def *d, const run_item *r, const char *restart)
         fclose(log);
         return 2;
     }
-    sd_run_opts o = {.outdir = r->dir, .stop = &child_stop, .log = log, .err = log};
+    /* (the directory is the sweep's: what a killed run left there goes) */
+    sd_run_opts o = {.outdir = r->dir, .stop = &child_stop, .log = log, .err = log, .overwrite = 1};
     o.restart = restart;
+    char resume[1400];
+    if (resume_point(&s, r->dir, resume, sizeof resume) == 0) o.restart = resume;
     sd_run_result res;
     double t0 = sd_now();
     int code = sd_run_scenario(&s, &o, &res);
@@ -273,7 +329,7 @@ static int child_run(const sweep_def *d, const run_item *r, const char *restart)
             for (int k = s.n_classes; k < 4; k++)
                 fprintf(f, ",");
             fprintf(f, ",%.6f,%.6e,%d,%.2f,%.4f,%.2f,%d,%016llx\n", res.p_v_logs, res.peak_dam_force, res.n_passed,
-                    wall, s.capture_limit, res.flow_wall, res.restarted, (unsigned long long)res.state_hash);
+                    wall, s.capture_limit, res.flow_wall, restart != NULL, (unsigned long long)res.state_hash);
             if (fclose(f) || rename(tmp, path)) code = 1;
         }
     }
@@ -726,6 +782,11 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
             break;
         }
         int ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+        char why[96]; /* how a child that failed ended: its exit code or the signal that killed it */
+        if (WIFSIGNALED(status))
+            snprintf(why, sizeof why, "killed by signal %d, %s", WTERMSIG(status), strsignal(WTERMSIG(status)));
+        else
+            snprintf(why, sizeof why, "exit code %d", WIFEXITED(status) ? WEXITSTATUS(status) : -1);
         int found = 0;
         for (int g = 0; g < ng && !found; g++)
             if (groups[g].state == ST_RUNNING && groups[g].pid == pid) {
@@ -739,8 +800,8 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
                     groups[g].state = ST_FAILED;
                     if (!interrupted) {
                         flows_failed++;
-                        fprintf(err, "sweep: flow %s failed (see %s.log); its runs are not run\n", groups[g].key,
-                                groups[g].dir);
+                        fprintf(err, "sweep: flow %s failed (%s; see %s.log); its runs are not run\n", groups[g].key,
+                                why, groups[g].dir);
                         for (int i = 0; i < total; i++)
                             if (items[i].group == g && items[i].state == ST_PENDING) {
                                 items[i].state = ST_FAILED;
@@ -761,7 +822,7 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
                     items[i].state = ST_FAILED;
                     if (!interrupted) {
                         failed++;
-                        fprintf(err, "sweep: run %s failed (see %s.log)\n", items[i].dir, items[i].dir);
+                        fprintf(err, "sweep: run %s failed (%s; see %s.log)\n", items[i].dir, why, items[i].dir);
                     }
                 }
             }
@@ -857,6 +918,15 @@ collect:
                 "sweep: branching saved %.1f s of %.1f s of run time (%.0f %%): %d runs continued from %d shared flows"
                 " (process seconds, summed over the finished runs; a straight run packs and flows itself)\n",
                 saved, cost_straight, cost_straight > 0 ? 100.0 * saved / cost_straight : 0.0, n_branched, shared);
+    if (failed || flows_failed) { /* the failures again, at the end, where they are seen */
+        fprintf(err, "sweep: %d run(s) failed (no row in results.csv; run the sweep again to retry them):\n", failed);
+        for (int i = 0; i < total; i++)
+            if (items[i].state == ST_FAILED)
+                fprintf(err, "  %s: see %s.log%s\n", items[i].name,
+                        items[i].group >= 0 && groups[items[i].group].state == ST_FAILED ? groups[items[i].group].dir
+                                                                                         : items[i].dir,
+                        items[i].group >= 0 && groups[items[i].group].state == ST_FAILED ? " (its shared flow)" : "");
+    }
     free(groups);
     free(items);
     if (interrupted) return 130;
