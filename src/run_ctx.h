@@ -98,6 +98,9 @@ int sd_output_snapshot(run_ctx *c, const char *name);
 int sd_output_walls(run_ctx *c);
 void sd_output_picture(run_ctx *c, const char *name, const char *png, double xmin, double xmax);
 void sd_output_progress(run_ctx *c, double t_end_est);
+/* the summary as JSON text (the caller frees it with cJSON_free; NULL when out of memory),
+ * and the same written to summary.json atomically; both fill res's trap-ratio fields */
+char *sd_output_summary_text(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg);
 int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg);
 void sd_output_close(run_ctx *c);
 /* the first failed write: nonzero (its errno) once one failed, the file in c->out_file */

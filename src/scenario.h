@@ -76,10 +76,17 @@ void sd_scenario_default(sd_scenario *s);
  * file:line:col: message (several collected); returns 0 on success. */
 int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overrides, int n_overrides, FILE *err);
 void sd_scenario_free(sd_scenario *s);
-/* Print the parameter table (markdown when md != 0). */
-void sd_scenario_print_params(FILE *f, int md);
-/* Echo the effective values as JSON object members (for the run summary). */
-void sd_scenario_echo_json(const sd_scenario *s, FILE *f);
+/* Print the parameter table: as text (`sabodem params`), markdown (docs/scenario.md) or roff
+ * (the man page's KEYS section). */
+enum { SD_PARAMS_TEXT = 0, SD_PARAMS_MARKDOWN = 1, SD_PARAMS_ROFF = 2 };
+void sd_scenario_print_params(FILE *f, int format);
+/* The keys, in table order: how many, and the i-th (NULL out of range). */
+int sd_scenario_param_count(void);
+const char *sd_scenario_param_key(int i);
+/* The effective values as a JSON object, key by key (the run summary's "parameters"); NULL
+ * when out of memory. The caller owns it (cJSON_Delete). */
+struct cJSON;
+struct cJSON *sd_scenario_params_json(const sd_scenario *s);
 /* 1 for the keys that act only from the capture phase on: the dam layout (dam.l_h, dam.l_v,
  * dam.top_beam, dam.columns, dam.beams) and the capture-phase settings (phases.capture_limit,
  * quiet_time, ke_fraction, water.probe, water.h_d_floating). Runs that differ only in these
