@@ -298,6 +298,8 @@ char *sd_output_summary_text(run_ctx *c, sd_run_result *res, int status_code, co
     return text;
 }
 
+void sd_output_summary_free(char *text) { cJSON_free(text); }
+
 int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg)
 {
     char path[1200], tmp[1300];

@@ -604,12 +604,14 @@ static void validate(ectx *e, sd_scenario *s, const sd_ynode *root)
     }
 }
 
-int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overrides, int n_overrides, FILE *err)
+/* the scenario from its YAML text (text != NULL) or file */
+static int load(sd_scenario *s, const char *path, const char *text, const char *const *overrides, int n_overrides,
+                FILE *err)
 {
     sd_scenario_default(s);
     snprintf(s->path, sizeof s->path, "%s", path);
     char msg[1024];
-    sd_ynode *root = sd_yaml_load(path, msg, sizeof msg);
+    sd_ynode *root = text ? sd_yaml_parse_string(text, path, msg, sizeof msg) : sd_yaml_load(path, msg, sizeof msg);
     if (!root) {
         fprintf(err, "%s\n", msg);
         return -1;
@@ -657,6 +659,17 @@ int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overri
         return -1;
     }
     return 0;
+}
+
+int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overrides, int n_overrides, FILE *err)
+{
+    return load(s, path, NULL, overrides, n_overrides, err);
+}
+
+int sd_scenario_load_string(sd_scenario *s, const char *text, const char *name, const char *const *overrides,
+                            int n_overrides, FILE *err)
+{
+    return load(s, name, text, overrides, n_overrides, err);
 }
 
 static const char *type_name(ptype t)

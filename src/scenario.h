@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #include "sabodem.h"
+#include "sabodem_run.h"
 
 #define SD_MAX_CLASSES 8
 #define SD_MAX_IDS 64
@@ -21,7 +22,7 @@ typedef struct {
     int line;
 } sd_elem_def;
 
-typedef struct {
+typedef struct sd_scenario {
     char path[1024];
     sd_world_def world;
     double duration; /* s */
@@ -75,6 +76,9 @@ void sd_scenario_default(sd_scenario *s);
 /* Load a scenario file and apply "key=value" overrides. Errors are printed to err as
  * file:line:col: message (several collected); returns 0 on success. */
 int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overrides, int n_overrides, FILE *err);
+/* The same from YAML text; name stands for the file in its messages (and s->path). */
+int sd_scenario_load_string(sd_scenario *s, const char *text, const char *name, const char *const *overrides,
+                            int n_overrides, FILE *err);
 void sd_scenario_free(sd_scenario *s);
 /* Print the parameter table: as text (`sabodem params`), markdown (docs/scenario.md) or roff
  * (the man page's KEYS section). */
