@@ -3,7 +3,7 @@ JOBS ?= $(shell nproc)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
 
-.PHONY: setup build run test test-fast asan bench clean
+.PHONY: setup build run test test-fast asan bench install clean
 
 setup:
 	bash scripts/setup.sh
@@ -34,6 +34,12 @@ asan: setup
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSD_SANITIZE=ON
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && SD_SANITIZED=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS)
+
+# the program, the shared library, headers, pkg-config file, CMake package, Python package,
+# plotting scripts, man page and bash completion under PREFIX (docs/api.md)
+PREFIX ?= /usr/local
+install: build
+	cmake --install $(BUILD) --prefix $(PREFIX)
 
 bench: build
 	PGO=$(PGO) bash bench/run.sh

@@ -1,4 +1,5 @@
-/* sabodem: the only main(). Subcommands: run, check, params. Exit codes: 0 ok, 1 run failed,
+/* sabodem: the only main(). Subcommands: run, check, sweep, params, man, completion (their table
+ * in commands.c). Exit codes: 0 ok, 1 run failed,
  * 2 bad input or usage, 130 interrupted. */
 #include <errno.h>
 #include <signal.h>
@@ -11,6 +12,9 @@
 #include "run.h"
 #include "scenario.h"
 #include "scene_report.h"
+#include "commands.h"
+#include "completion.h"
+#include "manpage.h"
 #include "plot.h"
 #include "ranks.h"
 #include "sweep.h"
@@ -33,81 +37,27 @@ static void stop_on_signals(struct sigaction *sa)
     sigaction(SIGPIPE, sa, NULL);
 }
 
-/* The subcommands' help, one table: usage lines, then what each does and its options. */
-static const struct {
-    const char *name, *usage, *help;
-} commands[] = {
-    {"run", "sabodem run FILE [-o DIR] [--overwrite] [--set key=value]... [--threads N] [--seed S]\n"
-            "                 [--checkpoint-at flow_end] [--restart CHECKPOINT]",
-     "simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
-     "  -o, --output DIR          the output directory (refused if it holds another run's files)\n"
-     "  --overwrite               delete another run's files in DIR first\n"
-     "  --set key=value           override a scenario key (sabodem params lists them)\n"
-     "  --threads N               threads (solver.threads; 0: all cores)\n"
-     "  --seed S                  the random seed (solver.seed)\n"
-     "  --checkpoint-at flow_end  also write DIR/flow_end.ckpt when the flow reaches the dam\n"
-     "  --restart CHECKPOINT      continue from such a checkpoint (the capture phase only; FILE may\n"
-     "                            differ from the writer's scenario only in the dam layout and\n"
-     "                            capture-phase keys, docs/sweep.md) or from a periodic one\n"
-     "                            (output.checkpoint_interval: DIR/checkpoint_<step>.ckpt, the same\n"
-     "                            scenario, any phase, the same bits as a run never stopped)"},
-    {"check", "sabodem check FILE [--set key=value]... [--png OUT.png]",
-     "validate the scenario, build its scene without running and describe it: the debris\n"
-     "(counts, solid volume, K_w), the dam (axes, clear gaps, l_H/d_max, l_V/d_max)\n"
-     "  --png OUT.png  also draw the dam's front view (with the largest boulder and a log to\n"
-     "                 scale) and a side view of the initial state (python3-matplotlib)"},
-    {"sweep", "sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch]\n"
-              "                   [--shard U/N | --collect | --emit slurm]",
-     "run a matrix of cases x seeds in parallel (resumable), with CSV and figures; runs that\n"
-     "differ only in the dam layout share one packing + flow (docs/sweep.md). Under mpirun the\n"
-     "ranks share the runs (one at a time each unless --parallel), rank 0 collects.\n"
-     "  --parallel N  processes at once (default: the sweep file's, else the cores; 1 per rank\n"
-     "                under mpirun)\n"
-     "  --dry-run     list the runs and shared flows, and what is already done\n"
-     "  --no-branch   every run packs and flows on its own\n"
-     "  --shard U/N   run only work unit U, U+N, U+2N, ... (a shared flow and its runs, or a\n"
-     "                run); no results.csv (--collect writes it)\n"
-     "  --collect     run nothing: results.csv, cases.csv and figures from the finished runs\n"
-     "  --emit slurm  write DIR/slurm/: a job array (one task per unit) and a collect job"},
-    {"params", "sabodem params [--markdown]", "list every scenario key with its type, unit, default and range"},
-};
-enum { N_COMMANDS = sizeof commands / sizeof commands[0] };
-
-static void usage(FILE *f)
-{
-    for (int k = 0; k < N_COMMANDS; k++)
-        fprintf(f, "%s %s\n", k ? "      " : "usage:", commands[k].usage);
-    fprintf(f, "       sabodem --version\n\n");
-    for (int k = 0; k < N_COMMANDS; k++) {
-        const char *h = commands[k].help;
-        fprintf(f, "%-7s ", commands[k].name);
-        for (; *h; h++) { /* (the help's lines indented under the name) */
-            fputc(*h, f);
-            if (*h == '\n') fputs("        ", f);
-        }
-        fputc('\n', f);
-    }
-    fprintf(f, "\n"
-               "sabodem COMMAND --help shows one command.\n"
-               "environment (how the engine runs; the results are the same bits whatever they say):\n"
-               "  SD_SIMD=scalar|avx2|avx512|auto   the hand-written kernels' width (auto: the CPU's best,\n"
-               "                                    AVX2 on AMD CPUs)\n"
-               "  SD_PREFETCH=on|off|auto           the contact pass's prefetch (auto: tried during the run)\n"
-               "  OMP_NUM_THREADS                   threads when --threads is not given\n"
-               "  SABODEM_SCRIPTS                   where the plotting scripts are, if not beside the program\n");
-}
-
 /* `sabodem COMMAND --help`: 1 when argv asks for it (and it was printed) */
 static int command_help(const char *cmd, int argc, char **argv)
 {
-    for (int i = 2; i < argc; i++)
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h"))
-            for (int k = 0; k < N_COMMANDS; k++)
-                if (!strcmp(cmd, commands[k].name)) {
-                    printf("usage: %s\n\n%s\n", commands[k].usage, commands[k].help);
-                    return 1;
-                }
+    const app_command *c = app_command_find(cmd);
+    for (int i = 2; c && i < argc; i++)
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            printf("usage: %s\n\n%s\n", c->usage, c->help);
+            return 1;
+        }
     return 0;
+}
+
+/* an option the command does not know (or one missing its value): the message, with the
+ * nearest option the command has; 2 */
+static int bad_option(const char *cmd, const char *opt)
+{
+    char hint[96];
+    fprintf(stderr, "sabodem %s: unknown or incomplete option '%s'%s\n", cmd, opt,
+            app_did_you_mean(app_command_find(cmd), opt, hint, sizeof hint));
+    fprintf(stderr, "usage: %s\n", app_command_find(cmd)->usage);
+    return 2;
 }
 
 /* A count option's value: 0 and *v set when it is an integer in [lo, hi], else a message naming
@@ -186,12 +136,12 @@ static int draw_design(const sd_scenario *s, const sd_world *w, const char *png)
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        usage(stderr);
+        app_print_usage(stderr);
         return 2;
     }
     const char *cmd = argv[1];
     if (!strcmp(cmd, "-h") || !strcmp(cmd, "--help") || !strcmp(cmd, "help")) {
-        usage(stdout);
+        app_print_usage(stdout);
         return 0;
     }
     if (!strcmp(cmd, "--version") || !strcmp(cmd, "version")) {
@@ -199,8 +149,23 @@ int main(int argc, char **argv)
         return 0;
     }
     if (command_help(cmd, argc, argv)) return 0;
-    if (!strcmp(cmd, "params")) {
-        sd_scenario_print_params(stdout, argc > 2 && !strcmp(argv[2], "--markdown"));
+    if (!strcmp(cmd, "params") || !strcmp(cmd, "man")) {
+        int md = 0;
+        for (int i = 2; i < argc; i++)
+            if (!strcmp(cmd, "params") && !strcmp(argv[i], "--markdown")) md = 1;
+            else return bad_option(cmd, argv[i]);
+        if (!strcmp(cmd, "man"))
+            app_print_man(stdout, SD_VERSION);
+        else
+            sd_scenario_print_params(stdout, md ? SD_PARAMS_MARKDOWN : SD_PARAMS_TEXT);
+        return 0;
+    }
+    if (!strcmp(cmd, "completion")) {
+        if (argc != 3 || strcmp(argv[2], "bash")) {
+            fprintf(stderr, "sabodem completion: the one shell is bash (sabodem completion bash)\n");
+            return 2;
+        }
+        app_print_bash_completion(stdout);
         return 0;
     }
     if (!strcmp(cmd, "sweep")) {
@@ -230,10 +195,8 @@ int main(int argc, char **argv)
                 so.shard = u;
                 so.shards = n;
             }
-            else if (argv[i][0] == '-') {
-                fprintf(stderr, "sabodem: unknown or incomplete option '%s'\n", argv[i]);
-                return 2;
-            } else file = argv[i];
+            else if (argv[i][0] == '-') return bad_option(cmd, argv[i]);
+            else file = argv[i];
         }
         if (!file) {
             fprintf(stderr, "sabodem: no sweep file given\n");
@@ -295,8 +258,9 @@ int main(int argc, char **argv)
         return code;
     }
     if (strcmp(cmd, "run") && strcmp(cmd, "check")) {
-        fprintf(stderr, "sabodem: unknown command '%s'\n", cmd);
-        usage(stderr);
+        char hint[96];
+        fprintf(stderr, "sabodem: unknown command '%s'%s\n", cmd, app_did_you_mean(NULL, cmd, hint, sizeof hint));
+        app_print_usage(stderr);
         return 2;
     }
     const char *file = NULL, *outdir = NULL, *restart = NULL, *png = NULL;
@@ -337,10 +301,8 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--png") && i + 1 < argc && !strcmp(cmd, "check")) png = argv[++i];
         else if (!strcmp(a, "--overwrite") && !strcmp(cmd, "run")) overwrite = 1;
         else if (a[0] == '-') {
-            fprintf(stderr, "sabodem: unknown or incomplete option '%s'\n", a);
-            usage(stderr);
             free(sets);
-            return 2;
+            return bad_option(cmd, a);
         } else if (!file) file = a;
         else {
             fprintf(stderr, "sabodem: more than one scenario file given ('%s')\n", a);
@@ -350,7 +312,7 @@ int main(int argc, char **argv)
     }
     if (!file) {
         fprintf(stderr, "sabodem: no scenario file given\n");
-        usage(stderr);
+        app_print_usage(stderr);
         free(sets);
         return 2;
     }

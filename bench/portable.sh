@@ -89,7 +89,7 @@ if [ -d "$dir/tests" ]; then
     [ $bad = 0 ] || exit 1
 fi
 [ $norun = 1 ] && exit 0
-hash_of() { grep -o '"state_hash": "[0-9a-f]*"' "$1/summary.json" | cut -d'"' -f4; }
+hash_of() { grep -o '"state_hash":[[:space:]]*"[0-9a-f]*"' "$1/summary.json" | cut -d'"' -f4; }
 off=(--set output.vtk=false --set output.png=false)
 s=$(date +%s%N)
 OMP_PROC_BIND=true OMP_PLACES=cores "$dir/sabodem" run examples/shibuya2009.yaml --threads 2 -o "$out/full" --overwrite \

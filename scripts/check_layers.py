@@ -14,7 +14,7 @@ import subprocess
 import sys
 
 LAYERS = ["core", "geom", "engine", "driver", "app"]
-DRIVER = {"scenario", "scene_report", "yaml_tree", "build", "run", "run_ctx", "run_output", "run_state", "run_dir", "trap", "water", "fluid",
+DRIVER = {"scenario", "scene_report", "yaml_tree", "build", "run", "run_ctx", "run_output", "run_state", "run_dir", "run_api", "trap", "water", "fluid",
           "io_vtk", "sweep"}
 
 
@@ -22,6 +22,8 @@ def layer_of(rel):
     """rel: a path under the source dir, e.g. src/core/hash.c, src/run.h, app/plot.c"""
     if rel.startswith("app/"):
         return "app"
+    if rel == "include/sabodem_run.h":
+        return "driver"
     if rel.startswith("src/core/") or rel == "include/sabodem.h":
         return "core"
     if rel.startswith("src/geom/"):

@@ -2,7 +2,7 @@
 # Install the Debian packages sabodem needs, only those missing (idempotent). Used by the
 # README's quick start, the Makefile and CI alike.
 set -euo pipefail
-pkgs=(build-essential cmake pkg-config libyaml-dev python3 python3-matplotlib python3-numpy libopenmpi-dev openmpi-bin)
+pkgs=(build-essential cmake pkg-config libyaml-dev libcjson-dev python3 python3-matplotlib python3-numpy libopenmpi-dev openmpi-bin)
 if [ "${1:-}" = "--bench" ]; then pkgs+=(lammps openmpi-bin); fi
 # bench/work.sh: callgrind and its client requests' header
 if [ "${1:-}" = "--work" ]; then pkgs+=(valgrind); fi

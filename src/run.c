@@ -98,14 +98,13 @@ static sd_status capture_start(run_ctx *c)
 
 /* ---------------------------------------------------------------- the run ---- */
 
-int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *res)
+/* Build (or restart) the run's world and open its outputs; 0, or the exit code (1, 2) of a run
+ * that cannot start, with the world gone. */
+int sd_run_begin(sd_run *r)
 {
-    run_ctx c;
-    memset(&c, 0, sizeof c);
-    memset(res, 0, sizeof(*res));
-    c.s = s;
-    c.o = o;
-    c.wall0 = sd_now();
+    run_ctx *c = &r->c;
+    const sd_scenario *s = c->s;
+    const sd_run_opts *o = c->o;
     sd_status st;
     sd_run_restored rs;
     memset(&rs, 0, sizeof rs);
@@ -113,16 +112,16 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
         char msg[1600];
         void *blob = NULL;
         size_t blen = 0;
-        st = sd_checkpoint_read(o->restart, &c.w, &blob, &blen, msg, sizeof msg);
+        st = sd_checkpoint_read(o->restart, &c->w, &blob, &blen, msg, sizeof msg);
         if (st) {
             fprintf(o->err, "%s\n", msg[0] ? msg : sd_status_message(st));
             return 2;
         }
-        int bad = sd_run_state_unpack(&c, blob, blen, &rs, msg, sizeof msg);
+        int bad = sd_run_state_unpack(c, blob, blen, &rs, msg, sizeof msg);
         free(blob);
         if (bad) {
             fprintf(o->err, "%s: %s\n", o->restart, msg);
-            sd_world_destroy(c.w);
+            sd_world_destroy(c->w);
             return 2;
         }
         /* the thread count is the caller's (the bits do not depend on it) */
@@ -130,280 +129,324 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
 #ifdef _OPENMP
         if (threads <= 0) threads = omp_get_max_threads();
 #endif
-        if (threads > 0) sd_world_set_threads(c.w, threads);
-        sd_world_set_tuning(c.w, &s->world.tuning); /* (and how it runs, too) */
-        c.restarted_from = o->restart;
+        if (threads > 0) sd_world_set_threads(c->w, threads);
+        sd_world_set_tuning(c->w, &s->world.tuning); /* (and how it runs, too) */
+        c->restarted_from = o->restart;
         if (rs.kind == SD_CKPT_PERIODIC) { /* the same run goes on: its wall times too */
-            c.wall0 = sd_now() - rs.wall_before;
-            c.phase_w0 = sd_now() - rs.phase_wall_in;
+            c->wall0 = sd_now() - rs.wall_before;
+            c->phase_w0 = sd_now() - rs.phase_wall_in;
         }
     } else {
-        st = sd_world_create(&s->world, &c.w);
+        st = sd_world_create(&s->world, &c->w);
         if (st) {
             fprintf(o->err, "%s: %s\n", s->path, sd_status_message(st));
             return 2;
         }
         /* without the dam pipes: they go in at the start of the capture phase (capture_start) */
-        st = sd_build_scene_ex(c.w, s, &c.info, o->err, 0);
-        if (!st) st = sd_world_check(c.w);
+        st = sd_build_scene_ex(c->w, s, &c->info, o->err, 0);
+        if (!st) st = sd_world_check(c->w);
         if (st) {
             if (st == SD_ERR_UNSTABLE)
                 fprintf(o->err, "%s: solver.dt: %s\n", s->path, sd_status_message(st));
             else
                 fprintf(o->err, "%s: cannot build the scene: %s\n", s->path, sd_status_message(st));
-            sd_world_destroy(c.w);
+            sd_world_destroy(c->w);
             return 2;
         }
     }
     /* only now, with valid input, does the output directory appear */
-    snprintf(c.dir, sizeof c.dir, "%s", o->outdir);
+    snprintf(c->dir, sizeof c->dir, "%s", o->outdir);
     {
         char msg[1800];
-        const int resume = c.restarted_from && sd_run_dir_holds(c.dir, c.restarted_from);
-        if (sd_run_dir_claim(c.dir, o->overwrite, resume, msg, sizeof msg)) {
+        const int resume = c->restarted_from && sd_run_dir_holds(c->dir, c->restarted_from);
+        if (sd_run_dir_claim(c->dir, o->overwrite, resume, msg, sizeof msg)) {
             fprintf(o->err, "%s\n", msg);
             sd_run_state_free(&rs);
-            sd_world_destroy(c.w);
+            sd_world_destroy(c->w);
             return 2;
         }
     }
-    if (c.restarted_from) {
+    if (c->restarted_from) {
         char msg[1600];
-        if (sd_run_state_restore_outputs(&c, &rs, msg, sizeof msg)) {
-            fprintf(o->err, "%s: cannot continue the outputs of %s: %s\n", c.dir, o->restart, msg);
+        if (sd_run_state_restore_outputs(c, &rs, msg, sizeof msg)) {
+            fprintf(o->err, "%s: cannot continue the outputs of %s: %s\n", c->dir, o->restart, msg);
             sd_run_state_free(&rs);
-            sd_world_destroy(c.w);
+            sd_world_destroy(c->w);
             return 1;
         }
     }
     char path[1200];
-    const char *mode = c.restarted_from ? "a" : "w";
-    snprintf(path, sizeof path, "%s/series.csv", c.dir);
-    c.series = fopen(path, mode);
-    if (c.series && !c.restarted_from)
-        fprintf(c.series,
+    const char *mode = c->restarted_from ? "a" : "w";
+    snprintf(path, sizeof path, "%s/series.csv", c->dir);
+    c->series = fopen(path, mode);
+    if (c->series && !c->restarted_from)
+        fprintf(c->series,
                 "t,phase,front_x,volume_upstream_m3,kinetic_energy_J,contacts,dam_force_N,p_v,h_d,elements,passed\n");
     if (s->n_traj > 0) {
-        snprintf(path, sizeof path, "%s/trajectories.csv", c.dir);
-        c.traj = fopen(path, mode);
-        if (c.traj && !c.restarted_from) fprintf(c.traj, "t,id,x,y,z,vx,vy,vz,wx,wy,wz,ax,ay,az,fx,fy,fz\n");
+        snprintf(path, sizeof path, "%s/trajectories.csv", c->dir);
+        c->traj = fopen(path, mode);
+        if (c->traj && !c->restarted_from) fprintf(c->traj, "t,id,x,y,z,vx,vy,vz,wx,wy,wz,ax,ay,az,fx,fy,fz\n");
     }
     int pvd_bad = 0;
     if (s->vtk_on) {
-        snprintf(path, sizeof path, "%s/series.pvd", c.dir);
-        c.pvd_on = sd_vtk_series_init(&c.pvd, path) == 0;
-        for (int k = 0; c.pvd_on && k < rs.npvd; k++)
-            if (sd_vtk_series_add(&c.pvd, rs.pvd_time[k], rs.pvd_part[k], rs.pvd_file[k])) pvd_bad = 1;
+        snprintf(path, sizeof path, "%s/series.pvd", c->dir);
+        c->pvd_on = sd_vtk_series_init(&c->pvd, path) == 0;
+        for (int k = 0; c->pvd_on && k < rs.npvd; k++)
+            if (sd_vtk_series_add(&c->pvd, rs.pvd_time[k], rs.pvd_part[k], rs.pvd_file[k])) pvd_bad = 1;
     }
     const int rs_kind = rs.kind;
     sd_run_state_free(&rs);
-    if (!c.series || (s->n_traj > 0 && !c.traj) || (s->vtk_on && !c.pvd_on) || pvd_bad ||
-        (!c.restarted_from && sd_output_walls(&c))) {
-        fprintf(o->err, "%s: cannot write output files: %s\n", c.dir, strerror(errno));
-        sd_output_close(&c);
-        sd_world_destroy(c.w);
+    if (!c->series || (s->n_traj > 0 && !c->traj) || (s->vtk_on && !c->pvd_on) || pvd_bad ||
+        (!c->restarted_from && sd_output_walls(c))) {
+        fprintf(o->err, "%s: cannot write output files: %s\n", c->dir, strerror(errno));
+        sd_output_close(c);
+        sd_world_destroy(c->w);
         return 1;
     }
-    const sd_body_view bv = sd_world_bodies(c.w), *b = &bv;
+    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
     const double dt = s->world.dt;
-    if (!c.restarted_from) {
+    if (!c->restarted_from) {
         for (int i = 0; i < b->n; i++) {
             if (b->fixed[i]) continue;
             if (b->shape[i] == SD_SHAPE_CYLINDER)
-                c.vol_total_logs += sd_trap_body_volume(b, i);
+                c->vol_total_logs += sd_trap_body_volume(b, i);
             else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES)
-                c.vol_total_class[b->tag[i]] += sd_trap_body_volume(b, i);
+                c->vol_total_class[b->tag[i]] += sd_trap_body_volume(b, i);
         }
-        c.phase = s->flume_on ? PH_PACK : PH_RUN;
-        c.h_d = s->water_h;
-        c.phase_t0 = 0.0;
-        c.phase_w0 = sd_now();
+        c->phase = s->flume_on ? PH_PACK : PH_RUN;
+        c->h_d = s->water_h;
+        c->phase_t0 = 0.0;
+        c->phase_w0 = sd_now();
     } else if (rs_kind != SD_CKPT_PERIODIC) {
-        c.phase_w0 = sd_now();
+        c->phase_w0 = sd_now();
     }
-    if (c.restarted_from && c.dam_built) /* the arrival's side view, asked again for this process */
-        sd_output_picture(&c, "arrival", "side_arrival.png", s->x_dam - 1.2, s->x_end);
-    if (c.restarted_from && o->log)
-        fprintf(o->log, "restart from %s: t = %.4f s, step %ld, phase %s\n", c.restarted_from, sd_world_time(c.w),
-                sd_world_step_count(c.w), sd_run_phase_name(c.phase));
-    long log_every = (long)llround(s->log_interval / dt);
-    if (log_every < 1) log_every = 1;
-    long traj_every = (long)llround(s->traj_interval / dt);
-    if (traj_every < 1) traj_every = 1;
-    long snap_every = s->snapshot_interval > 0 ? (long)llround(s->snapshot_interval / dt) : 0;
-    long ckpt_every = s->checkpoint_interval > 0 ? (long)llround(s->checkpoint_interval / dt) : 0;
-    if (s->checkpoint_interval > 0 && ckpt_every < 1) ckpt_every = 1;
-    long progress_every = 2000;
-    double t_end_est = s->flume_on ? s->packing_time + 4.0 + s->capture_limit : s->duration;
-    int code = 0;
-    const char *msg = "finished";
-    if (!c.restarted_from) {
-        sd_output_snapshot(&c, "initial");
-        sd_output_series_row(&c);
-        sd_output_traj(&c);
+    if (c->restarted_from && c->dam_built) /* the arrival's side view, asked again for this process */
+        sd_output_picture(c, "arrival", "side_arrival.png", s->x_dam - 1.2, s->x_end);
+    if (c->restarted_from && o->log)
+        fprintf(o->log, "restart from %s: t = %.4f s, step %ld, phase %s\n", c->restarted_from, sd_world_time(c->w),
+                sd_world_step_count(c->w), sd_run_phase_name(c->phase));
+    r->log_every = (long)llround(s->log_interval / dt);
+    if (r->log_every < 1) r->log_every = 1;
+    r->traj_every = (long)llround(s->traj_interval / dt);
+    if (r->traj_every < 1) r->traj_every = 1;
+    r->snap_every = s->snapshot_interval > 0 ? (long)llround(s->snapshot_interval / dt) : 0;
+    r->ckpt_every = s->checkpoint_interval > 0 ? (long)llround(s->checkpoint_interval / dt) : 0;
+    if (s->checkpoint_interval > 0 && r->ckpt_every < 1) r->ckpt_every = 1;
+    r->progress_every = 2000;
+    r->t_end_est = s->flume_on ? s->packing_time + 4.0 + s->capture_limit : s->duration;
+    if (!c->restarted_from) {
+        sd_output_snapshot(c, "initial");
+        sd_output_series_row(c);
+        sd_output_traj(c);
     }
-    c.rate_step0 = sd_world_step_count(c.w);
-    c.rate_wall0 = sd_now();
-    for (;;) {
-        if (o->stop && *o->stop) {
-            code = 130;
-            msg = "interrupted";
-            res->interrupted = 1;
-            break;
-        }
-        if (sd_output_failed(&c)) { /* a full disk: stop, with an error, not a run that says done */
-            fprintf(o->err, "%s/%s: cannot write: %s\n", c.dir, c.out_file, strerror(c.out_errno));
-            code = 1;
-            msg = "output failed";
-            break;
-        }
-        if (c.phase == PH_RUN && sd_world_time(c.w) >= s->duration - 0.5 * dt) break;
-        if (c.phase == PH_DONE) break;
-        if (c.flow_ended && !c.dam_built) {
-            /* the branch point: a flow-end checkpoint holds the state of exactly this moment, and
-             * a restart from it comes in here, so both go through capture_start alike */
-            if (o->checkpoint_flow_end && !c.flow_ckpt_written) {
-                st = sd_run_state_checkpoint(&c, o->checkpoint_flow_end);
-                if (st) {
-                    fprintf(o->err, "%s: cannot write the flow-end checkpoint: %s (%s)\n", o->checkpoint_flow_end,
-                            sd_status_message(st), strerror(errno));
-                    code = 1;
-                    msg = "checkpoint failed";
-                    break;
-                }
-                if (o->log && !o->progress_tty)
-                    fprintf(o->log, "flow-end checkpoint %s written at t = %.4f s\n", o->checkpoint_flow_end,
-                            sd_world_time(c.w));
-            }
-            if (o->stop_at_flow_end) {
-                res->stopped_at_flow_end = 1;
-                msg = "stopped at the flow end";
-                break;
-            }
-            st = capture_start(&c);
+    c->rate_step0 = sd_world_step_count(c->w);
+    c->rate_wall0 = sd_now();
+    r->msg = "finished";
+    return 0;
+}
+
+/* One pass of the loop: a step and what follows it. 1 when the loop ends here (r->code and
+ * r->msg say how), else 0. */
+int sd_run_step_once(sd_run *r)
+{
+    run_ctx *c = &r->c;
+    const sd_scenario *s = c->s;
+    const sd_run_opts *o = c->o;
+    sd_run_result *res = &r->res;
+    const double dt = s->world.dt;
+    sd_status st;
+    if (o->stop && *o->stop) {
+        r->code = 130;
+        r->msg = "interrupted";
+        res->interrupted = 1;
+        return 1;
+    }
+    if (sd_output_failed(c)) { /* a full disk: stop, with an error, not a run that says done */
+        fprintf(o->err, "%s/%s: cannot write: %s\n", c->dir, c->out_file, strerror(c->out_errno));
+        r->code = 1;
+        r->msg = "output failed";
+        return 1;
+    }
+    if (c->phase == PH_RUN && sd_world_time(c->w) >= s->duration - 0.5 * dt) return 1;
+    if (c->phase == PH_DONE) return 1;
+    if (c->flow_ended && !c->dam_built) {
+        /* the branch point: a flow-end checkpoint holds the state of exactly this moment, and
+         * a restart from it comes in here, so both go through capture_start alike */
+        if (o->checkpoint_flow_end && !c->flow_ckpt_written) {
+            st = sd_run_state_checkpoint(c, o->checkpoint_flow_end);
             if (st) {
-                fprintf(o->err, "%s: cannot add the dam pipes: %s\n", s->path, sd_status_message(st));
-                code = 1;
-                msg = sd_status_message(st);
-                break;
+                fprintf(o->err, "%s: cannot write the flow-end checkpoint: %s (%s)\n", o->checkpoint_flow_end,
+                        sd_status_message(st), strerror(errno));
+                r->code = 1;
+                r->msg = "checkpoint failed";
+                return 1;
             }
-        }
-        set_fluid(&c);
-        st = sd_world_step(c.w);
-        if (st) {
-            fprintf(o->err, "%s: step %ld, t = %.6f s: %s\n", s->path, sd_world_step_count(c.w), sd_world_time(c.w), sd_status_message(st));
-            code = 1;
-            msg = sd_status_message(st);
-            break;
-        }
-        long step = sd_world_step_count(c.w);
-        if (c.info.n_pipes) accumulate_pipes(&c);
-        int next = c.phase;
-        if (s->flume_on && step % 100 == 0) {
-            int before = c.n_passed;
-            remove_passed(&c);
-            double tph = sd_world_time(c.w) - c.phase_t0;
-            if (sd_trap_crossing(c.w, sd_trap_plane_x(&c))) c.last_cross_time = sd_world_time(c.w);
-            if (c.n_passed != before) c.last_cross_time = sd_world_time(c.w);
-            if (c.phase == PH_PACK) {
-                if (tph >= s->packing_time - 0.5 * dt) next = PH_FLOW;
-            } else if (c.phase == PH_CAPTURE) {
-                update_h_d(&c);
-                double ke = sd_trap_upstream_ke(&c);
-                if (ke > c.ke_peak) c.ke_peak = ke;
-                int quiet = sd_world_time(c.w) - c.last_cross_time >= s->quiet_time && ke < s->ke_fraction * c.ke_peak;
-                if (tph >= s->capture_limit || (tph > s->quiet_time && quiet)) next = PH_DONE;
-            }
-        }
-        if (c.phase == PH_FLOW && !c.flow_ended) {
-            /* checked at every step, so that the front has moved less than one step's travel
-             * (~v dt) past the dam face when the pipes appear (docs/physics.md) */
-            double fx = sd_trap_front_x(&c), tph = sd_world_time(c.w) - c.phase_t0;
-            if (step % 100 == 0 && !c.flow_len_done && s->x_dam - 1.0 > s->x_gate && fx >= s->x_dam - 1.0)
-                sd_trap_flow_length(&c);
-            if (fx >= s->x_dam || tph >= s->flow_limit) next = PH_CAPTURE;
-        }
-        if (next != c.phase) {
-            c.phase_end[c.phase] = sd_world_time(c.w);
-            c.phase_wall[c.phase] = sd_now() - c.phase_w0;
-            c.phase_w0 = sd_now();
             if (o->log && !o->progress_tty)
-                fprintf(o->log, "phase %s ended at t = %.4f s (max speed %.4f m/s)\n", sd_run_phase_name(c.phase), sd_world_time(c.w),
-                        sd_trap_max_speed(&c));
-            if (c.phase == PH_PACK) {
-                sd_world_set_group_active(c.w, SD_GROUP_GATE, 0);
-                sd_output_snapshot(&c, "packed");
-                c.phase_t0 = sd_world_time(c.w);
-                c.phase = next;
-            } else if (next == PH_CAPTURE) {
-                /* the capture (pipes, capture fluid) starts at the top of the next iteration */
-                c.flow_ended = 1;
-                c.flow_wall = sd_now() - c.wall0; /* the build included */
-            } else {
-                c.phase_t0 = sd_world_time(c.w);
-                c.phase = next;
-            }
+                fprintf(o->log, "flow-end checkpoint %s written at t = %.4f s\n", o->checkpoint_flow_end,
+                        sd_world_time(c->w));
         }
-        if (step % log_every == 0) sd_output_series_row(&c);
-        if (c.traj && step % traj_every == 0) sd_output_traj(&c);
-        if (snap_every && step % snap_every == 0) {
-            char name[64];
-            snprintf(name, sizeof name, "%06d", c.n_snap);
-            sd_output_snapshot(&c, name);
+        if (o->stop_at_flow_end) {
+            res->stopped_at_flow_end = 1;
+            r->msg = "stopped at the flow end";
+            return 1;
         }
-        if (step % progress_every == 0) sd_output_progress(&c, t_end_est);
-        /* after this step's outputs: a restart from it goes on at the top of the loop, as this
-         * run does */
-        if (ckpt_every && step % ckpt_every == 0 && c.phase != PH_DONE && !sd_output_failed(&c)) {
-            st = sd_run_state_periodic(&c);
-            if (st) {
-                fprintf(o->err, "%s/checkpoint_%010ld.ckpt: cannot write: %s; the checkpoints written before are kept\n",
-                        c.dir, step, st == SD_ERR_IO ? strerror(errno) : sd_status_message(st));
-                code = 1;
-                msg = "checkpoint failed";
-                break;
-            }
+        st = capture_start(c);
+        if (st) {
+            fprintf(o->err, "%s: cannot add the dam pipes: %s\n", s->path, sd_status_message(st));
+            r->code = 1;
+            r->msg = sd_status_message(st);
+            return 1;
         }
     }
+    set_fluid(c);
+    st = sd_world_step(c->w);
+    if (st) {
+        fprintf(o->err, "%s: step %ld, t = %.6f s: %s\n", s->path, sd_world_step_count(c->w), sd_world_time(c->w), sd_status_message(st));
+        r->code = 1;
+        r->msg = sd_status_message(st);
+        return 1;
+    }
+    long step = sd_world_step_count(c->w);
+    if (c->info.n_pipes) accumulate_pipes(c);
+    int next = c->phase;
+    if (s->flume_on && step % 100 == 0) {
+        int before = c->n_passed;
+        remove_passed(c);
+        double tph = sd_world_time(c->w) - c->phase_t0;
+        if (sd_trap_crossing(c->w, sd_trap_plane_x(c))) c->last_cross_time = sd_world_time(c->w);
+        if (c->n_passed != before) c->last_cross_time = sd_world_time(c->w);
+        if (c->phase == PH_PACK) {
+            if (tph >= s->packing_time - 0.5 * dt) next = PH_FLOW;
+        } else if (c->phase == PH_CAPTURE) {
+            update_h_d(c);
+            double ke = sd_trap_upstream_ke(c);
+            if (ke > c->ke_peak) c->ke_peak = ke;
+            int quiet = sd_world_time(c->w) - c->last_cross_time >= s->quiet_time && ke < s->ke_fraction * c->ke_peak;
+            if (tph >= s->capture_limit || (tph > s->quiet_time && quiet)) next = PH_DONE;
+        }
+    }
+    if (c->phase == PH_FLOW && !c->flow_ended) {
+        /* checked at every step, so that the front has moved less than one step's travel
+         * (~v dt) past the dam face when the pipes appear (docs/physics.md) */
+        double fx = sd_trap_front_x(c), tph = sd_world_time(c->w) - c->phase_t0;
+        if (step % 100 == 0 && !c->flow_len_done && s->x_dam - 1.0 > s->x_gate && fx >= s->x_dam - 1.0)
+            sd_trap_flow_length(c);
+        if (fx >= s->x_dam || tph >= s->flow_limit) next = PH_CAPTURE;
+    }
+    if (next != c->phase) {
+        c->phase_end[c->phase] = sd_world_time(c->w);
+        c->phase_wall[c->phase] = sd_now() - c->phase_w0;
+        c->phase_w0 = sd_now();
+        if (o->log && !o->progress_tty)
+            fprintf(o->log, "phase %s ended at t = %.4f s (max speed %.4f m/s)\n", sd_run_phase_name(c->phase), sd_world_time(c->w),
+                    sd_trap_max_speed(c));
+        if (c->phase == PH_PACK) {
+            sd_world_set_group_active(c->w, SD_GROUP_GATE, 0);
+            sd_output_snapshot(c, "packed");
+            c->phase_t0 = sd_world_time(c->w);
+            c->phase = next;
+        } else if (next == PH_CAPTURE) {
+            /* the capture (pipes, capture fluid) starts at the top of the next iteration */
+            c->flow_ended = 1;
+            c->flow_wall = sd_now() - c->wall0; /* the build included */
+        } else {
+            c->phase_t0 = sd_world_time(c->w);
+            c->phase = next;
+        }
+    }
+    if (step % r->log_every == 0) sd_output_series_row(c);
+    if (c->traj && step % r->traj_every == 0) sd_output_traj(c);
+    if (r->snap_every && step % r->snap_every == 0) {
+        char name[64];
+        snprintf(name, sizeof name, "%06d", c->n_snap);
+        sd_output_snapshot(c, name);
+    }
+    if (step % r->progress_every == 0) sd_output_progress(c, r->t_end_est);
+    /* after this step's outputs: a restart from it goes on at the top of the loop, as this run
+     * does */
+    if (r->ckpt_every && step % r->ckpt_every == 0 && c->phase != PH_DONE && !sd_output_failed(c)) {
+        st = sd_run_state_periodic(c);
+        if (st) {
+            fprintf(o->err, "%s/checkpoint_%010ld.ckpt: cannot write: %s; the checkpoints written before are kept\n",
+                    c->dir, step, st == SD_ERR_IO ? strerror(errno) : sd_status_message(st));
+            r->code = 1;
+            r->msg = "checkpoint failed";
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* After the loop: the final row, snapshot and picture, the files closed, the summary; res filled. */
+void sd_run_end(sd_run *r)
+{
+    run_ctx *c = &r->c;
+    const sd_scenario *s = c->s;
+    const sd_run_opts *o = c->o;
+    sd_run_result *res = &r->res;
     if (o->log && o->progress_tty) fputc('\n', o->log);
     if (res->stopped_at_flow_end) {
         /* a shared flow: its outputs end at the checkpoint, which the branches continue */
-        sd_output_close(&c);
+        sd_output_close(c);
     } else {
-        if (c.phase != PH_DONE && c.phase != PH_RUN && !c.flow_ended) {
-            c.phase_end[c.phase] = sd_world_time(c.w);
-            c.phase_wall[c.phase] = sd_now() - c.phase_w0;
-        } else if (c.phase == PH_CAPTURE) {
-            c.phase_end[c.phase] = sd_world_time(c.w);
-            c.phase_wall[c.phase] = sd_now() - c.phase_w0;
+        if (c->phase != PH_DONE && c->phase != PH_RUN && !c->flow_ended) {
+            c->phase_end[c->phase] = sd_world_time(c->w);
+            c->phase_wall[c->phase] = sd_now() - c->phase_w0;
+        } else if (c->phase == PH_CAPTURE) {
+            c->phase_end[c->phase] = sd_world_time(c->w);
+            c->phase_wall[c->phase] = sd_now() - c->phase_w0;
         }
-        sd_output_series_row(&c);
-        sd_output_snapshot(&c, "final");
-        if (s->flume_on && code == 0) sd_output_picture(&c, "final", "side_final.png", s->x_dam - 1.0, s->x_end);
-        const int failed_before = sd_output_failed(&c);
-        if (sd_output_finish(&c) && !failed_before) {
-            fprintf(o->err, "%s/%s: cannot write: %s\n", c.dir, c.out_file, strerror(c.out_errno));
-            if (code == 0 || code == 130) code = 1;
-            msg = "output failed";
+        sd_output_series_row(c);
+        sd_output_snapshot(c, "final");
+        if (s->flume_on && r->code == 0) sd_output_picture(c, "final", "side_final.png", s->x_dam - 1.0, s->x_end);
+        const int failed_before = sd_output_failed(c);
+        if (sd_output_finish(c) && !failed_before) {
+            fprintf(o->err, "%s/%s: cannot write: %s\n", c->dir, c->out_file, strerror(c->out_errno));
+            if (r->code == 0 || r->code == 130) r->code = 1;
+            r->msg = "output failed";
         }
     }
-    if (sd_output_summary(&c, res, code, msg)) {
-        fprintf(o->err, "%s: cannot write summary.json: %s\n", c.dir, strerror(errno));
-        if (!code) code = 1;
+    if (sd_output_summary(c, res, r->code, r->msg)) {
+        fprintf(o->err, "%s: cannot write summary.json: %s\n", c->dir, strerror(errno));
+        if (!r->code) r->code = 1;
     }
-    res->n_passed = c.n_passed;
-    for (int k = 0; k < c.info.n_pipes; k++)
-        res->peak_dam_force = fmax(res->peak_dam_force, c.pipe_peak[k]);
-    res->steps = sd_world_step_count(c.w);
-    res->wall_time = sd_now() - c.wall0;
-    res->n_pictures = c.n_plots;
-    memcpy(res->pictures, c.plots, (size_t)c.n_plots * sizeof c.plots[0]);
-    res->flow_wall = c.flow_wall;
-    res->restarted = c.restarted_from != NULL;
-    res->state_hash = sd_world_state_hash(c.w);
+    res->n_passed = c->n_passed;
+    for (int k = 0; k < c->info.n_pipes; k++)
+        res->peak_dam_force = fmax(res->peak_dam_force, c->pipe_peak[k]);
+    res->steps = sd_world_step_count(c->w);
+    res->wall_time = sd_now() - c->wall0;
+    res->n_pictures = c->n_plots;
+    memcpy(res->pictures, c->plots, (size_t)c->n_plots * sizeof c->plots[0]);
+    res->flow_wall = c->flow_wall;
+    res->restarted = c->restarted_from != NULL;
+    res->state_hash = sd_world_state_hash(c->w);
     for (int k = 0; k < 4; k++)
-        res->phase_end[k] = c.phase_end[k];
-    sd_world_destroy(c.w);
+        res->phase_end[k] = c->phase_end[k];
+    r->finished = 1;
+}
+
+int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *res)
+{
+    sd_run *r = calloc(1, sizeof *r);
+    memset(res, 0, sizeof(*res));
+    if (!r) {
+        fprintf(o->err, "%s: out of memory\n", s->path);
+        return 1;
+    }
+    r->o = *o;
+    r->c.s = s;
+    r->c.o = &r->o;
+    r->c.wall0 = sd_now();
+    int code = sd_run_begin(r);
+    if (!code) {
+        while (!sd_run_step_once(r)) {
+        }
+        sd_run_end(r);
+        code = r->code;
+        sd_world_destroy(r->c.w);
+    }
+    *res = r->res;
+    free(r);
     return code;
 }
 

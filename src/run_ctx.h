@@ -67,6 +67,32 @@ typedef struct {
 
 /* what a checkpoint's driver state holds beside run_ctx's fields */
 enum { SD_CKPT_FLOW_END = 0, SD_CKPT_PERIODIC = 1 };
+
+/* A run between its steps: the driver's context and the loop's settings. sd_run_scenario goes
+ * through it from start to end; the public API (sabodem_run.h) one stretch at a time. */
+struct sd_run {
+    run_ctx c;
+    sd_run_opts o;
+    sd_run_result res;
+    long log_every, traj_every, snap_every, ckpt_every, progress_every;
+    double t_end_est;
+    int code;         /* the run's exit code so far (0 while it goes on well) */
+    const char *msg;  /* the summary's status */
+    int ended;        /* the loop has ended (the phases are done, or stopped, or failed) */
+    int finished;     /* the final outputs and the summary are written */
+    FILE *err_stream; /* the API's runs (run_api.c): their messages, into err_text */
+    char *err_text;
+    size_t err_len;
+};
+
+/* run.c: a run in three parts. begin: build (or restart) the world and open the outputs (r->c.s,
+ * r->c.o and r->c.wall0 set by the caller); 0, or the exit code of a run that cannot start, its
+ * world gone. step_once: one step and what follows it; 1 when the loop ends there (r->code and
+ * r->msg say how). end: the final outputs and the summary, r->res filled; the world stays. */
+int sd_run_begin(sd_run *r);
+int sd_run_step_once(sd_run *r);
+void sd_run_end(sd_run *r);
+
 typedef struct {
     int kind; /* SD_CKPT_FLOW_END or SD_CKPT_PERIODIC */
     long series_len, traj_len;
@@ -103,6 +129,10 @@ int sd_output_snapshot(run_ctx *c, const char *name);
 int sd_output_walls(run_ctx *c);
 void sd_output_picture(run_ctx *c, const char *name, const char *png, double xmin, double xmax);
 void sd_output_progress(run_ctx *c, double t_end_est);
+/* the summary as JSON text (the caller frees it with sd_output_summary_free; NULL when out of memory),
+ * and the same written to summary.json atomically; both fill res's trap-ratio fields */
+char *sd_output_summary_text(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg);
+void sd_output_summary_free(char *text);
 int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg);
 void sd_output_close(run_ctx *c);
 /* the first failed write: nonzero (its errno) once one failed, the file in c->out_file */

@@ -6,6 +6,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
+
 #include "core/status.h"
 #include "core/vmath.h"
 #include "run_ctx.h"
@@ -154,98 +156,169 @@ void sd_output_progress(run_ctx *c, double t_end_est)
     fflush(c->o->log);
 }
 
+/* summary.json, built with cJSON (strings escaped, numbers printed with the digits that read
+ * back to the same double), one function per part; a new field goes into its part. Each part
+ * returns 0, or -1 when out of memory. */
+static int add_num(cJSON *o, const char *key, double v) { return cJSON_AddNumberToObject(o, key, v) ? 0 : -1; }
+static int add_str(cJSON *o, const char *key, const char *v) { return cJSON_AddStringToObject(o, key, v) ? 0 : -1; }
+static cJSON *add_obj(cJSON *o, const char *key) { return cJSON_AddObjectToObject(o, key); }
+
+/* what ran, how it ended, how long it took */
+static int summary_run(run_ctx *c, cJSON *o, int status_code, const char *status_msg)
+{
+    char hash[32];
+    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)sd_world_state_hash(c->w));
+    int bad = add_str(o, "scenario", c->s->path) | add_str(o, "status", status_msg) |
+              add_num(o, "exit_code", status_code) | add_num(o, "simulated_time_s", sd_world_time(c->w)) |
+              add_num(o, "steps", (double)sd_world_step_count(c->w)) | add_num(o, "wall_time_s", sd_now() - c->wall0) |
+              add_str(o, "state_hash", hash);
+    if (c->restarted_from)
+        bad |= add_str(o, "restarted_from", c->restarted_from) | add_num(o, "restart_flow_wall_s", c->flow_wall);
+    return bad;
+}
+
+/* how the engine ran (the same bits whatever it says: for the speed) */
+static int summary_engine(run_ctx *c, cJSON *o)
+{
+    static const char *const simd_names[] = {"auto", "scalar", "avx2", "avx512"};
+    int bad = add_str(o, "simd_kernels", simd_names[sd_world_simd_level(c->w)]);
+    /* the front prefetch and, in auto mode, the last trial's verdict and its time on over off */
+    double pf_ratio = 0.0;
+    int pf_trial = -1;
+    const int pf_on = sd_world_prefetch(c->w, &pf_trial, &pf_ratio) == SD_PREFETCH_ON;
+    char pf[64];
+    if (sd_world_definition(c->w)->tuning.prefetch != SD_PREFETCH_AUTO)
+        snprintf(pf, sizeof pf, "%s (set)", pf_on ? "on" : "off");
+    else if (pf_trial < 0)
+        snprintf(pf, sizeof pf, "%s (no trial)", pf_on ? "on" : "off");
+    else
+        snprintf(pf, sizeof pf, "%s (trial: on/off %.3f)", pf_trial ? "on" : "off", pf_ratio);
+    bad |= add_str(o, "front_prefetch", pf);
+    const sd_world_timers tm = sd_world_get_timers(c->w);
+    cJSON *t = add_obj(o, "timers_s");
+    if (!t) return -1;
+    return bad | add_num(t, "rebuild", tm.rebuild) | add_num(t, "contacts", tm.contacts) | add_num(t, "moves", tm.moves) |
+           add_num(t, "checks", tm.checks) | add_num(t, "rebuilds", (double)tm.rebuilds);
+}
+
+static int summary_elements(run_ctx *c, cJSON *o)
+{
+    cJSON *e = add_obj(o, "elements");
+    if (!e) return -1;
+    return add_num(e, "moving_spheres", c->info.n_spheres) | add_num(e, "logs", c->info.n_logs) |
+           add_num(e, "roughness_spheres", c->info.n_rough) | add_num(e, "pipes", c->info.n_pipes) |
+           add_num(e, "triangles", sd_world_triangle_count(c->w)) | add_num(e, "passed", c->n_passed) |
+           add_num(e, "remaining", sd_world_body_count(c->w));
+}
+
+/* a flume run: what the dam holds (P_V, per class, logs), the deposit, the phases, the flow */
+static int summary_trap(run_ctx *c, cJSON *o, sd_run_result *res)
+{
+    const sd_scenario *s = c->s;
+    double per[SD_MAX_CLASSES] = {0}, logs_ratio = 0.0;
+    int n_up = 0;
+    const double pv = sd_trap_ratio(c, per, &logs_ratio, &n_up);
+    res->p_v = pv;
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        res->p_v_class[k] = per[k];
+    res->p_v_logs = logs_ratio;
+    res->n_upstream = n_up;
+    int bad = add_num(o, "trap_ratio", pv) | add_num(o, "capture_limit_s", s->capture_limit);
+    cJSON *cls = cJSON_AddArrayToObject(o, "trap_ratio_class");
+    if (!cls) return -1;
+    for (int k = 0; k < s->n_classes; k++) {
+        cJSON *e = cJSON_CreateObject();
+        if (!e || !cJSON_AddItemToArray(cls, e)) {
+            cJSON_Delete(e);
+            return -1;
+        }
+        bad |= add_num(e, "diameter", s->class_diam[k]) | add_num(e, "p_v", per[k]);
+    }
+    double vt = c->vol_total_logs, vs = 0;
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        vs += c->vol_total_class[k];
+    bad |= add_num(o, "trap_ratio_logs", logs_ratio) | add_num(o, "k_w", vt + vs > 0 ? vt / (vt + vs) : 0.0);
+    cJSON *vol = add_obj(o, "solid_volume_m3");
+    if (!vol) return -1;
+    bad |= add_num(vol, "spheres", vs) | add_num(vol, "logs", vt);
+    /* deposit height at the dam: top of the highest element within the probe length */
+    double dep = 0.0;
+    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
+    for (int i = 0; i < b->n; i++)
+        if (!b->fixed[i] && b->pos[i].x >= s->x_dam - s->water_probe && b->pos[i].x <= sd_trap_plane_x(c))
+            dep = fmax(dep, b->pos[i].z + b->bound_radius[i]);
+    bad |= add_num(o, "deposit_height_at_dam_m", dep);
+    static const char *const phases[3] = {"packing", "flow", "capture"};
+    cJSON *pe = add_obj(o, "phase_end_s"), *pw = add_obj(o, "phase_wall_s");
+    if (!pe || !pw) return -1;
+    for (int k = 0; k < 3; k++)
+        bad |= add_num(pe, phases[k], c->phase_end[k]) | add_num(pw, phases[k], c->phase_wall[k]);
+    if (c->flow_len_done) {
+        cJSON *fl = add_obj(o, "flow_at_1m_before_dam");
+        if (!fl) return -1;
+        bad |= add_num(fl, "t", c->flow_len_time) | add_num(fl, "length_q05_q95_m", c->flow_len) |
+               add_num(fl, "q05_m", c->flow_q05) | add_num(fl, "q95_m", c->flow_q95) | add_num(fl, "front_m", c->flow_front);
+    }
+    return bad;
+}
+
+/* each pipe of the dam: where it is, its peak force (and when), its impulse */
+static int summary_pipes(run_ctx *c, cJSON *o)
+{
+    cJSON *pipes = cJSON_AddArrayToObject(o, "pipes");
+    if (!pipes) return -1;
+    int bad = 0;
+    for (int k = 0; k < c->info.n_pipes; k++) {
+        cJSON *p = cJSON_CreateObject();
+        if (!p || !cJSON_AddItemToArray(pipes, p)) {
+            cJSON_Delete(p);
+            return -1;
+        }
+        const int col = c->info.pipe_is_column[k];
+        bad |= add_num(p, "gid", c->info.pipe_gid[k]) | add_str(p, "kind", col ? "column" : "beam") |
+               add_num(p, col ? "y_m" : "z_axis_m", c->info.pipe_coord[k]) | add_num(p, "peak_force_N", c->pipe_peak[k]) |
+               add_num(p, "peak_time_s", c->pipe_peak_t[k]) | add_num(p, "impulse_Ns", c->pipe_impulse[k]) |
+               add_num(p, "impulse_x_Ns", c->pipe_impulse_vec[k].x);
+    }
+    return bad;
+}
+
+char *sd_output_summary_text(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg)
+{
+    cJSON *o = cJSON_CreateObject();
+    if (!o) return NULL;
+    int bad = summary_run(c, o, status_code, status_msg) | summary_engine(c, o) | summary_elements(c, o);
+    if (c->s->flume_on) bad |= summary_trap(c, o, res) | summary_pipes(c, o);
+    cJSON *par = sd_scenario_params_json(c->s);
+    if (!par || !cJSON_AddItemToObject(o, "parameters", par)) {
+        cJSON_Delete(par);
+        bad = 1;
+    }
+    char *text = bad ? NULL : cJSON_Print(o);
+    cJSON_Delete(o);
+    return text;
+}
+
+void sd_output_summary_free(char *text) { cJSON_free(text); }
+
 int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg)
 {
     char path[1200], tmp[1300];
     snprintf(path, sizeof path, "%s/summary.json", c->dir);
     snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    char *text = sd_output_summary_text(c, res, status_code, status_msg);
+    if (!text) {
+        errno = ENOMEM;
+        return -1;
+    }
     FILE *f = fopen(tmp, "w");
-    if (!f) return -1;
-    const sd_scenario *s = c->s;
-    double per[SD_MAX_CLASSES] = {0}, logs_ratio = 0.0;
-    int n_up = 0;
-    double pv = s->flume_on ? sd_trap_ratio(c, per, &logs_ratio, &n_up) : 0.0;
-    fprintf(f, "{\n  \"scenario\": \"%s\",\n  \"status\": \"%s\",\n  \"exit_code\": %d,\n", s->path, status_msg,
-            status_code);
-    fprintf(f, "  \"simulated_time_s\": %.6f,\n  \"steps\": %ld,\n  \"wall_time_s\": %.3f,\n", sd_world_time(c->w), sd_world_step_count(c->w),
-            sd_now() - c->wall0);
-    fprintf(f, "  \"state_hash\": \"%016llx\",\n", (unsigned long long)sd_world_state_hash(c->w));
-    /* the hand-written kernels this run used (the same bits at every level: for the speed) */
-    static const char *const simd_names[] = {"auto", "scalar", "avx2", "avx512"};
-    fprintf(f, "  \"simd_kernels\": \"%s\",\n", simd_names[sd_world_simd_level(c->w)]);
-    /* the front prefetch (a hint: the same bits either way) and, in auto mode, the last trial's
-     * verdict and its time on over off */
-    double pf_ratio = 0.0;
-    int pf_trial = -1;
-    const int pf_on = sd_world_prefetch(c->w, &pf_trial, &pf_ratio) == SD_PREFETCH_ON;
-    if (sd_world_definition(c->w)->tuning.prefetch != SD_PREFETCH_AUTO)
-        fprintf(f, "  \"front_prefetch\": \"%s (set)\",\n", pf_on ? "on" : "off");
-    else if (pf_trial < 0)
-        fprintf(f, "  \"front_prefetch\": \"%s (no trial)\",\n", pf_on ? "on" : "off");
-    else
-        fprintf(f, "  \"front_prefetch\": \"%s (trial: on/off %.3f)\",\n", pf_trial ? "on" : "off", pf_ratio);
-    if (c->restarted_from) {
-        fprintf(f, "  \"restarted_from\": \"");
-        for (const char *q = c->restarted_from; *q; q++)
-            fprintf(f, *q == '"' || *q == '\\' ? "\\%c" : "%c", *q);
-        fprintf(f, "\",\n  \"restart_flow_wall_s\": %.3f,\n", c->flow_wall);
+    if (!f) {
+        cJSON_free(text);
+        return -1;
     }
-    sd_world_timers tm = sd_world_get_timers(c->w);
-    fprintf(f,
-            "  \"timers_s\": {\"rebuild\": %.3f, \"contacts\": %.3f, \"moves\": %.3f, \"checks\": %.3f, "
-            "\"rebuilds\": %ld},\n",
-            tm.rebuild, tm.contacts, tm.moves, tm.checks, tm.rebuilds);
-    fprintf(f,
-            "  \"elements\": {\"moving_spheres\": %d, \"logs\": %d, \"roughness_spheres\": %d, \"pipes\": %d, "
-            "\"triangles\": %d, \"passed\": %d, \"remaining\": %d},\n",
-            c->info.n_spheres, c->info.n_logs, c->info.n_rough, c->info.n_pipes, sd_world_triangle_count(c->w),
-            c->n_passed, sd_world_body_count(c->w));
-    if (s->flume_on) {
-        res->p_v = pv;
-        for (int k = 0; k < SD_MAX_CLASSES; k++)
-            res->p_v_class[k] = per[k];
-        res->p_v_logs = logs_ratio;
-        res->n_upstream = n_up;
-        fprintf(f, "  \"trap_ratio\": %.6f,\n  \"capture_limit_s\": %.3f,\n  \"trap_ratio_class\": [", pv,
-                s->capture_limit);
-        for (int k = 0; k < s->n_classes; k++)
-            fprintf(f, "%s{\"diameter\": %g, \"p_v\": %.6f}", k ? ", " : "", s->class_diam[k], per[k]);
-        double vt = c->vol_total_logs, vs = 0;
-        for (int k = 0; k < SD_MAX_CLASSES; k++)
-            vs += c->vol_total_class[k];
-        fprintf(f,
-                "],\n  \"trap_ratio_logs\": %.6f,\n  \"k_w\": %.6f,\n  \"solid_volume_m3\": {\"spheres\": %.9e, "
-                "\"logs\": %.9e},\n",
-                logs_ratio, vt + vs > 0 ? vt / (vt + vs) : 0.0, vs, vt);
-        /* deposit height at the dam: top of the highest element within the probe length */
-        double dep = 0.0;
-        const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
-        for (int i = 0; i < b->n; i++)
-            if (!b->fixed[i] && b->pos[i].x >= s->x_dam - s->water_probe && b->pos[i].x <= sd_trap_plane_x(c))
-                dep = fmax(dep, b->pos[i].z + b->bound_radius[i]);
-        fprintf(f, "  \"deposit_height_at_dam_m\": %.5f,\n", dep);
-        fprintf(f, "  \"phase_end_s\": {\"packing\": %.4f, \"flow\": %.4f, \"capture\": %.4f},\n", c->phase_end[0],
-                c->phase_end[1], c->phase_end[2]);
-        fprintf(f, "  \"phase_wall_s\": {\"packing\": %.2f, \"flow\": %.2f, \"capture\": %.2f},\n", c->phase_wall[0],
-                c->phase_wall[1], c->phase_wall[2]);
-        if (c->flow_len_done)
-            fprintf(f,
-                    "  \"flow_at_1m_before_dam\": {\"t\": %.4f, \"length_q05_q95_m\": %.4f, \"q05_m\": %.4f, "
-                    "\"q95_m\": %.4f, \"front_m\": %.4f},\n",
-                    c->flow_len_time, c->flow_len, c->flow_q05, c->flow_q95, c->flow_front);
-        fprintf(f, "  \"pipes\": [\n");
-        for (int k = 0; k < c->info.n_pipes; k++)
-            fprintf(f,
-                    "    {\"gid\": %d, \"kind\": \"%s\", \"%s\": %.4f, \"peak_force_N\": %.6e, \"peak_time_s\": %.5f, "
-                    "\"impulse_Ns\": %.6e, \"impulse_x_Ns\": %.6e}%s\n",
-                    c->info.pipe_gid[k], c->info.pipe_is_column[k] ? "column" : "beam",
-                    c->info.pipe_is_column[k] ? "y_m" : "z_axis_m", c->info.pipe_coord[k], c->pipe_peak[k],
-                    c->pipe_peak_t[k], c->pipe_impulse[k], c->pipe_impulse_vec[k].x,
-                    k + 1 < c->info.n_pipes ? "," : "");
-        fprintf(f, "  ],\n");
-    }
-    sd_scenario_echo_json(s, f);
-    fprintf(f, "\n}\n");
+    fputs(text, f);
+    fputc('\n', f);
+    cJSON_free(text);
     int bad = ferror(f);
     if (fclose(f) || bad || rename(tmp, path)) { /* (no half-written summary left behind) */
         const int e = errno;

@@ -7,7 +7,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <cjson/cJSON.h>
+
 #include "core/hash.h"
+#include "core/nearest.h"
+#include "core/roff.h"
 #include "core/vmath.h"
 #include "yaml_tree.h"
 
@@ -369,6 +373,30 @@ static int is_section(const char *prefix)
     return 0;
 }
 
+/* " (did you mean 'KEY'?)" for an unknown key near a known one (a key, a section or
+ * "elements"), else "" */
+static const char *did_you_mean(const char *key, char *buf, size_t n)
+{
+    const char *cand[2 * N_PARAMS + 1];
+    char sections[N_PARAMS][32];
+    size_t nc = 0;
+    for (int i = 0; i < N_PARAMS; i++) {
+        cand[nc++] = params[i].key;
+        const char *dot = strchr(params[i].key, '.');
+        if (dot && (size_t)(dot - params[i].key) < sizeof sections[0]) {
+            snprintf(sections[i], sizeof sections[0], "%.*s", (int)(dot - params[i].key), params[i].key);
+            cand[nc++] = sections[i];
+        }
+    }
+    cand[nc++] = "elements";
+    const char *best = sd_nearest_word(key, cand, nc);
+    if (best)
+        snprintf(buf, n, " (did you mean '%s'?)", best);
+    else
+        buf[0] = 0;
+    return buf;
+}
+
 /* Element list entry keys. */
 static const char *elem_keys[] = {"type",  "radius", "diameter", "length", "density",  "position", "velocity",
                                   "omega", "axis",   "fixed",    "tag",    "vertices", "group",    NULL};
@@ -398,7 +426,11 @@ static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
     else if (!strcmp(t->value, "triangle"))
         d.type = 2;
     else {
-        report(e, t->line, t->col, "elements.type: unknown element type '%s'%s", t->value, "");
+        static const char *const types[] = {"sphere", "cylinder", "triangle"};
+        const char *near = sd_nearest_word(t->value, types, 3);
+        char hint[64] = " (sphere, cylinder or triangle)";
+        if (near) snprintf(hint, sizeof hint, " (did you mean '%s'?)", near);
+        report(e, t->line, t->col, "elements.type: unknown element type '%s'%s", t->value, hint);
         return;
     }
     int errs = e->errors;
@@ -409,7 +441,10 @@ static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
         for (int j = 0; elem_keys[j]; j++)
             known |= !strcmp(elem_keys[j], k);
         if (!known) {
-            report(e, n->key_line[i], n->key_col[i], "elements: unknown key '%s'%s", k, "");
+            const char *near = sd_nearest_word(k, elem_keys, sizeof elem_keys / sizeof elem_keys[0] - 1);
+            char hint[80] = "";
+            if (near) snprintf(hint, sizeof hint, " (did you mean '%s'?)", near);
+            report(e, n->key_line[i], n->key_col[i], "elements: unknown key '%s'%s", k, hint);
             continue;
         }
         double x;
@@ -510,7 +545,8 @@ static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefi
             else
                 walk(e, s, v, key);
         } else {
-            report(e, map->key_line[i], map->key_col[i], "unknown key '%s'%s", key, "");
+            char hint[128];
+            report(e, map->key_line[i], map->key_col[i], "unknown key '%s'%s", key, did_you_mean(key, hint, sizeof hint));
         }
     }
 }
@@ -570,12 +606,14 @@ static void validate(ectx *e, sd_scenario *s, const sd_ynode *root)
     }
 }
 
-int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overrides, int n_overrides, FILE *err)
+/* the scenario from its YAML text (text != NULL) or file */
+static int load(sd_scenario *s, const char *path, const char *text, const char *const *overrides, int n_overrides,
+                FILE *err)
 {
     sd_scenario_default(s);
     snprintf(s->path, sizeof s->path, "%s", path);
     char msg[1024];
-    sd_ynode *root = sd_yaml_load(path, msg, sizeof msg);
+    sd_ynode *root = text ? sd_yaml_parse_string(text, path, msg, sizeof msg) : sd_yaml_load(path, msg, sizeof msg);
     if (!root) {
         fprintf(err, "%s\n", msg);
         return -1;
@@ -604,7 +642,8 @@ int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overri
         key[eq - overrides[i]] = 0;
         const sd_param *p = find_param(key);
         if (!p) {
-            report(&eo, i + 1, 1, "unknown key '%s'%s", key, "");
+            char hint[128];
+            report(&eo, i + 1, 1, "unknown key '%s'%s", key, did_you_mean(key, hint, sizeof hint));
             continue;
         }
         set_param(&eo, s, p, NULL, eq + 1, i + 1, (int)(eq - overrides[i]) + 2);
@@ -622,6 +661,17 @@ int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overri
         return -1;
     }
     return 0;
+}
+
+int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overrides, int n_overrides, FILE *err)
+{
+    return load(s, path, NULL, overrides, n_overrides, err);
+}
+
+int sd_scenario_load_string(sd_scenario *s, const char *text, const char *name, const char *const *overrides,
+                            int n_overrides, FILE *err)
+{
+    return load(s, name, text, overrides, n_overrides, err);
 }
 
 static const char *type_name(ptype t)
@@ -680,15 +730,40 @@ static void print_value(FILE *f, const sd_scenario *s, const sd_param *p)
     }
 }
 
-void sd_scenario_print_params(FILE *f, int md)
+void sd_scenario_print_params(FILE *f, int format)
 {
     sd_scenario d;
     sd_scenario_default(&d);
-    if (md) {
-        fprintf(f, "| key | type | unit | default | range | meaning |\n|---|---|---|---|---|---|\n");
-    }
+    const int md = format == SD_PARAMS_MARKDOWN, roff = format == SD_PARAMS_ROFF;
+    if (md) fprintf(f, "| key | type | unit | default | range | meaning |\n|---|---|---|---|---|---|\n");
     for (int i = 0; i < N_PARAMS; i++) {
         const sd_param *p = &params[i];
+        if (roff) {
+            /* .TP, the key in bold, then its type, unit, default and range, and its meaning */
+            char val[512], range[96] = "";
+            FILE *m = fmemopen(val, sizeof val, "w");
+            if (m) {
+                print_value(m, &d, p);
+                fclose(m);
+            } else {
+                val[0] = 0;
+            }
+            if (p->type != P_BOOL && p->type != P_VEC3)
+                snprintf(range, sizeof range, ", range %s%g, %g]", p->strict_min ? "(" : "[", p->min, p->max);
+            fputs(".TP\n.B ", f);
+            sd_roff_puts(f, p->key);
+            fputs("\n", f);
+            sd_roff_puts(f, type_name(p->type));
+            fputs(", ", f);
+            sd_roff_puts(f, p->unit);
+            fputs(", default ", f);
+            sd_roff_puts(f, val);
+            sd_roff_puts(f, range);
+            fputs(": ", f);
+            sd_roff_puts(f, p->doc);
+            fputs("\n", f);
+            continue;
+        }
         if (md)
             fprintf(f, "| `%s` | %s | %s | `", p->key, type_name(p->type), p->unit);
         else
@@ -702,15 +777,48 @@ void sd_scenario_print_params(FILE *f, int md)
     }
 }
 
-void sd_scenario_echo_json(const sd_scenario *s, FILE *f)
+int sd_scenario_param_count(void) { return N_PARAMS; }
+
+const char *sd_scenario_param_key(int i) { return i >= 0 && i < N_PARAMS ? params[i].key : NULL; }
+
+/* A parameter's value as JSON: numbers at full precision (cJSON prints a double with the
+ * digits that read back to the same double), vectors and lists as arrays. */
+static cJSON *param_json(const sd_scenario *s, const sd_param *p)
 {
-    fprintf(f, "  \"parameters\": {\n");
-    for (int i = 0; i < N_PARAMS; i++) {
-        fprintf(f, "    \"%s\": ", params[i].key);
-        print_value(f, s, &params[i]);
-        fprintf(f, "%s\n", i + 1 < N_PARAMS ? "," : "");
+    const char *base = (const char *)s;
+    switch (p->type) {
+    case P_DOUBLE:
+        return cJSON_CreateNumber(*(const double *)(base + p->off));
+    case P_INT:
+        return cJSON_CreateNumber(p->off == OFF(seed) ? (double)*(const long *)(base + p->off)
+                                                      : (double)*(const int *)(base + p->off));
+    case P_BOOL:
+        return cJSON_CreateBool(*(const int *)(base + p->off));
+    case P_VEC3: {
+        const sd_vec3 *v = (const sd_vec3 *)(base + p->off);
+        const double xyz[3] = {v->x, v->y, v->z};
+        return cJSON_CreateDoubleArray(xyz, 3);
     }
-    fprintf(f, "  }");
+    case P_DLIST:
+        return cJSON_CreateDoubleArray((const double *)(base + p->off), *(const int *)(base + p->count_off));
+    case P_ILIST:
+        return cJSON_CreateIntArray((const int *)(base + p->off), *(const int *)(base + p->count_off));
+    }
+    return cJSON_CreateNull();
+}
+
+cJSON *sd_scenario_params_json(const sd_scenario *s)
+{
+    cJSON *o = cJSON_CreateObject();
+    for (int i = 0; o && i < N_PARAMS; i++) {
+        cJSON *v = param_json(s, &params[i]);
+        if (!cJSON_AddItemToObject(o, params[i].key, v)) {
+            cJSON_Delete(v);
+            cJSON_Delete(o);
+            return NULL;
+        }
+    }
+    return o;
 }
 
 /* Keys that act only from the capture phase on (see scenario.h). dam.pipe_diameter and dam.on

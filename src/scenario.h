@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #include "sabodem.h"
+#include "sabodem_run.h"
 
 #define SD_MAX_CLASSES 8
 #define SD_MAX_IDS 64
@@ -21,7 +22,7 @@ typedef struct {
     int line;
 } sd_elem_def;
 
-typedef struct {
+typedef struct sd_scenario {
     char path[1024];
     sd_world_def world;
     double duration; /* s */
@@ -76,11 +77,21 @@ void sd_scenario_default(sd_scenario *s);
 /* Load a scenario file and apply "key=value" overrides. Errors are printed to err as
  * file:line:col: message (several collected); returns 0 on success. */
 int sd_scenario_load(sd_scenario *s, const char *path, const char *const *overrides, int n_overrides, FILE *err);
+/* The same from YAML text; name stands for the file in its messages (and s->path). */
+int sd_scenario_load_string(sd_scenario *s, const char *text, const char *name, const char *const *overrides,
+                            int n_overrides, FILE *err);
 void sd_scenario_free(sd_scenario *s);
-/* Print the parameter table (markdown when md != 0). */
-void sd_scenario_print_params(FILE *f, int md);
-/* Echo the effective values as JSON object members (for the run summary). */
-void sd_scenario_echo_json(const sd_scenario *s, FILE *f);
+/* Print the parameter table: as text (`sabodem params`), markdown (docs/scenario.md) or roff
+ * (the man page's KEYS section). */
+enum { SD_PARAMS_TEXT = 0, SD_PARAMS_MARKDOWN = 1, SD_PARAMS_ROFF = 2 };
+void sd_scenario_print_params(FILE *f, int format);
+/* The keys, in table order: how many, and the i-th (NULL out of range). */
+int sd_scenario_param_count(void);
+const char *sd_scenario_param_key(int i);
+/* The effective values as a JSON object, key by key (the run summary's "parameters"); NULL
+ * when out of memory. The caller owns it (cJSON_Delete). */
+struct cJSON;
+struct cJSON *sd_scenario_params_json(const sd_scenario *s);
 /* 1 for the keys that act only from the capture phase on: the dam layout (dam.l_h, dam.l_v,
  * dam.top_beam, dam.columns, dam.beams) and the capture-phase settings (phases.capture_limit,
  * quiet_time, ke_fraction, water.probe, water.h_d_floating). Runs that differ only in these

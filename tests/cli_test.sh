@@ -27,12 +27,37 @@ expect good-check 0 "ok \(1 elements" check "$tmp/good.yaml"
 expect good-run 0 "done" run "$tmp/good.yaml" -o "$tmp/good-out"
 [ -f "$tmp/good-out/summary.json" ] && pass=$((pass + 1)) || { echo "FAIL good-run: no summary.json"; fail=$((fail + 1)); }
 
+# summary.json is JSON whatever the scenario's file name holds (a quote, a backslash, a
+# newline): read back, it gives the name, the steps and a parameter exactly
+odd="$tmp/we\"ird\\na
+me.yaml"
+printf '%s' "$base" > "$odd"
+expect odd-name 0 "done" run "$odd" -o "$tmp/odd-out"
+SD_ODD="$odd" /usr/bin/python3 -c "
+import json, os, sys
+d = json.load(open('$tmp/odd-out/summary.json'))
+sys.exit(not (d['scenario'] == os.environ['SD_ODD'] and d['steps'] == 100 and d['parameters']['solver.dt'] == 1e-5
+              and d['parameters']['gravity'] == [0, 0, -9.81] and d['status'] == 'finished'))" \
+  && pass=$((pass + 1)) || { echo "FAIL odd-name: summary.json not valid or not exact"; cat "$tmp/odd-out/summary.json"; fail=$((fail + 1)); }
+
 printf '%s  - {type: sphere, radius: -0.01, position: [0, 0, 0]}\n' "$base" > "$tmp/neg.yaml"
 expect negative-radius 2 "neg.yaml:5:[0-9]+: elements.radius: expected a positive number" run "$tmp/neg.yaml" -o "$tmp/neg-out"
 [ ! -e "$tmp/neg-out" ] && pass=$((pass + 1)) || { echo "FAIL negative-radius left an output directory"; fail=$((fail + 1)); }
 
 printf 'solver: {dt: 1.0e-5, durration: 1}\n' > "$tmp/key.yaml"
-expect unknown-key 2 "key.yaml:1:[0-9]+: unknown key 'solver.durration'" check "$tmp/key.yaml"
+
+# "did you mean": the nearest key, section, element key or type, command, option
+printf 'solvr: {dt: 1.0e-5}\nelements:\n  - {type: sphre, radius: 0.01}\n  - {type: sphere, radus: 0.01}\n' > "$tmp/near.yaml"
+expect near-key 2 "key.yaml:1:22: unknown key 'solver.durration' \(did you mean 'solver.duration'\?\)" check "$tmp/key.yaml"
+expect near-section 2 "near.yaml:1:1: unknown key 'solvr' \(did you mean 'solver'\?\)" check "$tmp/near.yaml"
+expect near-type 2 "near.yaml:3:12: elements.type: unknown element type 'sphre' \(did you mean 'sphere'\?\)" check "$tmp/near.yaml"
+expect near-elem-key 2 "near.yaml:4:20: elements: unknown key 'radus' \(did you mean 'radius'\?\)" check "$tmp/near.yaml"
+expect near-set 2 "--set:1:1: unknown key 'contact.kn' \(did you mean 'contact.k_n'\?\)" check "$tmp/good.yaml" --set contact.kn=5
+expect near-none 2 "unknown key 'zzz'$" check "$tmp/good.yaml" --set zzz=5
+expect near-command 2 "unknown command 'chek' \(did you mean 'check'\?\)" chek "$tmp/good.yaml"
+expect near-option 2 "sabodem run: unknown or incomplete option '--thread' \(did you mean '--threads'\?\)" run "$tmp/good.yaml" --thread 2
+expect near-sweep-option 2 "unknown or incomplete option '--dryrun' \(did you mean '--dry-run'\?\)" sweep x.yaml --dryrun
+expect near-abbrev 2 "unknown or incomplete option '--mark' \(did you mean '--markdown'\?\)" params --mark
 
 printf 'solver: {dt: fast}\n' > "$tmp/type.yaml"
 expect wrong-type 2 "type.yaml:1:[0-9]+: solver.dt: expected a number" check "$tmp/type.yaml"
@@ -156,6 +181,45 @@ png_ok=$?
 left=$(ls "${TMPDIR:-/tmp}" | grep -c "^sabodem-design-")
 if [ "$png_ok" -eq 0 ] && [ "$left" -eq 0 ]; then pass=$((pass + 1)); else
   echo "FAIL check --png: exit $code, $left temporary directories left"; cat "$tmp/design.log"; fail=$((fail + 1)); fi
+
+# a flume run's summary: valid JSON with the trap ratio, its classes, the pipes and the parameters
+/usr/bin/python3 -c "
+import json, sys
+d = json.load(open('$tmp/png/summary.json'))
+ok = 0 <= d['trap_ratio'] <= 1 and len(d['trap_ratio_class']) == len(d['parameters']['spheres.diameters'])
+ok = ok and len(d['pipes']) == d['elements']['pipes'] > 0 and all(p['peak_force_N'] >= 0 for p in d['pipes'])
+ok = ok and d['parameters']['flume.x_dam'] == 0.8 and d['capture_limit_s'] == 0.05 and len(d['state_hash']) == 16
+sys.exit(not ok)" && pass=$((pass + 1)) || { echo "FAIL flume summary.json"; cat "$tmp/png/summary.json"; fail=$((fail + 1)); }
+
+# the man page and the bash completion come from the same tables as params and --help: every
+# key and every option of every command is in the man page (roff-escaped); the completion
+# offers every key after --set, a command's options after '-', the commands first
+"$bin" params | awk '{print $1}' > "$tmp/keys"
+[ "$(wc -l < "$tmp/keys")" -gt 50 ] || { echo "FAIL params lists too few keys"; fail=$((fail + 1)); }
+"$bin" man > "$tmp/sabodem.1"
+man_ok=1
+while read -r k; do grep -qxF ".B $(printf '%s' "$k" | sed 's/-/\\-/g')" "$tmp/sabodem.1" || { echo "man: no $k"; man_ok=0; }; done < "$tmp/keys"
+for c in run check sweep params man completion; do
+  "$bin" $c --help | head -1 | grep -q "usage: sabodem $c" || { echo "no help for $c"; man_ok=0; }
+  grep -qxF ".B $c" "$tmp/sabodem.1" || { echo "man: no command $c"; man_ok=0; }
+done
+for o in --output --set --threads --seed --checkpoint-at --restart --parallel --dry-run --no-branch --markdown; do
+  grep -qF -- "$(printf '%s' "$o" | sed 's/-/\\-/g')" "$tmp/sabodem.1" || { echo "man: no $o"; man_ok=0; }
+done
+if command -v groff >/dev/null; then groff -k -man -Tutf8 -ww -z "$tmp/sabodem.1" 2>"$tmp/groff.err"; [ -s "$tmp/groff.err" ] && { cat "$tmp/groff.err"; man_ok=0; }; fi
+[ "$man_ok" -eq 1 ] && pass=$((pass + 1)) || { echo "FAIL man page out of step with the tables"; fail=$((fail + 1)); }
+"$bin" completion bash > "$tmp/sabodem.bash"
+complete_words() { # words of the command line being completed (the last one is the word under the cursor)
+  bash -c 'compopt() { :; }; source "$1"; shift; COMP_WORDS=("$@"); COMP_CWORD=$(($# - 1)); _sabodem; printf "%s\n" "${COMPREPLY[@]}"' \
+    _ "$tmp/sabodem.bash" "$@" | sort
+}
+comp_ok=1
+[ "$(complete_words sabodem run x.yaml --set '' | sed 's/=$//')" = "$(sort "$tmp/keys")" ] || { echo "completion: --set keys"; comp_ok=0; }
+[ "$(complete_words sabodem run x.yaml --set solver.d | tr '\n' ' ')" = "solver.dt= solver.duration= " ] || { echo "completion: solver.d"; comp_ok=0; }
+[ "$(complete_words sabodem sweep x.yaml --d)" = "--dry-run" ] || { echo "completion: sweep --d"; comp_ok=0; }
+[ "$(complete_words sabodem ch)" = "check" ] || { echo "completion: ch"; comp_ok=0; }
+[ "$(complete_words sabodem run x.yaml --checkpoint-at '')" = "flow_end" ] || { echo "completion: flow_end"; comp_ok=0; }
+[ "$comp_ok" -eq 1 ] && pass=$((pass + 1)) || { echo "FAIL bash completion"; fail=$((fail + 1)); }
 
 # docs/scenario.md carries the same table the loader checks
 "$bin" params --markdown > "$tmp/params.md"

@@ -1,0 +1,115 @@
+/* The command line's table (commands.h). */
+#include "commands.h"
+
+#include <string.h>
+
+#include "core/nearest.h"
+
+static const app_option run_options[] = {
+    {"-o", "DIR"}, {"--output", "DIR"}, {"--overwrite", NULL}, {"--set", "key=value"}, {"--threads", "N"}, {"--seed", "S"},
+    {"--checkpoint-at", "flow_end"}, {"--restart", "CHECKPOINT"}, {"--help", NULL}, {NULL, NULL}};
+static const app_option check_options[] = {{"--set", "key=value"}, {"--threads", "N"}, {"--seed", "S"},
+                                           {"--png", "OUT.png"}, {"--help", NULL},  {NULL, NULL}};
+static const app_option sweep_options[] = {{"-o", "DIR"},      {"--output", "DIR"},    {"--parallel", "N"},
+                                           {"--dry-run", NULL}, {"--no-branch", NULL}, {"--shard", "U/N"},
+                                           {"--collect", NULL}, {"--emit", "slurm"},   {"--help", NULL},
+                                           {NULL, NULL}};
+static const app_option params_options[] = {{"--markdown", NULL}, {"--help", NULL}, {NULL, NULL}};
+static const app_option man_options[] = {{"--help", NULL}, {NULL, NULL}};
+static const app_option completion_options[] = {{"bash", NULL}, {"--help", NULL}, {NULL, NULL}};
+
+const app_command app_commands[] = {
+    {"run",
+     "sabodem run FILE [-o DIR] [--overwrite] [--set key=value]... [--threads N] [--seed S]\n"
+     "                 [--checkpoint-at flow_end] [--restart CHECKPOINT]",
+     "simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
+     "  -o, --output DIR          the output directory (refused if it holds another run's files)\n"
+     "  --overwrite               delete another run's files in DIR first\n"
+     "  --set key=value           override a scenario key (sabodem params lists them)\n"
+     "  --threads N               threads (solver.threads; 0: all cores)\n"
+     "  --seed S                  the random seed (solver.seed)\n"
+     "  --checkpoint-at flow_end  also write DIR/flow_end.ckpt when the flow reaches the dam\n"
+     "  --restart CHECKPOINT      continue from such a checkpoint (the capture phase only; FILE may\n"
+     "                            differ from the writer's scenario only in the dam layout and\n"
+     "                            capture-phase keys, docs/sweep.md) or from a periodic one\n"
+     "                            (output.checkpoint_interval: DIR/checkpoint_<step>.ckpt, the same\n"
+     "                            scenario, any phase, the same bits as a run never stopped)",
+     run_options},
+    {"check", "sabodem check FILE [--set key=value]... [--threads N] [--seed S] [--png OUT.png]",
+     "validate the scenario, build its scene without running and describe it: the debris\n"
+     "(counts, solid volume, K_w), the dam (axes, clear gaps, l_H/d_max, l_V/d_max)\n"
+     "  --png OUT.png  also draw the dam's front view (with the largest boulder and a log to\n"
+     "                 scale) and a side view of the initial state (python3-matplotlib)",
+     check_options},
+    {"sweep",
+     "sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch]\n"
+     "                   [--shard U/N | --collect | --emit slurm]",
+     "run a matrix of cases x seeds in parallel (resumable), with CSV and figures; runs that\n"
+     "differ only in the dam layout share one packing + flow (docs/sweep.md). Under mpirun the\n"
+     "ranks share the runs (one at a time each unless --parallel), rank 0 collects.\n"
+     "  --parallel N  processes at once (default: the sweep file's, else the cores; 1 per rank\n"
+     "                under mpirun)\n"
+     "  --dry-run     list the runs and shared flows, and what is already done\n"
+     "  --no-branch   every run packs and flows on its own\n"
+     "  --shard U/N   run only work unit U, U+N, U+2N, ... (a shared flow and its runs, or a\n"
+     "                run); no results.csv (--collect writes it)\n"
+     "  --collect     run nothing: results.csv, cases.csv and figures from the finished runs\n"
+     "  --emit slurm  write DIR/slurm/: a job array (one task per unit) and a collect job",
+     sweep_options},
+    {"params", "sabodem params [--markdown]", "list every scenario key with its type, unit, default and range",
+     params_options},
+    {"man", "sabodem man", "print this manual page (roff; man -l <(sabodem man))", man_options},
+    {"completion", "sabodem completion bash",
+     "print the bash completion (source <(sabodem completion bash)): commands, options, scenario keys",
+     completion_options},
+};
+const int app_n_commands = (int)(sizeof app_commands / sizeof app_commands[0]);
+
+const app_command *app_command_find(const char *name)
+{
+    for (int k = 0; k < app_n_commands; k++)
+        if (!strcmp(name, app_commands[k].name)) return &app_commands[k];
+    return NULL;
+}
+
+void app_print_usage(FILE *f)
+{
+    for (int k = 0; k < app_n_commands; k++)
+        fprintf(f, "%s %s\n", k ? "      " : "usage:", app_commands[k].usage);
+    fprintf(f, "       sabodem --version\n\n");
+    for (int k = 0; k < app_n_commands; k++) {
+        const char *h = app_commands[k].help;
+        fprintf(f, "%-10s ", app_commands[k].name);
+        for (; *h; h++) { /* (the help's lines indented under the name) */
+            fputc(*h, f);
+            if (*h == '\n') fputs("           ", f);
+        }
+        fputc('\n', f);
+    }
+    fprintf(f, "\n"
+               "sabodem COMMAND --help shows one command.\n"
+               "environment (how the engine runs; the results are the same bits whatever they say):\n"
+               "  SD_SIMD=scalar|avx2|avx512|auto   the hand-written kernels' width (auto: the CPU's best,\n"
+               "                                    AVX2 on AMD CPUs)\n"
+               "  SD_PREFETCH=on|off|auto           the contact pass's prefetch (auto: tried during the run)\n"
+               "  OMP_NUM_THREADS                   threads when --threads is not given\n"
+               "  SABODEM_SCRIPTS                   where the plotting scripts are, if not beside the program\n");
+}
+
+const char *app_did_you_mean(const app_command *cmd, const char *word, char *buf, size_t n)
+{
+    const char *cand[32];
+    size_t nc = 0;
+    if (cmd)
+        for (const app_option *o = cmd->options; o->name && nc < 32; o++)
+            cand[nc++] = o->name;
+    else
+        for (int k = 0; k < app_n_commands && nc < 32; k++)
+            cand[nc++] = app_commands[k].name;
+    const char *best = sd_nearest_word(word, cand, nc);
+    if (best)
+        snprintf(buf, n, " (did you mean '%s'?)", best);
+    else
+        buf[0] = 0;
+    return buf;
+}
