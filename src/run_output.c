@@ -29,9 +29,14 @@ void sd_output_series_row(run_ctx *c)
     for (int k = 0; k < SD_MAX_CLASSES; k++)
         up += cls[k];
     double pv = c->s->flume_on ? sd_trap_ratio(c, NULL, NULL, &n_up) : 0.0;
-    fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d\n", sd_world_time(c->w), sd_run_phase_name(c->phase),
-            sd_world_body_count(c->w) ? sd_trap_front_x(c) : 0.0, up, sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w),
-            c->dam_force_now, pv, c->h_d, sd_world_body_count(c->w), c->n_passed);
+    /* what the debris does to the bed: the load on the bed roughness (the fixed spheres) and on
+     * the bed's triangles */
+    sd_vec3 rough, tri_bed;
+    sd_trap_fixed_loads(c, &rough, &tri_bed);
+    fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d,%.6e,%.6e,%.6e,%.6e\n", sd_world_time(c->w),
+            sd_run_phase_name(c->phase), sd_world_body_count(c->w) ? sd_trap_front_x(c) : 0.0, up,
+            sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w), c->dam_force_now, pv, c->h_d,
+            sd_world_body_count(c->w), c->n_passed, rough.x, rough.z, tri_bed.x, tri_bed.z);
     if (ferror(c->series)) out_failed(c, "series.csv", errno);
 }
 
@@ -216,13 +221,17 @@ int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const cha
                 "],\n  \"trap_ratio_logs\": %.6f,\n  \"k_w\": %.6f,\n  \"solid_volume_m3\": {\"spheres\": %.9e, "
                 "\"logs\": %.9e},\n",
                 logs_ratio, vt + vs > 0 ? vt / (vt + vs) : 0.0, vs, vt);
-        /* deposit height at the dam: top of the highest element within the probe length */
-        double dep = 0.0;
-        const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
-        for (int i = 0; i < b->n; i++)
-            if (!b->fixed[i] && b->pos[i].x >= s->x_dam - s->water_probe && b->pos[i].x <= sd_trap_plane_x(c))
-                dep = fmax(dep, b->pos[i].z + b->bound_radius[i]);
-        fprintf(f, "  \"deposit_height_at_dam_m\": %.5f,\n", dep);
+        /* the deposit at the dam: the highest true top within the probe length; floating logs apart */
+        double dep, float_top;
+        int n_float;
+        sd_trap_deposit(c, &dep, &n_float, &float_top);
+        fprintf(f, "  \"deposit_height_at_dam_m\": %.5f,\n  \"floating_at_dam\": {\"count\": %d, \"top_m\": %.5f},\n",
+                dep, n_float, float_top);
+        fprintf(f,
+                "  \"packing_end\": {\"t_s\": %.4f, \"ended_by\": \"%s\", \"speed_max_m_s\": %.6e, "
+                "\"speed_p99_m_s\": %.6e, \"speed_mean_m_s\": %.6e},\n",
+                c->phase_end[PH_PACK], c->pack_at_rest ? "rest" : "time limit", c->pack_speed[0], c->pack_speed[1],
+                c->pack_speed[2]);
         fprintf(f, "  \"phase_end_s\": {\"packing\": %.4f, \"flow\": %.4f, \"capture\": %.4f},\n", c->phase_end[0],
                 c->phase_end[1], c->phase_end[2]);
         fprintf(f, "  \"phase_wall_s\": {\"packing\": %.2f, \"flow\": %.2f, \"capture\": %.2f},\n", c->phase_wall[0],
