@@ -140,10 +140,11 @@ int sd_world_add_triangle(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, int grou
 sd_status sd_world_set_group_active(sd_world *w, int group, int active);
 sd_status sd_world_remove_body(sd_world *w, int gid);
 
-/* The largest stable time step for normal stiffness k_n (N/m) and the smallest moving mass
- * m_min (kg): 8 steps per half period of the stiffest contact (docs/model.md). INFINITY when
- * there is no moving mass. */
-double sd_stable_dt_max(double k_n, double m_min);
+/* The largest stable time step for the springs k_n, k_s (N/m) and the smallest moving sphere
+ * mass m_min (kg): 8 steps per half period of the stiffest mode of a contact between two such
+ * spheres, the normal one (ω_n² = k_n/m*) or the tangential–rotational one (ω_t² = (7/2) k_s/m*),
+ * m* = m_min/2 (docs/physics.md §1). INFINITY when there is no moving mass. */
+double sd_stable_dt_max(double k_n, double k_s, double m_min);
 /* Validate settings against the elements present (time-step stability); called by step. */
 sd_status sd_world_check(const sd_world *w);
 sd_status sd_world_step(sd_world *w);

@@ -237,10 +237,16 @@ int sd_build_log_count(const sd_scenario *s)
 {
     if (s->log_count >= 0) return s->log_count;
     if (s->log_kw <= 0.0) return 0;
-    double vs = 0.0;
-    for (int k = 0; k < s->n_classes; k++)
-        vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
-    double vlog = M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
+    double vs = 0.0, vlog;
+    if (s->log_kw_volume > 0.0) {
+        /* the paper's count: V its sample's measured volume (6 l), a log counted as d^2 L */
+        vs = s->log_kw_volume;
+        vlog = s->log_diam * s->log_diam * s->log_length;
+    } else {
+        for (int k = 0; k < s->n_classes; k++)
+            vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+        vlog = M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
+    }
     /* K_w = V_t / (V + V_t)  =>  V_t = K_w V / (1 - K_w) */
     return (int)lround(s->log_kw * vs / (1.0 - s->log_kw) / vlog);
 }

@@ -24,7 +24,7 @@ sd_fluid_params sd_fluid_params_default(double slope_rad)
 double sd_fluid_discharge(double U, double h, sd_fluid_phase phase, double h_D, int n)
 {
     double top;
-    if (phase == SD_FLUID_FLOW)
+    if (phase == SD_FLUID_FLOW || phase == SD_FLUID_UNIFORM)
         top = h;
     else if (phase == SD_FLUID_CAPTURE)
         top = h_D >= h ? h_D : h;
@@ -36,7 +36,9 @@ double sd_fluid_discharge(double U, double h, sd_fluid_phase phase, double h_D, 
     for (int k = 0; k <= n; k++) {
         double z = k == n ? top : k * dz; /* the last node exactly at the surface */
         double u = 0.0;
-        if (phase == SD_FLUID_FLOW)
+        if (phase == SD_FLUID_UNIFORM)
+            u = U;
+        else if (phase == SD_FLUID_FLOW)
             sd_fluid_speed_flow(U, h, z, &u);
         else
             sd_fluid_speed_capture(U, h, h_D, z, &u);

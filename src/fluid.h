@@ -25,15 +25,17 @@ typedef struct {
     sd_vec3 flow_dir;   /* unit downstream direction, parallel to the bed; flume frame (1,0,0) */
     sd_vec3 bed_normal; /* unit bed normal; flume frame (0,0,1) */
     double z_bed;       /* bed offset along bed_normal, m (0 in the flume frame) */
-    sd_vec3 gravity;    /* gravity vector, m/s^2; flume frame 9.81 (sinθ, 0, −cosθ).
-                           Buoyancy f_B = −ρ V gravity (opposite gravity, world vertical). */
+    sd_vec3 gravity;    /* the gravity the buoyancy opposes, m/s^2: f_B = −ρ V gravity. The world's
+                           gravity (vertical, the paper; flume frame 9.81 (sinθ, 0, −cosθ)), or
+                           its part normal to the bed (water.buoyancy: bed_normal) */
 } sd_fluid_params;
 
 /* Phase of the velocity profile applied to an element. */
 typedef enum {
     SD_FLUID_NONE = 0,   /* no fluid force (packing) */
     SD_FLUID_FLOW = 1,   /* eq 50, surface at h */
-    SD_FLUID_CAPTURE = 2 /* eqs 51–53, surface at h_D (>= h) */
+    SD_FLUID_CAPTURE = 2, /* eqs 51–53, surface at h_D (>= h) */
+    SD_FLUID_UNIFORM = 3  /* U at every depth, surface at h (U = 0: still water) */
 } sd_fluid_phase;
 
 /* An element as the fluid sees it. */
@@ -114,6 +116,13 @@ static inline int sd_fluid_speed(const sd_fluid_params *p, sd_fluid_phase phase,
         return sd_fluid_speed_flow(p->U, p->h, z, u);
     case SD_FLUID_CAPTURE:
         return sd_fluid_speed_capture(p->U, p->h, h_D, z, u);
+    case SD_FLUID_UNIFORM:
+        if (!(p->h > 0.0) || !(z <= p->h)) { /* above the surface */
+            *u = 0.0;
+            return 0;
+        }
+        *u = p->U;
+        return 1;
     case SD_FLUID_NONE:
     default:
         *u = 0.0;

@@ -20,23 +20,31 @@
 #endif
 
 /* The fluid forces of the current phase for the coming step: handed to the world, which calls
- * sd_water_forces inside the step; none while packing (the external forces stay as they are). */
+ * sd_water_forces inside the step; none while packing, nor in a scene without a flume unless
+ * water.scene asks for water (the external forces stay as they are). */
 static void set_fluid(run_ctx *c)
 {
     const sd_scenario *s = c->s;
-    if (!s->water_on || c->phase == PH_PACK || c->phase == PH_RUN) {
+    if (!s->water_on || c->phase == PH_PACK || (c->phase == PH_RUN && s->water_scene == SD_SCENE_WATER_NONE)) {
         sd_world_set_external_force_fn(c->w, NULL, NULL);
         return;
     }
-    sd_fluid_params fp = sd_fluid_params_default(s->slope_deg * M_PI / 180.0);
-    fp.U = s->water_u;
+    /* the flume frame; a scene's frame is the world's (x downstream, bed z = 0, normal +z) */
+    sd_fluid_params fp = sd_fluid_params_default(c->phase == PH_RUN ? 0.0 : s->slope_deg * M_PI / 180.0);
+    fp.U = c->phase == PH_RUN && s->water_scene == SD_SCENE_WATER_STILL ? 0.0 : s->water_u;
     fp.h = s->water_h;
     fp.rho = s->water_rho;
     fp.C_D = s->water_cd;
     fp.gravity = sd_world_definition(c->w)->gravity;
+    /* the pond is still water: its buoyancy is vertical whatever water.buoyancy says */
+    if (s->water_buoyancy == SD_BUOYANCY_BED_NORMAL && c->phase != PH_CAPTURE)
+        fp.gravity = v3_scale(fp.bed_normal, v3_dot(fp.gravity, fp.bed_normal));
     c->fluid.fp = fp;
-    c->fluid.xd = s->x_dam;
     c->fluid.capture = c->phase == PH_CAPTURE;
+    c->fluid.uniform = c->phase == PH_RUN && s->water_scene != SD_SCENE_WATER_FLOW;
+    /* the pond's region: from capture_length upstream of the dam face to the trap plane (or the face) */
+    c->fluid.xd = s->water_capture_end == SD_CAPTURE_END_DAM_FACE ? s->x_dam : sd_trap_plane_x(c);
+    c->fluid.x_from = s->water_capture_length > 0.0 ? s->x_dam - s->water_capture_length : -INFINITY;
     c->fluid.h_d = c->h_d;
     sd_world_set_external_force_fn(c->w, sd_water_forces, &c->fluid);
 }
@@ -181,7 +189,8 @@ int sd_run_begin(sd_run *r)
     c->series = fopen(path, mode);
     if (c->series && !c->restarted_from)
         fprintf(c->series,
-                "t,phase,front_x,volume_upstream_m3,kinetic_energy_J,contacts,dam_force_N,p_v,h_d,elements,passed\n");
+                "t,phase,front_x,volume_upstream_m3,kinetic_energy_J,contacts,dam_force_N,p_v,h_d,elements,passed,"
+                "roughness_force_x_N,roughness_force_z_N,bed_force_x_N,bed_force_z_N\n");
     if (s->n_traj > 0) {
         snprintf(path, sizeof path, "%s/trajectories.csv", c->dir);
         c->traj = fopen(path, mode);
@@ -316,7 +325,14 @@ int sd_run_step_once(sd_run *r)
         if (sd_trap_crossing(c->w, sd_trap_plane_x(c))) c->last_cross_time = sd_world_time(c->w);
         if (c->n_passed != before) c->last_cross_time = sd_world_time(c->w);
         if (c->phase == PH_PACK) {
-            if (tph >= s->packing_time - 0.5 * dt) next = PH_FLOW;
+            /* at rest (model.md §6: speeds below ~1 mm/s), or at the time limit */
+            if (tph >= s->packing_time - 0.5 * dt)
+                next = PH_FLOW;
+            else if (s->packing_rest_speed > 0.0 && tph >= s->packing_min_time - 0.5 * dt &&
+                     sd_trap_max_speed(c) <= s->packing_rest_speed) {
+                next = PH_FLOW;
+                c->pack_at_rest = 1;
+            }
         } else if (c->phase == PH_CAPTURE) {
             update_h_d(c);
             double ke = sd_trap_upstream_ke(c);
@@ -341,6 +357,7 @@ int sd_run_step_once(sd_run *r)
             fprintf(o->log, "phase %s ended at t = %.4f s (max speed %.4f m/s)\n", sd_run_phase_name(c->phase), sd_world_time(c->w),
                     sd_trap_max_speed(c));
         if (c->phase == PH_PACK) {
+            sd_trap_speed_stats(c, c->pack_speed);
             sd_world_set_group_active(c->w, SD_GROUP_GATE, 0);
             sd_output_snapshot(c, "packed");
             c->phase_t0 = sd_world_time(c->w);

@@ -39,6 +39,8 @@ typedef struct {
     sd_vec3 pipe_impulse_vec[2 * SD_MAX_PIPES];
     double dam_force_now;
     double phase_end[4];
+    int pack_at_rest;      /* the packing ended at rest (else at phases.packing_time) */
+    double pack_speed[3];  /* the moving elements' speeds at the packing end: max, p99, mean, m/s */
     double phase_wall[4];
     int flow_len_done;
     double flow_len, flow_q05, flow_q95, flow_front, flow_len_time;
@@ -118,6 +120,20 @@ double sd_trap_front_x(const run_ctx *c);
 /* the kinetic energy upstream of the trap plane, J, and the moving bodies' top speed, m/s */
 double sd_trap_upstream_ke(const run_ctx *c);
 double sd_trap_max_speed(const run_ctx *c);
+/* the moving bodies' speeds: max, 99th percentile, mean, m/s, into v[0..2] */
+void sd_trap_speed_stats(const run_ctx *c, double v[3]);
+/* the loads of the last step on the fixed spheres (the bed roughness) and on the bed's triangles
+ * (group SD_GROUP_BED), N. The engine leaves the fixed spheres' own sums at zero (the contact
+ * pass's speed): their load is what the moving bodies' contact forces leave over once the
+ * triangles' and the fixed cylinders' loads are taken out (each pair force acts on both sides). */
+void sd_trap_fixed_loads(const run_ctx *c, sd_vec3 *roughness, sd_vec3 *bed);
+/* the highest point of body i above the bed (z): a sphere's centre + r, a log's from its axis
+ * and radius, z + hl |a_z| + r sqrt(1 - a_z^2) */
+double sd_trap_body_top(const sd_body_view *b, int i);
+/* the deposit at the dam, between x_dam - water.probe and the trap plane: the highest top of
+ * the elements denser than the water (all of them without water), and apart, the elements
+ * lighter than it (floating logs): how many and their highest top (0 if none) */
+void sd_trap_deposit(const run_ctx *c, double *height, int *n_floating, double *floating_top);
 /* the flow length 1 m before the dam (model.md), into c->flow_len and its fields */
 void sd_trap_flow_length(run_ctx *c);
 

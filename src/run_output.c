@@ -32,9 +32,14 @@ void sd_output_series_row(run_ctx *c)
     for (int k = 0; k < SD_MAX_CLASSES; k++)
         up += cls[k];
     double pv = c->s->flume_on ? sd_trap_ratio(c, NULL, NULL, &n_up) : 0.0;
-    fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d\n", sd_world_time(c->w), sd_run_phase_name(c->phase),
-            sd_world_body_count(c->w) ? sd_trap_front_x(c) : 0.0, up, sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w),
-            c->dam_force_now, pv, c->h_d, sd_world_body_count(c->w), c->n_passed);
+    /* what the debris does to the bed: the load on the bed roughness (the fixed spheres) and on
+     * the bed's triangles */
+    sd_vec3 rough, tri_bed;
+    sd_trap_fixed_loads(c, &rough, &tri_bed);
+    fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d,%.6e,%.6e,%.6e,%.6e\n", sd_world_time(c->w),
+            sd_run_phase_name(c->phase), sd_world_body_count(c->w) ? sd_trap_front_x(c) : 0.0, up,
+            sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w), c->dam_force_now, pv, c->h_d,
+            sd_world_body_count(c->w), c->n_passed, rough.x, rough.z, tri_bed.x, tri_bed.z);
     if (ferror(c->series)) out_failed(c, "series.csv", errno);
 }
 
@@ -241,13 +246,19 @@ static int summary_trap(run_ctx *c, cJSON *o, sd_run_result *res)
     cJSON *vol = add_obj(o, "solid_volume_m3");
     if (!vol) return -1;
     bad |= add_num(vol, "spheres", vs) | add_num(vol, "logs", vt);
-    /* deposit height at the dam: top of the highest element within the probe length */
-    double dep = 0.0;
-    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
-    for (int i = 0; i < b->n; i++)
-        if (!b->fixed[i] && b->pos[i].x >= s->x_dam - s->water_probe && b->pos[i].x <= sd_trap_plane_x(c))
-            dep = fmax(dep, b->pos[i].z + b->bound_radius[i]);
+    /* the deposit at the dam: the highest true top within the probe length; floating logs apart */
+    double dep, float_top;
+    int n_float;
+    sd_trap_deposit(c, &dep, &n_float, &float_top);
     bad |= add_num(o, "deposit_height_at_dam_m", dep);
+    cJSON *fl_dam = add_obj(o, "floating_at_dam");
+    if (!fl_dam) return -1;
+    bad |= add_num(fl_dam, "count", n_float) | add_num(fl_dam, "top_m", float_top);
+    cJSON *pk = add_obj(o, "packing_end");
+    if (!pk) return -1;
+    bad |= add_num(pk, "t_s", c->phase_end[PH_PACK]) | add_str(pk, "ended_by", c->pack_at_rest ? "rest" : "time limit") |
+           add_num(pk, "speed_max_m_s", c->pack_speed[0]) | add_num(pk, "speed_p99_m_s", c->pack_speed[1]) |
+           add_num(pk, "speed_mean_m_s", c->pack_speed[2]);
     static const char *const phases[3] = {"packing", "flow", "capture"};
     cJSON *pe = add_obj(o, "phase_end_s"), *pw = add_obj(o, "phase_wall_s");
     if (!pe || !pw) return -1;

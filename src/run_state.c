@@ -75,6 +75,9 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series
     sd_bin_put_f64(b, c->flow_q95);
     sd_bin_put_f64(b, c->flow_front);
     sd_bin_put_f64(b, c->flow_len_time);
+    sd_bin_put_i32(b, c->pack_at_rest);
+    for (int k = 0; k < 3; k++)
+        sd_bin_put_f64(b, c->pack_speed[k]);
     sd_bin_put_f64(b, c->phase_t0);
     sd_bin_put_f64(b, c->flow_wall);
     sd_bin_put_f64(b, now - c->wall0);
@@ -121,7 +124,7 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
         snprintf(msg, msglen,
                  "was written for other scenario parameters than %s (a restart may change only the capture-phase keys:"
                  " dam.l_h, dam.l_v, dam.top_beam, dam.columns, dam.beams, phases.capture_limit, phases.quiet_time,"
-                 " phases.ke_fraction, water.probe, water.h_d_floating)",
+                 " phases.ke_fraction, water.probe, water.h_d_floating, water.capture_length, water.capture_end)",
                  c->s->path);
         return -1;
     }
@@ -178,6 +181,9 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     c->flow_q95 = sd_bin_get_f64(&b);
     c->flow_front = sd_bin_get_f64(&b);
     c->flow_len_time = sd_bin_get_f64(&b);
+    c->pack_at_rest = sd_bin_get_i32(&b);
+    for (int k = 0; k < 3; k++)
+        c->pack_speed[k] = sd_bin_get_f64(&b);
     c->phase_t0 = sd_bin_get_f64(&b);
     c->flow_wall = sd_bin_get_f64(&b);
     r->wall_before = sd_bin_get_f64(&b);

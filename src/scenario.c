@@ -15,7 +15,7 @@
 #include "core/vmath.h"
 #include "yaml_tree.h"
 
-typedef enum { P_DOUBLE, P_INT, P_BOOL, P_VEC3, P_DLIST, P_ILIST } ptype;
+typedef enum { P_DOUBLE, P_INT, P_BOOL, P_VEC3, P_DLIST, P_ILIST, P_ENUM } ptype;
 
 typedef struct {
     const char *key;
@@ -81,6 +81,9 @@ static const sd_param params[] = {
     {"spheres.density", P_DOUBLE, OFF(sphere_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density (SG 1.9)"},
     {"logs.count", P_INT, OFF(log_count), 0, 0, "-", -1, 1e6, 0, "number of logs (-1: from logs.k_w)"},
     {"logs.k_w", P_DOUBLE, OFF(log_kw), 0, 0, "-", 0, 0.95, 0, "woody volume ratio K_w (eq 54), used when count = -1"},
+    {"logs.k_w_volume", P_DOUBLE, OFF(log_kw_volume), 0, 0, "m^3", 0, INF, 0,
+     "eq 54's V for the count from K_w: 0: the spheres' solid volume, each log's π d²L/4; > 0: this V, each log "
+     "counted as d²L (the paper: V = 0.006, its four 1.5-l measures, gives its 32, 67, 106, 150 logs)"},
     {"logs.diameter", P_DOUBLE, OFF(log_diam), 0, 0, "m", 0, 1, 1, "log diameter"},
     {"logs.length", P_DOUBLE, OFF(log_length), 0, 0, "m", 0, 10, 1, "log length"},
     {"logs.density", P_DOUBLE, OFF(log_density), 0, 0, "kg/m^3", 0, INF, 1, "log density (SG 0.8)"},
@@ -103,7 +106,24 @@ static const sd_param params[] = {
     {"water.h_d_floating", P_BOOL, OFF(water_hd_floating), 0, 0, "-", 0, 1, 0,
      "let elements lighter than water (logs) set the capture depth h_D (the paper's literal rule: a log buoyed to h_D "
      "lifts h_D with it, without bound; see docs/physics.md)"},
-    {"phases.packing_time", P_DOUBLE, OFF(packing_time), 0, 0, "s", 0, INF, 0, "packing (drop) time"},
+    {"water.buoyancy", P_ENUM, OFF(water_buoyancy), 0, 0, "-", 0, 0, 0,
+     "direction of the flow phase's buoyancy ρVg: vertical (the paper) or normal to the bed (the hydrostatics of "
+     "uniform flow on a slope, ρVg cosθ); the capture's pond is still water: vertical either way"},
+    {"water.capture_length", P_DOUBLE, OFF(water_capture_length), 0, 0, "m", 0, INF, 0,
+     "the capture profile applies this far upstream of the dam face, the flow profile further up (0: the whole "
+     "flume upstream of the dam)"},
+    {"water.capture_end", P_ENUM, OFF(water_capture_end), 0, 0, "-", 0, 0, 0,
+     "downstream end of the capture profile: the trap plane x_dam + d/2 (what is held gets the pond's water) or the "
+     "dam face x_dam; downstream of it the flow profile"},
+    {"water.scene", P_ENUM, OFF(water_scene), 0, 0, "-", 0, 0, 0,
+     "water in a scene without a flume (water.on): none, the flow profile (eq 50), a uniform stream U, or still "
+     "water; x downstream, surface at z = water.h, buoyancy opposite gravity"},
+    {"phases.packing_time", P_DOUBLE, OFF(packing_time), 0, 0, "s", 0, INF, 0,
+     "longest packing (drop) time: packing ends here if the elements have not come to rest before"},
+    {"phases.packing_rest_speed", P_DOUBLE, OFF(packing_rest_speed), 0, 0, "m/s", 0, INF, 0,
+     "packing ends once no moving element is faster (checked every 100 steps; 0: packing lasts packing_time)"},
+    {"phases.packing_min_time", P_DOUBLE, OFF(packing_min_time), 0, 0, "s", 0, INF, 0,
+     "packing does not end at rest before this time (the elements start at rest, in the air)"},
     {"phases.flow_limit", P_DOUBLE, OFF(flow_limit), 0, 0, "s", 0, INF, 1, "longest flow phase"},
     {"phases.capture_limit", P_DOUBLE, OFF(capture_limit), 0, 0, "s", 0, INF, 1,
      "capture time limit (reconstructed 6 s)"},
@@ -123,6 +143,34 @@ static const sd_param params[] = {
     {"output.png", P_BOOL, OFF(png_on), 0, 0, "-", 0, 1, 0, "draw side-view pictures (matplotlib)"},
 };
 #define N_PARAMS ((int)(sizeof(params) / sizeof(params[0])))
+
+/* The choices of the P_ENUM keys, in the order of their values (scenario.h's enums). */
+static const struct {
+    const char *key;
+    const char *const names[5];
+} enum_choices[] = {
+    {"water.buoyancy", {"vertical", "bed_normal", NULL}},
+    {"water.capture_end", {"trap_plane", "dam_face", NULL}},
+    {"water.scene", {"none", "flow", "uniform", "still", NULL}},
+};
+
+static const char *const *choices(const sd_param *p)
+{
+    for (size_t k = 0; k < sizeof enum_choices / sizeof enum_choices[0]; k++)
+        if (!strcmp(enum_choices[k].key, p->key)) return enum_choices[k].names;
+    return NULL;
+}
+
+/* "a, b, c": the choices of an enumerated key */
+static void choices_text(const sd_param *p, char *buf, size_t len)
+{
+    const char *const *c = choices(p);
+    buf[0] = 0;
+    for (int k = 0; c && c[k]; k++) {
+        size_t n = strlen(buf);
+        snprintf(buf + n, len - n, "%s%s", k ? ", " : "", c[k]);
+    }
+}
 
 void sd_scenario_default(sd_scenario *s)
 {
@@ -168,6 +216,8 @@ void sd_scenario_default(sd_scenario *s)
     s->water_cd = 0.49;
     s->water_probe = 0.10;
     s->packing_time = 2.0;
+    s->packing_rest_speed = 1e-3;
+    s->packing_min_time = 0.5;
     s->flow_limit = 10.0;
     s->capture_limit = 6.0;
     s->quiet_time = 0.5;
@@ -305,6 +355,20 @@ static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode
         int v;
         if (n->kind != SD_Y_SCALAR || parse_bool(n->value, &v)) {
             report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected true or false%s", p->key, "");
+            break;
+        }
+        *(int *)(base + p->off) = v;
+        break;
+    }
+    case P_ENUM: {
+        const char *const *c = choices(p);
+        int v = -1;
+        for (int k = 0; c && c[k] && n->kind == SD_Y_SCALAR; k++)
+            if (!strcmp(n->value, c[k])) v = k;
+        if (v < 0) {
+            char list[128];
+            choices_text(p, list, sizeof list);
+            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected one of: %s", p->key, list);
             break;
         }
         *(int *)(base + p->off) = v;
@@ -594,13 +658,14 @@ static void validate(ectx *e, sd_scenario *s, const sd_ynode *root)
             mmin = fmin(mmin, s->log_density * M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length);
     }
     if (s->world.check_dt && isfinite(mmin)) {
-        double dt_max = sd_stable_dt_max(s->world.contact.k_n, mmin);
+        double dt_max = sd_stable_dt_max(s->world.contact.k_n, s->world.contact.k_s, mmin);
         if (s->world.dt > dt_max) {
             n = sd_yaml_get(sd_yaml_get(root, "solver"), "dt");
-            char a[64], b[200];
+            char a[64], b[256];
             snprintf(a, sizeof a, "%g", s->world.dt);
-            snprintf(b, sizeof b, "%g s (8 steps per contact half-period for k_n = %g N/m and the smallest mass %g kg)",
-                     dt_max, s->world.contact.k_n, mmin);
+            snprintf(b, sizeof b,
+                     "%g s (8 steps per contact half-period for k_n = %g N/m, k_s = %g N/m and the smallest mass %g kg)",
+                     dt_max, s->world.contact.k_n, s->world.contact.k_s, mmin);
             report(e, n ? n->line : 1, n ? n->col : 1, "solver.dt = %s is unstable: it must be at most %s", a, b);
         }
     }
@@ -689,14 +754,19 @@ static const char *type_name(ptype t)
         return "list of numbers";
     case P_ILIST:
         return "list of integers";
+    case P_ENUM:
+        return "choice";
     }
     return "?";
 }
 
-static void print_value(FILE *f, const sd_scenario *s, const sd_param *p)
+static void print_value(FILE *f, const sd_scenario *s, const sd_param *p, int json)
 {
     const char *base = (const char *)s;
     switch (p->type) {
+    case P_ENUM:
+        fprintf(f, json ? "\"%s\"" : "%s", choices(p)[*(const int *)(base + p->off)]);
+        break;
     case P_DOUBLE:
         fprintf(f, "%.10g", *(const double *)(base + p->off));
         break;
@@ -740,15 +810,19 @@ void sd_scenario_print_params(FILE *f, int format)
         const sd_param *p = &params[i];
         if (roff) {
             /* .TP, the key in bold, then its type, unit, default and range, and its meaning */
-            char val[512], range[96] = "";
+            char val[512], range[192] = "";
             FILE *m = fmemopen(val, sizeof val, "w");
             if (m) {
-                print_value(m, &d, p);
+                print_value(m, &d, p, 0);
                 fclose(m);
             } else {
                 val[0] = 0;
             }
-            if (p->type != P_BOOL && p->type != P_VEC3)
+            if (p->type == P_ENUM) {
+                char list[128];
+                choices_text(p, list, sizeof list);
+                snprintf(range, sizeof range, ", one of %s", list);
+            } else if (p->type != P_BOOL && p->type != P_VEC3)
                 snprintf(range, sizeof range, ", range %s%g, %g]", p->strict_min ? "(" : "[", p->min, p->max);
             fputs(".TP\n.B ", f);
             sd_roff_puts(f, p->key);
@@ -768,8 +842,12 @@ void sd_scenario_print_params(FILE *f, int format)
             fprintf(f, "| `%s` | %s | %s | `", p->key, type_name(p->type), p->unit);
         else
             fprintf(f, "%-28s %-16s %-8s ", p->key, type_name(p->type), p->unit);
-        print_value(f, &d, p);
-        if (p->type == P_BOOL || p->type == P_VEC3)
+        print_value(f, &d, p, 0);
+        if (p->type == P_ENUM) {
+            char list[128];
+            choices_text(p, list, sizeof list);
+            fprintf(f, md ? "` | %s | %s |\n" : "  [%s]  %s\n", list, p->doc);
+        } else if (p->type == P_BOOL || p->type == P_VEC3)
             fprintf(f, md ? "` | | %s |\n" : "  %s\n", p->doc);
         else
             fprintf(f, md ? "` | %s%g, %g] | %s |\n" : "  %s%g, %g]  %s\n", p->strict_min ? "(" : "[", p->min, p->max,
@@ -787,6 +865,8 @@ static cJSON *param_json(const sd_scenario *s, const sd_param *p)
 {
     const char *base = (const char *)s;
     switch (p->type) {
+    case P_ENUM:
+        return cJSON_CreateString(choices(p)[*(const int *)(base + p->off)]);
     case P_DOUBLE:
         return cJSON_CreateNumber(*(const double *)(base + p->off));
     case P_INT:
@@ -828,7 +908,8 @@ static const char *const capture_keys[] = {"dam.l_h",           "dam.l_v",
                                            "dam.top_beam",      "dam.columns",
                                            "dam.beams",         "phases.capture_limit",
                                            "phases.quiet_time", "phases.ke_fraction",
-                                           "water.probe",       "water.h_d_floating"};
+                                           "water.probe",       "water.h_d_floating",
+                                           "water.capture_length", "water.capture_end"};
 
 int sd_scenario_is_capture_key(const char *key)
 {
@@ -861,6 +942,7 @@ static uint64_t scenario_hash(const sd_scenario *s, int with_capture)
                 h = sd_hash_bytes(h, base + p->off, sizeof(int));
             break;
         case P_BOOL:
+        case P_ENUM:
             h = sd_hash_bytes(h, base + p->off, sizeof(int));
             break;
         case P_VEC3:

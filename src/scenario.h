@@ -13,6 +13,11 @@
 #define SD_MAX_IDS 64
 #define SD_MAX_PIPES 32
 
+/* The choices of the scenario's enumerated keys (their index is the stored value). */
+enum { SD_BUOYANCY_VERTICAL = 0, SD_BUOYANCY_BED_NORMAL = 1 };
+enum { SD_CAPTURE_END_TRAP_PLANE = 0, SD_CAPTURE_END_DAM_FACE = 1 };
+enum { SD_SCENE_WATER_NONE = 0, SD_SCENE_WATER_FLOW = 1, SD_SCENE_WATER_UNIFORM = 2, SD_SCENE_WATER_STILL = 3 };
+
 typedef struct {
     int type; /* 0 sphere, 1 cylinder, 2 triangle */
     sd_vec3 pos, vel, omega, axis;
@@ -62,8 +67,14 @@ typedef struct sd_scenario {
     int water_on;
     double water_u, water_h, water_rho, water_cd, water_probe;
     int water_hd_floating; /* floating elements count in h_D (default 0: only those denser than water) */
+    int water_buoyancy;    /* the flow phase's buoyancy: SD_BUOYANCY_VERTICAL or SD_BUOYANCY_BED_NORMAL */
+    double water_capture_length; /* the pond reaches this far upstream of the dam face, m (0: the whole flume) */
+    int water_capture_end;       /* the pond's downstream end: SD_CAPTURE_END_TRAP_PLANE or _DAM_FACE */
+    int water_scene;             /* water in a scene without a flume: SD_SCENE_WATER_* */
+    double log_kw_volume;        /* eq 54's V for the log count, m^3 (0: the spheres' solid volume) */
     /* phases */
     double packing_time, capture_limit, quiet_time, ke_fraction, flow_limit;
+    double packing_rest_speed, packing_min_time; /* packing ends at rest (m/s), not before (s) */
     /* output */
     double snapshot_interval, log_interval;
     double checkpoint_interval; /* simulated s between periodic checkpoints (0: none) */
@@ -94,7 +105,8 @@ struct cJSON;
 struct cJSON *sd_scenario_params_json(const sd_scenario *s);
 /* 1 for the keys that act only from the capture phase on: the dam layout (dam.l_h, dam.l_v,
  * dam.top_beam, dam.columns, dam.beams) and the capture-phase settings (phases.capture_limit,
- * quiet_time, ke_fraction, water.probe, water.h_d_floating). Runs that differ only in these
+ * quiet_time, ke_fraction, water.probe, water.h_d_floating, water.capture_length,
+ * water.capture_end). Runs that differ only in these
  * share their packing and flow, bit for bit: a sweep branches them from one flow-end
  * checkpoint (docs/sweep.md). */
 int sd_scenario_is_capture_key(const char *key);

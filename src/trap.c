@@ -101,6 +101,77 @@ double sd_trap_max_speed(const run_ctx *c)
     return sqrt(v);
 }
 
+static int cmp_double(const void *pa, const void *pb)
+{
+    const double a = *(const double *)pa, b = *(const double *)pb;
+    return (a > b) - (a < b);
+}
+
+void sd_trap_speed_stats(const run_ctx *c, double v[3])
+{
+    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
+    v[0] = v[1] = v[2] = 0.0;
+    double *sp = malloc((size_t)(b->n + 1) * sizeof(double));
+    if (!sp) return;
+    int m = 0;
+    double sum = 0.0;
+    for (int i = 0; i < b->n; i++)
+        if (!b->fixed[i]) {
+            sp[m] = v3_norm(b->vel[i]);
+            sum += sp[m++];
+        }
+    if (m > 0) {
+        qsort(sp, (size_t)m, sizeof(double), cmp_double);
+        v[0] = sp[m - 1];
+        v[1] = sp[(int)ceil(0.99 * m) - 1]; /* the nearest-rank percentile */
+        v[2] = sum / m;
+    }
+    free(sp);
+}
+
+void sd_trap_fixed_loads(const run_ctx *c, sd_vec3 *roughness, sd_vec3 *bed)
+{
+    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
+    sd_vec3 r = v3(0.0, 0.0, 0.0);
+    for (int i = 0; i < b->n; i++) /* the moving bodies' pairs among themselves cancel */
+        if (!b->fixed[i]) r = v3_sub(r, b->force[i]);
+        else if (b->shape[i] == SD_SHAPE_CYLINDER)
+            r = v3_sub(r, b->force[i]);
+    int top = SD_GROUP_BOX; /* the builders' groups, and the scenario's triangles' */
+    for (int k = 0; k < c->s->n_elems; k++)
+        if (c->s->elems[k].type == 2 && c->s->elems[k].group > top) top = c->s->elems[k].group;
+    for (int g = 0; g <= top; g++)
+        r = v3_sub(r, sd_world_group_force(c->w, g));
+    *roughness = r;
+    *bed = sd_world_group_force(c->w, SD_GROUP_BED);
+}
+
+double sd_trap_body_top(const sd_body_view *b, int i)
+{
+    const double r = b->radius[i];
+    if (b->shape[i] != SD_SHAPE_CYLINDER) return b->pos[i].z + r;
+    const double az = fabs(b->axis[i].z);
+    return b->pos[i].z + b->half_length[i] * az + r * sqrt(fmax(0.0, 1.0 - az * az));
+}
+
+void sd_trap_deposit(const run_ctx *c, double *height, int *n_floating, double *floating_top)
+{
+    const sd_scenario *s = c->s;
+    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
+    const double lo = s->x_dam - s->water_probe, hi = sd_trap_plane_x(c);
+    *height = *floating_top = 0.0;
+    *n_floating = 0;
+    for (int i = 0; i < b->n; i++) {
+        if (b->fixed[i] || b->pos[i].x < lo || b->pos[i].x > hi) continue;
+        const double top = sd_trap_body_top(b, i);
+        if (s->water_on && b->mass[i] <= s->water_rho * sd_trap_body_volume(b, i)) {
+            (*n_floating)++;
+            *floating_top = fmax(*floating_top, top);
+        } else
+            *height = fmax(*height, top);
+    }
+}
+
 typedef struct {
     double x, v;
 } xv;

@@ -52,7 +52,8 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
                   mrho = _mm512_set1_pd(-p->rho), gx = _mm512_set1_pd(p->gravity.x), gy = _mm512_set1_pd(p->gravity.y),
                   gz = _mm512_set1_pd(p->gravity.z), bma = _mm512_set1_pd(be - al), A = _mm512_set1_pd(al),
                   five = _mm512_set1_pd(5.0), c45 = _mm512_set1_pd(4.0 / 5.0), pi = _mm512_set1_pd(M_PI),
-                  c43pi = _mm512_set1_pd(4.0 / 3.0 * M_PI), XD = _mm512_set1_pd(fc->xd), zero = _mm512_setzero_pd();
+                  c43pi = _mm512_set1_pd(4.0 / 3.0 * M_PI), XD = _mm512_set1_pd(fc->xd), X0 = _mm512_set1_pd(fc->x_from),
+                  zero = _mm512_setzero_pd();
     const __mmask8 flow_ok = h > 0.0 ? 0xFF : 0, cap_ok = hd > 0.0 ? 0xFF : 0, capture = fc->capture ? 0xFF : 0;
     for (int k = k0; k < k1; k += 8) {
         const int nl = k1 - k < 8 ? k1 - k : 8;
@@ -76,8 +77,9 @@ __attribute__((target("avx512f,avx512vl"))) static void fluid_spheres512(const s
         const __m512d z = _mm512_sub_pd(
             _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(px, nx), _mm512_mul_pd(py, ny)), _mm512_mul_pd(pz, nz)), zb);
         const __m512d zc = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(z, zero, _CMP_LT_OQ), z, zero);
-        /* the capture profile upstream of the dam (capture && p.x < x_dam) */
-        const __mmask8 cap = (__mmask8)(capture & _mm512_cmp_pd_mask(px, XD, _CMP_LT_OQ));
+        /* the capture profile in the pond's region (capture && x_from <= p.x < xd) */
+        const __mmask8 cap = (__mmask8)(capture & _mm512_cmp_pd_mask(px, XD, _CMP_LT_OQ) &
+                                        _mm512_cmp_pd_mask(px, X0, _CMP_GE_OQ));
         const __mmask8 wet = (__mmask8)((cap & cap_ok & _mm512_cmp_pd_mask(zc, HD, _CMP_LE_OQ)) |
                                         (~cap & flow_ok & _mm512_cmp_pd_mask(zc, H, _CMP_LE_OQ)));
         /* the profile of each lane; a group all of one profile (nearly every group) skips the
@@ -132,7 +134,8 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const sd_water *fc, 
                   mrho = _mm256_set1_pd(-p->rho), gx = _mm256_set1_pd(p->gravity.x), gy = _mm256_set1_pd(p->gravity.y),
                   gz = _mm256_set1_pd(p->gravity.z), bma = _mm256_set1_pd(be - al), A = _mm256_set1_pd(al),
                   five = _mm256_set1_pd(5.0), c45 = _mm256_set1_pd(4.0 / 5.0), pi = _mm256_set1_pd(M_PI),
-                  c43pi = _mm256_set1_pd(4.0 / 3.0 * M_PI), XD = _mm256_set1_pd(fc->xd), zero = _mm256_setzero_pd();
+                  c43pi = _mm256_set1_pd(4.0 / 3.0 * M_PI), XD = _mm256_set1_pd(fc->xd), X0 = _mm256_set1_pd(fc->x_from),
+                  zero = _mm256_setzero_pd();
     const __m256d flow_ok = h > 0.0 ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero,
                   cap_ok = hd > 0.0 ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero,
                   capture = fc->capture ? _mm256_castsi256_pd(_mm256_set1_epi64x(-1)) : zero;
@@ -172,8 +175,9 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const sd_water *fc, 
             const __m256d z = _mm256_sub_pd(
                 _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(px, nx), _mm256_mul_pd(py, ny)), _mm256_mul_pd(pz, nz)), zb);
             const __m256d zc = _mm256_blendv_pd(z, zero, _mm256_cmp_pd(z, zero, _CMP_LT_OQ));
-            /* the capture profile upstream of the dam (capture && p.x < x_dam) */
-            const __m256d cap = _mm256_and_pd(capture, _mm256_cmp_pd(px, XD, _CMP_LT_OQ));
+            /* the capture profile in the pond's region (capture && x_from <= p.x < xd) */
+            const __m256d cap = _mm256_and_pd(_mm256_and_pd(capture, _mm256_cmp_pd(px, XD, _CMP_LT_OQ)),
+                                              _mm256_cmp_pd(px, X0, _CMP_GE_OQ));
             const __m256d wet =
                 _mm256_or_pd(_mm256_and_pd(_mm256_and_pd(cap, cap_ok), _mm256_cmp_pd(zc, HD, _CMP_LE_OQ)),
                              _mm256_andnot_pd(cap, _mm256_and_pd(flow_ok, _mm256_cmp_pd(zc, H, _CMP_LE_OQ))));
@@ -229,7 +233,8 @@ __attribute__((target("avx2"))) static int fluid_spheres256(const sd_water *fc, 
 }
 #endif
 
-/* The fluid force on log i, one by one (sd_fluid_force_total). */
+/* The fluid force on body i, one by one (sd_fluid_force_total): the logs, and every body in a
+ * uniform stream. */
 static sd_vec3 fluid_log(const sd_water *fc, const sd_body_view *b, int i)
 {
     sd_fluid_element e;
@@ -239,8 +244,11 @@ static sd_vec3 fluid_log(const sd_water *fc, const sd_body_view *b, int i)
     e.axis = b->axis[i];
     e.radius = b->radius[i];
     e.length = 2.0 * b->half_length[i];
-    /* the capture profile applies upstream of the dam; passed elements keep the flow one */
-    const sd_fluid_phase ph = (fc->capture && b->pos[i].x < fc->xd) ? SD_FLUID_CAPTURE : SD_FLUID_FLOW;
+    /* the capture profile applies in the pond's region; elsewhere the flow one */
+    const double x = b->pos[i].x;
+    const sd_fluid_phase ph = fc->uniform                            ? SD_FLUID_UNIFORM
+                              : (fc->capture && x < fc->xd && x >= fc->x_from) ? SD_FLUID_CAPTURE
+                                                                                : SD_FLUID_FLOW;
     return sd_fluid_force_total(&fc->fp, ph, fc->h_d, &e);
 }
 
@@ -255,8 +263,13 @@ void sd_water_forces(void *ctx, const sd_world *w, const int32_t *mov, int k0, i
     const sd_water *fc = ctx;
     const sd_body_view bv = sd_world_bodies(w), *b = &bv;
     const sd_fluid_params *fp = &fc->fp;
-    const double xd = fc->xd, h_d = fc->h_d;
+    const double xd = fc->xd, x_from = fc->x_from, h_d = fc->h_d;
     const int capture = fc->capture;
+    if (fc->uniform) { /* a scene's uniform stream or still water: every body one by one */
+        for (int k = k0; k < k1; k++)
+            out[k - k0] = fluid_log(fc, b, mov[k]);
+        return;
+    }
     /* the spheres of mov[k0 .. kv) in SIMD lanes where the CPU has them (8 AVX-512 lanes, 4 AVX2
      * lanes), the rest through the batch */
     int kv = k0;
@@ -292,7 +305,7 @@ void sd_water_forces(void *ctx, const sd_world *w, const int32_t *mov, int k0, i
             q.px[j] = p.x, q.py[j] = p.y, q.pz[j] = p.z;
             q.vx[j] = v.x, q.vy[j] = v.y, q.vz[j] = v.z;
             q.r[j] = rad[i];
-            q.cap[j] = (capture && p.x < xd) ? 1.0 : 0.0;
+            q.cap[j] = (capture && p.x < xd && p.x >= x_from) ? 1.0 : 0.0;
             if (q.m == FLUID_BATCH) fluid_flush(&q, fp, h_d, out);
             continue;
         }

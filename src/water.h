@@ -7,12 +7,14 @@
 #include "fluid.h"
 #include "sabodem.h"
 
-/* What the hook needs: the flow's parameters, the capture's pond depth h_D at the dam, the
- * dam's face x_D, and whether the capture profile applies (upstream of the dam). */
+/* What the hook needs: the flow's parameters, the capture's pond depth h_D at the dam, whether
+ * the capture profile applies, and where: in the pond's region x_from <= x < xd (the trap
+ * plane or the dam face; -inf for the whole flume upstream), the flow profile elsewhere; or a
+ * uniform stream (U at every depth up to h: a scene's uniform or still water) for every body. */
 typedef struct {
     sd_fluid_params fp;
-    double h_d, xd; /* m */
-    int capture;
+    double h_d, xd, x_from; /* m */
+    int capture, uniform;
 } sd_water;
 
 /* sd_external_force_fn with ctx an sd_water: the forces on the bodies index[k0 .. k1) (store

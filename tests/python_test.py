@@ -81,7 +81,7 @@ def main():
         while r.advance_phase():
             phases.append((r.phase, r.time))
         check([p for p, _ in phases] == ["flow", "capture", "done"], f"phases {phases}")
-        check(abs(phases[0][1] - 0.3) < 5e-6 and abs(phases[1][1] - cli["phase_end_s"]["flow"]) < 5e-6,
+        check(abs(phases[0][1] - cli["phase_end_s"]["packing"]) < 5e-6 and abs(phases[1][1] - cli["phase_end_s"]["flow"]) < 5e-6,
               f"phase ends {phases}, the program's {cli['phase_end_s']}")
         s = r.finish()
     check(s["state_hash"] == cli["state_hash"] and s["steps"] == cli["steps"],
