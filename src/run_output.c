@@ -19,6 +19,8 @@ static void out_failed(run_ctx *c, const char *file, int e)
 
 int sd_output_failed(const run_ctx *c) { return c->out_errno; }
 
+void sd_output_note_failure(run_ctx *c, const char *file, int e) { out_failed(c, file, e); }
+
 void sd_output_series_row(run_ctx *c)
 {
     if (!c->series) return;
@@ -232,15 +234,32 @@ int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const cha
                     "  \"flow_at_1m_before_dam\": {\"t\": %.4f, \"length_q05_q95_m\": %.4f, \"q05_m\": %.4f, "
                     "\"q95_m\": %.4f, \"front_m\": %.4f},\n",
                     c->flow_len_time, c->flow_len, c->flow_q05, c->flow_q95, c->flow_front);
+        double held, channel, passed, dep_x0;
+        sd_trap_split(c, &held, &channel, &passed, &dep_x0);
+        res->v_held = held;
+        res->v_channel = channel;
+        res->v_passed = passed;
+        res->capture_cut = c->capture_cut;
+        fprintf(f,
+                "  \"debris_m3\": {\"held_at_dam\": %.9e, \"in_channel\": %.9e, \"passed\": %.9e, "
+                "\"deposit_from_x_m\": %.4f},\n",
+                held, channel, passed, dep_x0);
+        fprintf(f, "  \"capture\": \"%s\",\n",
+                c->phase_end[PH_CAPTURE] <= 0.0 ? "not reached" : c->capture_cut ? "cut by its time limit" : "settled");
+        fprintf(f, "  \"pipe_support\": \"%s\",\n", s->dam_support ? "fixed ends" : "simply supported");
         fprintf(f, "  \"pipes\": [\n");
-        for (int k = 0; k < c->info.n_pipes; k++)
+        for (int k = 0; k < c->loads.n; k++) {
+            const sd_pipe_load *p = &c->loads.p[k];
             fprintf(f,
-                    "    {\"gid\": %d, \"kind\": \"%s\", \"%s\": %.4f, \"peak_force_N\": %.6e, \"peak_time_s\": %.5f, "
-                    "\"impulse_Ns\": %.6e, \"impulse_x_Ns\": %.6e}%s\n",
-                    c->info.pipe_gid[k], c->info.pipe_is_column[k] ? "column" : "beam",
-                    c->info.pipe_is_column[k] ? "y_m" : "z_axis_m", c->info.pipe_coord[k], c->pipe_peak[k],
-                    c->pipe_peak_t[k], c->pipe_impulse[k], c->pipe_impulse_vec[k].x,
-                    k + 1 < c->info.n_pipes ? "," : "");
+                    "    {\"gid\": %d, \"kind\": \"%s\", \"%s\": %.4f, \"span_m\": %.4f, \"peak_force_N\": %.6e, "
+                    "\"peak_time_s\": %.5f, \"impulse_Ns\": %.6e, \"impulse_x_Ns\": %.6e, \"peak_moment_Nm\": %.6e, "
+                    "\"peak_moment_time_s\": %.5f, \"peak_moment_at_m\": %.4f, \"sustained_N\": [%.6e, %.6e, %.6e], "
+                    "\"rising_at_end\": %s}%s\n",
+                    p->gid, p->is_column ? "column" : "beam", p->is_column ? "y_m" : "z_axis_m", p->coord, p->span,
+                    p->peak, p->t_peak, p->impulse, p->impulse_vec.x, p->m_peak, p->t_m_peak, p->s_at_m_peak,
+                    p->sustained.x, p->sustained.y, p->sustained.z, p->rising ? "true" : "false",
+                    k + 1 < c->loads.n ? "," : "");
+        }
         fprintf(f, "  ],\n");
     }
     sd_scenario_echo_json(s, f);
