@@ -42,9 +42,8 @@ def main():
     if not rows:
         print("no finished runs")
         return 0
-    fixed = {"case", "seed", "p_v", "p_v_class0", "p_v_class1", "p_v_class2", "p_v_class3", "p_v_logs",
-             "peak_dam_force_N", "passed", "wall_s", "capture_limit_s", "flow_wall_s", "branched", "state_hash"}
-    vary = [k for k in rows[0].keys() if k not in fixed]
+    cols = list(rows[0].keys())
+    vary = cols[cols.index("seed") + 1:cols.index("p_v")]  # the varied keys sit between seed and p_v
     cases = {}
     for r in rows:
         key = tuple(r[k] for k in vary)
@@ -52,6 +51,7 @@ def main():
     with open(os.path.join(d, "cases.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(vary + ["runs", "p_v_mean", "p_v_std", "p_v_min", "p_v_max", "p_v_logs_mean",
+                           "v_held_mean_m3", "v_channel_mean_m3", "v_passed_mean_m3", "runs_cut_by_limit",
                            "peak_dam_force_mean_N", "wall_s_total"])
         for key, rs in sorted(cases.items(), key=lambda kv: [float(x) for x in kv[0]]):
             pv = [float(r["p_v"]) for r in rs]
@@ -59,6 +59,10 @@ def main():
                                     "%.5f" % (statistics.stdev(pv) if len(pv) > 1 else 0.0),
                                     "%.5f" % min(pv), "%.5f" % max(pv),
                                     "%.5f" % statistics.mean(float(r["p_v_logs"]) for r in rs),
+                                    "%.4e" % statistics.mean(float(r["v_held_m3"]) for r in rs),
+                                    "%.4e" % statistics.mean(float(r["v_channel_m3"]) for r in rs),
+                                    "%.4e" % statistics.mean(float(r["v_passed_m3"]) for r in rs),
+                                    sum(r["capture_end"] == "limit" for r in rs),
                                     "%.4e" % statistics.mean(float(r["peak_dam_force_N"]) for r in rs),
                                     "%.1f" % sum(float(r["wall_s"]) for r in rs)])
     import matplotlib

@@ -67,24 +67,6 @@ static void remove_passed(run_ctx *c)
     }
 }
 
-static void accumulate_pipes(run_ctx *c)
-{
-    double tot = 0.0;
-    for (int k = 0; k < c->info.n_pipes; k++) {
-        sd_body_state st;
-        if (sd_world_body(c->w, c->info.pipe_gid[k], &st)) continue;
-        double f = v3_norm(st.force);
-        tot += f;
-        if (f > c->pipe_peak[k]) {
-            c->pipe_peak[k] = f;
-            c->pipe_peak_t[k] = sd_world_time(c->w);
-        }
-        c->pipe_impulse[k] += f * sd_world_definition(c->w)->dt;
-        c->pipe_impulse_vec[k] = v3_madd(c->pipe_impulse_vec[k], st.force, sd_world_definition(c->w)->dt);
-    }
-    c->dam_force_now = tot;
-}
-
 /* The capture phase begins: the grid dam's pipes go in now, not at the build, so that packing
  * and flow do not depend on the dam layout (SPEC §6, docs/physics.md "Flow end and branching").
  * A straight run and a run restarted from a flow-end checkpoint both come through here. */
@@ -94,6 +76,10 @@ static sd_status capture_start(run_ctx *c)
     sd_status st = sd_build_dam(c->w, s, &c->info);
     if (st) return st;
     c->dam_built = 1;
+    char csv[1200];
+    snprintf(csv, sizeof csv, "%s/pipes.csv", c->dir);
+    if (sd_pipe_loads_start(&c->loads, s, &c->info, c->w, c->series ? csv : NULL))
+        sd_output_note_failure(c, "pipes.csv", errno);
     c->phase = PH_CAPTURE;
     c->phase_t0 = sd_world_time(c->w);
     c->phase_w0 = sd_now();
@@ -129,6 +115,7 @@ int sd_run_begin(sd_run *r)
         free(blob);
         if (bad) {
             fprintf(o->err, "%s: %s\n", o->restart, msg);
+            sd_pipe_loads_free(&c->loads);
             sd_world_destroy(c->w);
             return 2;
         }
@@ -158,6 +145,7 @@ int sd_run_begin(sd_run *r)
                 fprintf(o->err, "%s: solver.dt: %s\n", s->path, sd_status_message(st));
             else
                 fprintf(o->err, "%s: cannot build the scene: %s\n", s->path, sd_status_message(st));
+            sd_pipe_loads_free(&c->loads);
             sd_world_destroy(c->w);
             return 2;
         }
@@ -170,6 +158,7 @@ int sd_run_begin(sd_run *r)
         if (sd_run_dir_claim(c->dir, o->overwrite, resume, msg, sizeof msg)) {
             fprintf(o->err, "%s\n", msg);
             sd_run_state_free(&rs);
+            sd_pipe_loads_free(&c->loads);
             sd_world_destroy(c->w);
             return 2;
         }
@@ -179,6 +168,7 @@ int sd_run_begin(sd_run *r)
         if (sd_run_state_restore_outputs(c, &rs, msg, sizeof msg)) {
             fprintf(o->err, "%s: cannot continue the outputs of %s: %s\n", c->dir, o->restart, msg);
             sd_run_state_free(&rs);
+            sd_pipe_loads_free(&c->loads);
             sd_world_destroy(c->w);
             return 1;
         }
@@ -204,11 +194,16 @@ int sd_run_begin(sd_run *r)
             if (sd_vtk_series_add(&c->pvd, rs.pvd_time[k], rs.pvd_part[k], rs.pvd_file[k])) pvd_bad = 1;
     }
     const int rs_kind = rs.kind;
+    if (c->restarted_from && c->dam_built) { /* a restart in the capture: its pipe loads go on */
+        snprintf(path, sizeof path, "%s/pipes.csv", c->dir);
+        if (sd_pipe_loads_resume(&c->loads, s, &c->info, c->w, path)) pvd_bad = 1;
+    }
     sd_run_state_free(&rs);
     if (!c->series || (s->n_traj > 0 && !c->traj) || (s->vtk_on && !c->pvd_on) || pvd_bad ||
         (!c->restarted_from && sd_output_walls(c))) {
         fprintf(o->err, "%s: cannot write output files: %s\n", c->dir, strerror(errno));
         sd_output_close(c);
+        sd_pipe_loads_free(&c->loads);
         sd_world_destroy(c->w);
         return 1;
     }
@@ -316,7 +311,7 @@ int sd_run_step_once(sd_run *r)
         return 1;
     }
     long step = sd_world_step_count(c->w);
-    if (c->info.n_pipes) accumulate_pipes(c);
+    if (c->loads.n) c->dam_force_now = sd_pipe_loads_step(&c->loads, c->w, sd_world_time(c->w), dt);
     int next = c->phase;
     if (s->flume_on && step % 100 == 0) {
         int before = c->n_passed;
@@ -339,6 +334,7 @@ int sd_run_step_once(sd_run *r)
             if (ke > c->ke_peak) c->ke_peak = ke;
             int quiet = sd_world_time(c->w) - c->last_cross_time >= s->quiet_time && ke < s->ke_fraction * c->ke_peak;
             if (tph >= s->capture_limit || (tph > s->quiet_time && quiet)) next = PH_DONE;
+            c->capture_cut = next == PH_DONE && !(tph > s->quiet_time && quiet);
         }
     }
     if (c->phase == PH_FLOW && !c->flow_ended) {
@@ -371,7 +367,11 @@ int sd_run_step_once(sd_run *r)
             c->phase = next;
         }
     }
-    if (step % r->log_every == 0) sd_output_series_row(c);
+    if (step % r->log_every == 0) {
+        sd_output_series_row(c);
+        if (c->loads.n && sd_pipe_loads_sample(&c->loads, c->w, sd_world_time(c->w)))
+            sd_output_note_failure(c, "pipes.csv", errno);
+    }
     if (c->traj && step % r->traj_every == 0) sd_output_traj(c);
     if (r->snap_every && step % r->snap_every == 0) {
         char name[64];
@@ -414,6 +414,11 @@ void sd_run_end(sd_run *r)
             c->phase_wall[c->phase] = sd_now() - c->phase_w0;
         }
         sd_output_series_row(c);
+        if (c->loads.n) {
+            if (sd_pipe_loads_sample(&c->loads, c->w, sd_world_time(c->w))) sd_output_note_failure(c, "pipes.csv", errno);
+            sd_pipe_loads_finish(&c->loads, c->capture_cut || c->phase == PH_CAPTURE);
+            if (sd_pipe_loads_close(&c->loads)) sd_output_note_failure(c, "pipes.csv", errno);
+        }
         sd_output_snapshot(c, "final");
         if (s->flume_on && r->code == 0) sd_output_picture(c, "final", "side_final.png", s->x_dam - 1.0, s->x_end);
         const int failed_before = sd_output_failed(c);
@@ -428,8 +433,9 @@ void sd_run_end(sd_run *r)
         if (!r->code) r->code = 1;
     }
     res->n_passed = c->n_passed;
-    for (int k = 0; k < c->info.n_pipes; k++)
-        res->peak_dam_force = fmax(res->peak_dam_force, c->pipe_peak[k]);
+    for (int k = 0; k < c->loads.n; k++)
+        res->peak_dam_force = fmax(res->peak_dam_force, c->loads.p[k].peak);
+    sd_pipe_loads_free(&c->loads);
     res->steps = sd_world_step_count(c->w);
     res->wall_time = sd_now() - c->wall0;
     res->n_pictures = c->n_plots;
@@ -483,6 +489,7 @@ int sd_run_check_restart(const sd_scenario *s, const char *path, char *msg, size
     c.s = s;
     sd_run_restored r;
     int bad = sd_run_state_unpack(&c, blob, len, &r, m, sizeof m);
+    sd_pipe_loads_free(&c.loads);
     free(blob);
     sd_world_destroy(w);
     if (bad) {

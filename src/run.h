@@ -43,6 +43,8 @@ typedef struct {
     double p_v_class[SD_MAX_CLASSES];
     double p_v_logs;
     double peak_dam_force; /* largest force on any one pipe, N */
+    double v_held, v_channel, v_passed; /* debris at the end: held at the dam, in the channel, passed (m^3) */
+    int capture_cut;       /* the capture ended at its time limit (not settled) */
     int n_upstream, n_passed, n_removed;
     double wall_time;
     double phase_end[4]; /* simulated time at the end of packing, flow, capture */

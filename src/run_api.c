@@ -162,6 +162,7 @@ void sd_run_destroy(sd_run *r)
 {
     if (!r) return;
     if (!r->finished) sd_output_close(&r->c);
+    sd_pipe_loads_free(&r->c.loads);
     sd_world_destroy(r->c.w);
     fclose(r->err_stream);
     free(r->err_text);

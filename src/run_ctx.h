@@ -9,6 +9,7 @@
 #include "build.h"
 #include "core/binio.h"
 #include "io_vtk.h"
+#include "pipe_loads.h"
 #include "run.h"
 #include "trap.h"
 #include "water.h"
@@ -34,9 +35,8 @@ typedef struct {
     double h_d;
     double last_cross_time;
     double ke_peak;
-    double pipe_peak[2 * SD_MAX_PIPES], pipe_impulse[2 * SD_MAX_PIPES];
-    double pipe_peak_t[2 * SD_MAX_PIPES]; /* when the peak happened (pipes exist from the capture start) */
-    sd_vec3 pipe_impulse_vec[2 * SD_MAX_PIPES];
+    sd_pipe_loads loads; /* the pipes' loads (from the capture start, when the pipes go in) */
+    int capture_cut;     /* the capture ended at its time limit, not settled */
     double dam_force_now;
     double phase_end[4];
     int pack_at_rest;      /* the packing ended at rest (else at phases.packing_time) */
@@ -97,7 +97,7 @@ void sd_run_end(sd_run *r);
 
 typedef struct {
     int kind; /* SD_CKPT_FLOW_END or SD_CKPT_PERIODIC */
-    long series_len, traj_len;
+    long series_len, traj_len, pipes_len; /* the outputs' lengths at the checkpoint (-1: none) */
     double wall_before;   /* wall time of the run(s) before the checkpoint, s */
     double phase_wall_in; /* of that, in the phase the checkpoint was taken in */
     int npvd;
@@ -136,6 +136,9 @@ double sd_trap_body_top(const sd_body_view *b, int i);
 void sd_trap_deposit(const run_ctx *c, double *height, int *n_floating, double *floating_top);
 /* the flow length 1 m before the dam (model.md), into c->flow_len and its fields */
 void sd_trap_flow_length(run_ctx *c);
+/* the debris volumes at the end: held at the dam (the deposit against it, from *deposit_x0 to
+ * the trap plane), in the channel upstream of it, and passed (m^3) */
+void sd_trap_split(const run_ctx *c, double *held, double *channel, double *passed, double *deposit_x0);
 
 /* run_output.c: the files a run writes (series.csv, trajectories.csv, VTK snapshots, walls,
  * summary.json), the pictures it asks for, the progress line */
@@ -153,6 +156,8 @@ int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const cha
 void sd_output_close(run_ctx *c);
 /* the first failed write: nonzero (its errno) once one failed, the file in c->out_file */
 int sd_output_failed(const run_ctx *c);
+/* a failed write of file (errno e) elsewhere in the driver: kept like the outputs' own */
+void sd_output_note_failure(run_ctx *c, const char *file, int e);
 /* series.csv and trajectories.csv flushed and closed; nonzero when either could not be written */
 int sd_output_finish(run_ctx *c);
 

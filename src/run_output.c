@@ -22,6 +22,8 @@ static void out_failed(run_ctx *c, const char *file, int e)
 
 int sd_output_failed(const run_ctx *c) { return c->out_errno; }
 
+void sd_output_note_failure(run_ctx *c, const char *file, int e) { out_failed(c, file, e); }
+
 void sd_output_series_row(run_ctx *c)
 {
     if (!c->series) return;
@@ -273,25 +275,54 @@ static int summary_trap(run_ctx *c, cJSON *o, sd_run_result *res)
     return bad;
 }
 
-/* each pipe of the dam: where it is, its peak force (and when), its impulse */
+/* each pipe of the dam (docs/loads.md): where it is, its span, its peak force and moment (when,
+ * where), its impulse, the sustained load, whether the load was still rising at the end */
 static int summary_pipes(run_ctx *c, cJSON *o)
 {
     cJSON *pipes = cJSON_AddArrayToObject(o, "pipes");
     if (!pipes) return -1;
-    int bad = 0;
-    for (int k = 0; k < c->info.n_pipes; k++) {
+    int bad = add_str(o, "pipe_support", c->s->dam_support ? "fixed ends" : "simply supported");
+    for (int k = 0; k < c->loads.n; k++) {
+        const sd_pipe_load *L = &c->loads.p[k];
         cJSON *p = cJSON_CreateObject();
         if (!p || !cJSON_AddItemToArray(pipes, p)) {
             cJSON_Delete(p);
             return -1;
         }
-        const int col = c->info.pipe_is_column[k];
-        bad |= add_num(p, "gid", c->info.pipe_gid[k]) | add_str(p, "kind", col ? "column" : "beam") |
-               add_num(p, col ? "y_m" : "z_axis_m", c->info.pipe_coord[k]) | add_num(p, "peak_force_N", c->pipe_peak[k]) |
-               add_num(p, "peak_time_s", c->pipe_peak_t[k]) | add_num(p, "impulse_Ns", c->pipe_impulse[k]) |
-               add_num(p, "impulse_x_Ns", c->pipe_impulse_vec[k].x);
+        const double sus[3] = {L->sustained.x, L->sustained.y, L->sustained.z};
+        cJSON *sv = cJSON_CreateDoubleArray(sus, 3);
+        if (!sv || !cJSON_AddItemToObject(p, "sustained_N", sv)) {
+            cJSON_Delete(sv);
+            return -1;
+        }
+        bad |= add_num(p, "gid", L->gid) | add_str(p, "kind", L->is_column ? "column" : "beam") |
+               add_num(p, L->is_column ? "y_m" : "z_axis_m", L->coord) | add_num(p, "span_m", L->span) |
+               add_num(p, "peak_force_N", L->peak) | add_num(p, "peak_time_s", L->t_peak) |
+               add_num(p, "impulse_Ns", L->impulse) | add_num(p, "impulse_x_Ns", L->impulse_vec.x) |
+               add_num(p, "peak_moment_Nm", L->m_peak) | add_num(p, "peak_moment_time_s", L->t_m_peak) |
+               add_num(p, "peak_moment_at_m", L->s_at_m_peak) |
+               (cJSON_AddBoolToObject(p, "rising_at_end", L->rising) ? 0 : -1);
     }
     return bad;
+}
+
+/* where the debris ended (docs/loads.md): held at the dam, in the channel, passed; how the
+ * capture ended */
+static int summary_debris(run_ctx *c, cJSON *o, sd_run_result *res)
+{
+    double held, channel, passed, dep_x0;
+    sd_trap_split(c, &held, &channel, &passed, &dep_x0);
+    res->v_held = held;
+    res->v_channel = channel;
+    res->v_passed = passed;
+    res->capture_cut = c->capture_cut;
+    cJSON *d = add_obj(o, "debris_m3");
+    if (!d) return -1;
+    return add_num(d, "held_at_dam", held) | add_num(d, "in_channel", channel) | add_num(d, "passed", passed) |
+           add_num(d, "deposit_from_x_m", dep_x0) |
+           add_str(o, "capture", c->phase_end[PH_CAPTURE] <= 0.0 ? "not reached"
+                                 : c->capture_cut                ? "cut by its time limit"
+                                                                 : "settled");
 }
 
 char *sd_output_summary_text(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg)
@@ -299,7 +330,7 @@ char *sd_output_summary_text(run_ctx *c, sd_run_result *res, int status_code, co
     cJSON *o = cJSON_CreateObject();
     if (!o) return NULL;
     int bad = summary_run(c, o, status_code, status_msg) | summary_engine(c, o) | summary_elements(c, o);
-    if (c->s->flume_on) bad |= summary_trap(c, o, res) | summary_pipes(c, o);
+    if (c->s->flume_on) bad |= summary_trap(c, o, res) | summary_debris(c, o, res) | summary_pipes(c, o);
     cJSON *par = sd_scenario_params_json(c->s);
     if (!par || !cJSON_AddItemToObject(o, "parameters", par)) {
         cJSON_Delete(par);

@@ -18,7 +18,7 @@
  * length, the time series' lengths and the VTK series so far. The output timers are the world's
  * step count (saved with the world). The build's random numbers are spent before the first
  * step; the driver draws none later, so there is no rng state to carry. */
-#define BLOB_MAGIC "SDRUNv2"
+#define BLOB_MAGIC "SDRUNv3"
 
 static long file_len(FILE *f)
 {
@@ -26,7 +26,7 @@ static long file_len(FILE *f)
     return ftell(f);
 }
 
-static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series_len, long traj_len)
+static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series_len, long traj_len, long pipes_len)
 {
     const double now = sd_now();
     sd_bin_put(b, BLOB_MAGIC, 8);
@@ -49,13 +49,9 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series
         sd_bin_put_i32(b, c->info.pipe_gid[k]);
         sd_bin_put_i32(b, c->info.pipe_is_column[k]);
         sd_bin_put_f64(b, c->info.pipe_coord[k]);
-        sd_bin_put_f64(b, c->pipe_peak[k]);
-        sd_bin_put_f64(b, c->pipe_peak_t[k]);
-        sd_bin_put_f64(b, c->pipe_impulse[k]);
-        sd_bin_put_f64(b, c->pipe_impulse_vec[k].x);
-        sd_bin_put_f64(b, c->pipe_impulse_vec[k].y);
-        sd_bin_put_f64(b, c->pipe_impulse_vec[k].z);
     }
+    sd_pipe_loads_pack(&c->loads, b);
+    sd_bin_put_i32(b, c->capture_cut);
     for (int k = 0; k < SD_MAX_CLASSES; k++)
         sd_bin_put_f64(b, c->vol_total_class[k]);
     sd_bin_put_f64(b, c->vol_total_logs);
@@ -82,6 +78,7 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series
     sd_bin_put_f64(b, c->flow_wall);
     sd_bin_put_f64(b, now - c->wall0);
     sd_bin_put_f64(b, now - c->phase_w0);
+    sd_bin_put_i64(b, pipes_len);
     sd_bin_put_i64(b, series_len);
     sd_bin_put_i64(b, traj_len);
     /* the VTK series so far (file names relative to the output directory) */
@@ -155,13 +152,12 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
         c->info.pipe_gid[k] = sd_bin_get_i32(&b);
         c->info.pipe_is_column[k] = sd_bin_get_i32(&b);
         c->info.pipe_coord[k] = sd_bin_get_f64(&b);
-        c->pipe_peak[k] = sd_bin_get_f64(&b);
-        c->pipe_peak_t[k] = sd_bin_get_f64(&b);
-        c->pipe_impulse[k] = sd_bin_get_f64(&b);
-        c->pipe_impulse_vec[k].x = sd_bin_get_f64(&b);
-        c->pipe_impulse_vec[k].y = sd_bin_get_f64(&b);
-        c->pipe_impulse_vec[k].z = sd_bin_get_f64(&b);
     }
+    if (sd_pipe_loads_unpack(&c->loads, &b) || (c->loads.n != 0 && c->loads.n != c->info.n_pipes)) {
+        snprintf(msg, msglen, "run-driver state: the pipe loads are malformed");
+        return -1;
+    }
+    c->capture_cut = sd_bin_get_i32(&b);
     for (int k = 0; k < SD_MAX_CLASSES; k++)
         c->vol_total_class[k] = sd_bin_get_f64(&b);
     c->vol_total_logs = sd_bin_get_f64(&b);
@@ -188,6 +184,7 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     c->flow_wall = sd_bin_get_f64(&b);
     r->wall_before = sd_bin_get_f64(&b);
     r->phase_wall_in = sd_bin_get_f64(&b);
+    r->pipes_len = (long)sd_bin_get_i64(&b);
     r->series_len = (long)sd_bin_get_i64(&b);
     r->traj_len = (long)sd_bin_get_i64(&b);
     int np = sd_bin_get_i32(&b);
@@ -226,7 +223,7 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
         sd_run_state_free(r);
         return -1;
     }
-    int ok = c->n_passed >= 0 && c->n_snap >= 0 && r->series_len >= 0 && r->traj_len >= -1 && isfinite(c->phase_t0) &&
+    int ok = c->n_passed >= 0 && c->n_snap >= 0 && r->series_len >= 0 && r->traj_len >= -1 && r->pipes_len >= -1 && isfinite(c->phase_t0) &&
              isfinite(c->h_d) && isfinite(r->wall_before) && isfinite(r->phase_wall_in) && isfinite(c->flow_wall);
     if (ok && r->kind == SD_CKPT_FLOW_END)
         ok = c->phase == PH_FLOW && c->flow_ended == 1 && c->dam_built == 0;
@@ -315,6 +312,11 @@ int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg
     snprintf(a, sizeof a, "%s/series.csv", src);
     snprintf(b, sizeof b, "%s/series.csv", c->dir);
     if (copy_prefix(a, b, r->series_len, msg, msglen)) return -1;
+    if (r->pipes_len >= 0) {
+        snprintf(a, sizeof a, "%s/pipes.csv", src);
+        snprintf(b, sizeof b, "%s/pipes.csv", c->dir);
+        if (copy_prefix(a, b, r->pipes_len, msg, msglen)) return -1;
+    }
     if (c->s->n_traj > 0 && r->traj_len >= 0) {
         snprintf(a, sizeof a, "%s/trajectories.csv", src);
         snprintf(b, sizeof b, "%s/trajectories.csv", c->dir);
@@ -335,14 +337,15 @@ int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg
 
 static sd_status write_state(run_ctx *c, const char *path, int kind)
 {
-    long sl = file_len(c->series), tl = c->traj ? file_len(c->traj) : -1;
-    if (sl < 0 || (c->traj && tl < 0)) return SD_ERR_IO;
+    long sl = file_len(c->series), tl = c->traj ? file_len(c->traj) : -1, pl = c->loads.csv ? file_len(c->loads.csv) : -1;
+    if (sl < 0 || (c->traj && tl < 0) || (c->loads.csv && pl < 0)) return SD_ERR_IO;
     /* the rows the checkpoint counts are on the disk before the checkpoint that counts them */
-    if (kind == SD_CKPT_PERIODIC && (fsync(fileno(c->series)) || (c->traj && fsync(fileno(c->traj)))))
+    if (kind == SD_CKPT_PERIODIC && (fsync(fileno(c->series)) || (c->traj && fsync(fileno(c->traj))) ||
+                                     (c->loads.csv && fsync(fileno(c->loads.csv)))))
         return SD_ERR_IO;
     sd_bin_writer b;
     sd_bin_writer_init(&b);
-    state_pack(c, &b, kind, sl, tl);
+    state_pack(c, &b, kind, sl, tl, pl);
     sd_status st = b.err ? SD_ERR_NOMEM : sd_checkpoint_write(path, c->w, b.p, b.n);
     sd_bin_writer_fini(&b);
     return st;

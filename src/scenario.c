@@ -97,6 +97,8 @@ static const sd_param params[] = {
      "explicit column positions y (empty: from l_h)"},
     {"dam.beams", P_DLIST, OFF(beam_z), OFF(n_beams), SD_MAX_PIPES, "m", 0, INF, 0,
      "explicit beam undersides z (empty: from l_v, top_beam)"},
+    {"dam.fixed_ends", P_BOOL, OFF(dam_support), 0, 0, "-", 0, 1, 0,
+     "pipe bending moments for spans with fixed ends (default: simply supported; docs/loads.md)"},
     {"water.on", P_BOOL, OFF(water_on), 0, 0, "-", 0, 1, 0, "fluid forces (SPEC §5)"},
     {"water.u", P_DOUBLE, OFF(water_u), 0, 0, "m/s", 0, INF, 0, "reference velocity U"},
     {"water.h", P_DOUBLE, OFF(water_h), 0, 0, "m", 0, INF, 1, "flow depth h"},
@@ -909,7 +911,8 @@ static const char *const capture_keys[] = {"dam.l_h",           "dam.l_v",
                                            "dam.beams",         "phases.capture_limit",
                                            "phases.quiet_time", "phases.ke_fraction",
                                            "water.probe",       "water.h_d_floating",
-                                           "water.capture_length", "water.capture_end"};
+                                           "water.capture_length", "water.capture_end",
+                                           "dam.fixed_ends"};
 
 int sd_scenario_is_capture_key(const char *key)
 {

@@ -61,6 +61,7 @@ typedef struct sd_scenario {
     int dam_on;
     double pipe_diam, l_h, l_v, top_beam;
     int n_columns, n_beams;
+    int dam_support; /* bending moments: 0 simple supports, 1 fixed ends (pipe_loads.h) */
     double column_y[SD_MAX_PIPES];
     double beam_z[SD_MAX_PIPES]; /* underside heights */
     /* water */

@@ -326,10 +326,10 @@ static int child_run(const sweep_def *d, const run_item *r, const char *restart)
             fprintf(f, ",%.6f", res.p_v);
             for (int k = 0; k < SD_MAX_CLASSES && k < s.n_classes; k++)
                 fprintf(f, ",%.6f", res.p_v_class[k]);
-            for (int k = s.n_classes; k < 4; k++)
-                fprintf(f, ",");
-            fprintf(f, ",%.6f,%.6e,%d,%.2f,%.4f,%.2f,%d,%016llx\n", res.p_v_logs, res.peak_dam_force, res.n_passed,
-                    wall, s.capture_limit, res.flow_wall, restart != NULL, (unsigned long long)res.state_hash);
+            fprintf(f, ",%.6f,%.6e,%.6e,%.6e,%s,%.6e,%d,%.2f,%.4f,%.2f,%d,%016llx\n", res.p_v_logs, res.v_held,
+                    res.v_channel, res.v_passed, res.capture_cut ? "limit" : "settled", res.peak_dam_force,
+                    res.n_passed, wall, s.capture_limit, res.flow_wall, restart != NULL,
+                    (unsigned long long)res.state_hash);
             if (fclose(f) || rename(tmp, path)) code = 1;
         }
     }
@@ -515,7 +515,7 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
     run_item *items = calloc((size_t)total, sizeof(*items));
     if (!items) return 1;
     /* validate every case before running anything */
-    int bad = 0, flume = 0;
+    int bad = 0, flume = 0, n_classes = 0;
     for (int c = 0; c < ncase; c++)
         for (int s = 0; s < d.runs; s++) {
             run_item *r = &items[c * d.runs + s];
@@ -536,7 +536,10 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
                     fprintf(err, "%s: case %d is invalid (see above)\n", sweep_file, c);
                     bad = 1;
                 } else {
-                    if (c == 0) flume = sc.flume_on;
+                    if (c == 0) {
+                        flume = sc.flume_on;
+                        n_classes = sc.n_classes;
+                    }
                     sd_scenario_free(&sc);
                 }
             }
@@ -859,10 +862,11 @@ collect:
         fprintf(f, "case,seed");
         for (int v = 0; v < d.n_vary; v++)
             fprintf(f, ",%s", d.vary_key[v]);
-        fprintf(
-            f,
-            ",p_v,p_v_class0,p_v_class1,p_v_class2,p_v_class3,p_v_logs,peak_dam_force_N,passed,wall_s,capture_limit_s,"
-            "flow_wall_s,branched,state_hash\n");
+        fprintf(f, ",p_v");
+        for (int k = 0; k < n_classes; k++)
+            fprintf(f, ",p_v_class%d", k);
+        fprintf(f, ",p_v_logs,v_held_m3,v_channel_m3,v_passed_m3,capture_end,peak_dam_force_N,passed,wall_s,"
+                   "capture_limit_s,flow_wall_s,branched,state_hash\n");
         for (int i = 0; i < total; i++) {
             char rp[1300], line[2048], copy[2048];
             snprintf(rp, sizeof rp, "%s/result.csv", items[i].dir);
@@ -873,7 +877,7 @@ collect:
                 memcpy(copy, line, sizeof copy);
                 char *fl[64];
                 int nf = split_csv(copy, fl, 64);
-                int want = 2 + d.n_vary + 13;
+                int want = 2 + d.n_vary + 1 + n_classes + 12;
                 if (nf == want && gflow && gdone) {
                     double wall = atof(fl[nf - 5]), fw = atof(fl[nf - 3]);
                     int br = atoi(fl[nf - 2]);

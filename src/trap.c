@@ -213,3 +213,48 @@ void sd_trap_flow_length(run_ctx *c)
     c->flow_len_time = sd_world_time(c->w);
     c->flow_len_done = 1;
 }
+
+/* Where the debris is at the end (docs/loads.md): held at the dam (the deposit against it:
+ * from the trap plane upstream, bins 2 d_max long across the flume, while a bin's solid volume
+ * spread over the flume's width is at least d_max / 2 deep, about a layer of the largest
+ * stones), in the channel (upstream of that, never reached the dam's deposit) and passed
+ * (past the trap plane, in the world or removed at the end of the bed). */
+void sd_trap_split(const run_ctx *c, double *held, double *channel, double *passed, double *deposit_x0)
+{
+    const sd_scenario *s = c->s;
+    const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
+    double dmax = 0.0;
+    for (int k = 0; k < s->n_classes; k++)
+        if (s->class_count[k] > 0) dmax = fmax(dmax, s->class_diam[k]);
+    if (dmax <= 0.0) dmax = s->log_diam;
+    const double xt = sd_trap_plane_x(c), bin = 2.0 * dmax, x0 = 0.0; /* the upstream end of the flume */
+    const int nb = (int)ceil((xt - x0) / bin) + 1;
+    double *vol = calloc((size_t)nb, sizeof *vol);
+    *held = *channel = 0.0;
+    *passed = c->vol_passed_logs;
+    for (int k = 0; k < SD_MAX_CLASSES; k++)
+        *passed += c->vol_passed_class[k];
+    *deposit_x0 = xt;
+    for (int i = 0; i < b->n; i++) {
+        if (!is_debris(b, i)) continue;
+        const double v = sd_trap_body_volume(b, i);
+        if (b->pos[i].x >= xt) {
+            *passed += v;
+            continue;
+        }
+        int j = (int)floor((xt - b->pos[i].x) / bin); /* bin 0 touches the trap plane */
+        if (j >= nb) j = nb - 1;
+        if (j < 0) j = 0;
+        if (vol) vol[j] += v;
+    }
+    if (!vol) return;
+    const double full = 0.5 * dmax * bin * s->width;
+    int jd = 0;
+    while (jd < nb && vol[jd] >= full)
+        jd++;
+    for (int j = 0; j < nb; j++)
+        if (j < jd) *held += vol[j];
+        else *channel += vol[j];
+    *deposit_x0 = xt - jd * bin;
+    free(vol);
+}

@@ -221,6 +221,32 @@ comp_ok=1
 [ "$(complete_words sabodem run x.yaml --checkpoint-at '')" = "flow_end" ] || { echo "completion: flow_end"; comp_ok=0; }
 [ "$comp_ok" -eq 1 ] && pass=$((pass + 1)) || { echo "FAIL bash completion"; fail=$((fail + 1)); }
 
+# the run's debris account and pipe loads (docs/loads.md): held + in the channel + passed is all
+# the debris released, P_V is (held + channel) / all, the capture's end is named, pipes.csv has a
+# row per pipe per sample with the moment of its columns' resultant inside each span
+if /usr/bin/python3 - "$tmp/png" <<'PY'
+import csv, json, sys
+d = sys.argv[1]
+s = json.load(open(d + "/summary.json"))
+v = s["debris_m3"]
+total = s["solid_volume_m3"]["spheres"] + s["solid_volume_m3"]["logs"]
+assert abs(v["held_at_dam"] + v["in_channel"] + v["passed"] - total) <= 1e-6 * total, (v, total)
+assert abs((v["held_at_dam"] + v["in_channel"]) / total - s["trap_ratio"]) <= 2e-6, (v, s["trap_ratio"])
+assert s["capture"] == "cut by its time limit", s["capture"]
+rows = list(csv.DictReader(open(d + "/pipes.csv")))
+n = len(s["pipes"])
+assert n == 4 and len(rows) % n == 0 and len(rows) >= 2 * n, (n, len(rows))
+for r in rows:
+    span = s["pipes"][int(r["pipe"])]["span_m"]
+    assert 0.0 <= float(r["s_m"]) <= span and float(r["m_bend_Nm"]) >= 0.0, r
+    f = (float(r["fx_N"]) ** 2 + float(r["fy_N"]) ** 2 + float(r["fz_N"]) ** 2) ** 0.5
+    assert abs(f - float(r["f_N"])) <= 1e-5 * max(f, 1e-9), r
+# every step's force goes into some sample's interval peak: the largest is the run's peak
+pk, ipk = max(p["peak_force_N"] for p in s["pipes"]), max(float(r["f_peak_interval_N"]) for r in rows)
+assert pk > 0 and abs(pk - ipk) <= 1e-6 * pk, (pk, ipk)
+PY
+then pass=$((pass + 1)); else echo "FAIL debris account / pipe loads in summary.json, pipes.csv"; fail=$((fail + 1)); fi
+
 # docs/scenario.md carries the same table the loader checks
 "$bin" params --markdown > "$tmp/params.md"
 if awk '/^## Keys/{f=1;next} f && NF' "$src_dir/docs/scenario.md" | diff -q - "$tmp/params.md" >/dev/null; then

@@ -97,7 +97,7 @@ if [ "$code" -eq 0 ] && [ "$(hash "$run_dir/summary.json")" = "$ref" ]; then ok;
 for p in packing flow capture; do
   case " $phases " in *" $p "*) ok ;; *) bad "no restart from a checkpoint in the $p phase ($phases)" ;; esac
 done
-for f in series.csv trajectories.csv series.pvd spheres_final.vtp cylinders_final.vtp spheres_000003.vtp cylinders_000006.vtp; do
+for f in series.csv pipes.csv trajectories.csv series.pvd spheres_final.vtp cylinders_final.vtp spheres_000003.vtp cylinders_000006.vtp; do
   cmp -s "$tmp/ref/$f" "$run_dir/$f" && ok || bad "kill loop: $f differs from the uninterrupted run's"
 done
 [ "$(summary_core "$tmp/ref/summary.json")" = "$(summary_core "$run_dir/summary.json")" ] && ok \

@@ -30,9 +30,12 @@ set:
   phases.capture_limit: 0.25
   output.checkpoint_interval: 0.02
 EOF
-# the columns that do not depend on the wall clock: case, seed, dam.l_v, p_v ... passed,
-# capture_limit_s, branched, state_hash
-values() { cut -d, -f1-11,13,15,16 "$1"; }
+# the columns that do not depend on the wall clock: all but wall_s and flow_wall_s
+values() {
+  /usr/bin/python3 -c 'import csv, sys
+for r in csv.DictReader(open(sys.argv[1])):
+    print(",".join(v for k, v in r.items() if k not in ("wall_s", "flow_wall_s")))' "$1"
+}
 descendants() { # every process below $1
   local c
   for c in $(pgrep -P "$1"); do echo "$c"; descendants "$c"; done

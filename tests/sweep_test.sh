@@ -89,8 +89,21 @@ nr=$(started run "$tmp/resume2.log")
 echo "resume after deletions: exit $code, $nf flows and $nr runs started"
 if [ "$code" -eq 0 ] && [ "$nf" -eq 1 ] && [ "$nr" -eq 3 ] && grep -q "flow logs.count=0_seed1 started" "$tmp/resume2.log" \
    && [ ! -e "$out/branch/logs.count=4_seed1/flow_end.ckpt" ]; then ok; else bad "partial resume"; cat "$tmp/resume2.log"; fi
+# the debris account per run: held + channel + passed volumes positive and P_V = (held +
+# channel) / all; the capture's end named; a header per size class (3 here) and no more
+if /usr/bin/python3 - "$out/results.csv" <<'PY'
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+cols = list(rows[0].keys())
+assert [c for c in cols if c.startswith("p_v_class")] == ["p_v_class0", "p_v_class1", "p_v_class2"], cols
+for r in rows:
+    h, c, p = float(r["v_held_m3"]), float(r["v_channel_m3"]), float(r["v_passed_m3"])
+    assert h >= 0 and c >= 0 and p >= 0 and abs((h + c) / (h + c + p) - float(r["p_v"])) <= 2e-5, r
+    assert r["capture_end"] in ("settled", "limit"), r
+PY
+then ok; else bad "results.csv debris columns"; fi
 # the recomputed runs carry the same bits (trap ratio and state hash)
-if diff <(cut -d, -f1-11,17 "$tmp/results1.csv") <(cut -d, -f1-11,17 "$out/results.csv") >/dev/null; then ok
+if diff <(cut -d, -f1-14,20 "$tmp/results1.csv") <(cut -d, -f1-14,20 "$out/results.csv") >/dev/null; then ok
 else bad "recomputed results differ"; diff "$tmp/results1.csv" "$out/results.csv"; fi
 
 # a damaged flow checkpoint is refused before anything runs, naming the file
@@ -107,7 +120,7 @@ rm "$ck"
 "$bin" sweep "$tmp/small.yaml" -o "$out" --parallel 2 > "$tmp/resume3.log" 2>&1
 code=$?
 if [ "$code" -eq 0 ] && [ "$(started flow "$tmp/resume3.log")" -eq 1 ] && [ "$(started run "$tmp/resume3.log")" -eq 1 ] \
-   && diff <(cut -d, -f1-11,17 "$tmp/results1.csv") <(cut -d, -f1-11,17 "$out/results.csv") >/dev/null; then ok
+   && diff <(cut -d, -f1-14,20 "$tmp/results1.csv") <(cut -d, -f1-14,20 "$out/results.csv") >/dev/null; then ok
 else bad "recompute after deleting the damaged checkpoint"; cat "$tmp/resume3.log"; fi
 
 # branched = straight: one case (l_V = 0, 4 logs, seed 1) run without branching
@@ -115,8 +128,8 @@ sed -e 's/dam.l_v: \[0.040, 0\]/dam.l_v: [0]/' -e 's/logs.count: \[0, 4\]/logs.c
   "$tmp/small.yaml" > "$tmp/one.yaml"
 "$bin" sweep "$tmp/one.yaml" -o "$tmp/one" --no-branch > "$tmp/one.log" 2>&1
 code=$?
-a=$(awk -F, '$3 == "0" && $4 == "4" && $2 == "1" {print $5, $17}' "$out/results.csv")
-b=$(awk -F, 'NR == 2 {print $5, $17}' "$tmp/one/results.csv")
+a=$(awk -F, '$3 == "0" && $4 == "4" && $2 == "1" {print $5, $20}' "$out/results.csv")
+b=$(awk -F, 'NR == 2 {print $5, $20}' "$tmp/one/results.csv")
 echo "branched: $a; straight: $b"
 if [ "$code" -eq 0 ] && [ -n "$a" ] && [ "$a" = "$b" ] && [ ! -e "$tmp/one/branch" ]; then ok; else bad "branched run differs from the straight one"; cat "$tmp/one.log"; fi
 
