@@ -3,7 +3,7 @@ JOBS ?= $(shell nproc)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
 
-.PHONY: setup build run test test-fast asan bench clean
+.PHONY: setup build run test test-fast asan fuzz bench clean
 
 setup:
 	bash scripts/setup.sh
@@ -34,8 +34,14 @@ asan: setup
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && SD_SANITIZED=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS)
 
+# the fuzz harnesses (tests/fuzz/) with clang's libFuzzer, each for FUZZ_SECONDS (docs/reliability.md)
+FUZZ_SECONDS ?= 60
+fuzz:
+	bash scripts/setup.sh --fuzz
+	FUZZ_SECONDS=$(FUZZ_SECONDS) JOBS=$(JOBS) bash scripts/fuzz.sh
+
 bench: build
 	PGO=$(PGO) bash bench/run.sh
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) build-fuzz

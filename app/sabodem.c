@@ -36,7 +36,7 @@ static const struct {
     const char *name, *usage, *help;
 } commands[] = {
     {"run", "sabodem run FILE [-o DIR] [--set key=value]... [--threads N] [--seed S]\n"
-            "                 [--checkpoint-at flow_end] [--restart CHECKPOINT]",
+            "                 [--checkpoint-at flow_end] [--restart CHECKPOINT] [--max-memory BYTES] [--max-steps N]",
      "simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
      "  -o, --output DIR          the output directory\n"
      "  --set key=value           override a scenario key (sabodem params lists them)\n"
@@ -45,15 +45,20 @@ static const struct {
      "  --checkpoint-at flow_end  also write DIR/flow_end.ckpt when the flow reaches the dam\n"
      "  --restart CHECKPOINT      continue from such a checkpoint (the capture phase only); FILE may\n"
      "                            differ from the writer's scenario only in the dam layout and\n"
-     "                            capture-phase keys (docs/sweep.md)"},
-    {"check", "sabodem check FILE [--set key=value]...",
-     "validate the scenario and build its scene without running"},
-    {"sweep", "sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch]",
+     "                            capture-phase keys (docs/sweep.md)\n"
+     "  --max-memory BYTES        refuse a scene estimated to need more memory (default 8G;\n"
+     "                            suffixes K, M, G, T)\n"
+     "  --max-steps N             refuse a run of more time steps (default 1e8)"},
+    {"check", "sabodem check FILE [--set key=value]... [--max-memory BYTES] [--max-steps N]",
+     "validate the scenario, estimate its memory and steps, and build its scene without running"},
+    {"sweep", "sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch] [--max-memory BYTES]\n"
+              "                 [--max-steps N]",
      "run a matrix of cases x seeds in parallel (resumable), with CSV and figures; runs that\n"
      "differ only in the dam layout share one packing + flow (docs/sweep.md)\n"
      "  --parallel N  processes at once (default: the sweep file's, else the cores)\n"
      "  --dry-run     list the runs and shared flows, and what is already done\n"
-     "  --no-branch   every run packs and flows on its own"},
+     "  --no-branch   every run packs and flows on its own\n"
+     "  --max-memory BYTES, --max-steps N   the limits each run's estimate must keep to (as run)"},
     {"params", "sabodem params [--markdown]", "list every scenario key with its type, unit, default and range"},
 };
 enum { N_COMMANDS = sizeof commands / sizeof commands[0] };
@@ -110,6 +115,29 @@ static int int_option(const char *opt, const char *text, long lo, long hi, long 
     return 0;
 }
 
+/* --max-memory (bytes, with an optional K, M, G or T: powers of 1024) or --max-steps (a count,
+ * 1e9 allowed): 0 and *v set, else a message naming the option and 2. */
+static int limit_option(const char *opt, const char *text, int bytes, double *v)
+{
+    char *end;
+    errno = 0;
+    double x = strtod(text, &end);
+    if (bytes && *end && !end[1]) {
+        const char *u = strchr("KMGT", *end);
+        if (u) {
+            x *= (double)(1ull << (10 * (u - "KMGT" + 1)));
+            end++;
+        }
+    }
+    if (errno || end == text || *end || !(x >= 1) || !(x < 1e30)) {
+        fprintf(stderr, "sabodem: %s: expected a positive %s, got '%s'\n", opt,
+                bytes ? "size in bytes (suffix K, M, G or T)" : "number of steps", text);
+        return 2;
+    }
+    *v = x;
+    return 0;
+}
+
 /* The engine's tuning from the environment (SD_SIMD, SD_PREFETCH; sd_tuning_from_env): how it
  * runs, never what it computes, so a value it does not know is a warning, not an error. */
 static void tuning_from_env(sd_tuning *t)
@@ -154,6 +182,7 @@ int main(int argc, char **argv)
         const char *file = NULL, *outdir = NULL;
         sd_sweep_opts so;
         memset(&so, 0, sizeof so);
+        so.limits = sd_scenario_limits_default();
         for (int i = 2; i < argc; i++) {
             if ((!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) && i + 1 < argc) outdir = argv[++i];
             else if (!strcmp(argv[i], "--parallel") && i + 1 < argc) {
@@ -164,6 +193,10 @@ int main(int argc, char **argv)
                     return 2;
                 }
                 so.parallel = (int)p;
+            } else if (!strcmp(argv[i], "--max-memory") && i + 1 < argc) {
+                if (limit_option("--max-memory", argv[++i], 1, &so.limits.max_bytes)) return 2;
+            } else if (!strcmp(argv[i], "--max-steps") && i + 1 < argc) {
+                if (limit_option("--max-steps", argv[++i], 0, &so.limits.max_steps)) return 2;
             } else if (!strcmp(argv[i], "--dry-run")) so.dry_run = 1;
             else if (!strcmp(argv[i], "--no-branch")) so.no_branch = 1;
             else if (argv[i][0] == '-') {
@@ -199,6 +232,7 @@ int main(int argc, char **argv)
     }
     const char *file = NULL, *outdir = NULL, *restart = NULL;
     int ckpt_flow_end = 0;
+    sd_scenario_limits lim = sd_scenario_limits_default();
     const char **sets = calloc((size_t)argc + 2, sizeof(char *));
     char seedbuf[64], thrbuf[64];
     int nsets = 0;
@@ -232,6 +266,13 @@ int main(int argc, char **argv)
             }
             ckpt_flow_end = 1;
         } else if (!strcmp(a, "--restart") && i + 1 < argc && !strcmp(cmd, "run")) restart = argv[++i];
+        else if ((!strcmp(a, "--max-memory") || !strcmp(a, "--max-steps")) && i + 1 < argc) {
+            const int bytes = !strcmp(a, "--max-memory");
+            if (limit_option(a, argv[++i], bytes, bytes ? &lim.max_bytes : &lim.max_steps)) {
+                free(sets);
+                return 2;
+            }
+        }
         else if (a[0] == '-') {
             fprintf(stderr, "sabodem: unknown or incomplete option '%s'\n", a);
             usage(stderr);
@@ -257,6 +298,13 @@ int main(int argc, char **argv)
     }
     free(sets);
     tuning_from_env(&s.world.tuning);
+    /* the memory and the steps it will take, before anything is allocated */
+    sd_scenario_cost cost;
+    sd_scenario_estimate(&s, &cost);
+    if (sd_scenario_check_cost(&s, &cost, &lim, stderr)) {
+        sd_scenario_free(&s);
+        return 2;
+    }
     if (!strcmp(cmd, "check")) {
         /* build the scene too: placement and stability are part of validity */
         sd_world *w;
@@ -275,7 +323,8 @@ int main(int argc, char **argv)
             fprintf(stderr, "%s: %s\n", file, sd_status_message(st));
             return 2;
         }
-        printf("%s: ok (%d elements, %d triangles)\n", file, n, t);
+        printf("%s: ok (%d elements, %d triangles; estimate: %.3g MB, %.4g steps, about %.3g s on one core)\n", file,
+               n, t, cost.bytes / 1e6, cost.steps, cost.seconds);
         return 0;
     }
     char name[256], dirbuf[512];
