@@ -74,14 +74,29 @@ static void human_time(double t, char *buf, size_t n)
         snprintf(buf, n, "%.3g years", t / (365.25 * 86400));
 }
 
+/* "512 KiB", "8 GiB", "76.3 GiB" */
+static void human_bytes(double b, char *buf, size_t n)
+{
+    static const char *const unit[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+    int k = 0;
+    while (b >= 1024 && k < 6) {
+        b /= 1024;
+        k++;
+    }
+    snprintf(buf, n, "%.3g %s", b, unit[k]);
+}
+
 int sd_scenario_check_cost(const sd_scenario *s, const sd_scenario_cost *c, const sd_scenario_limits *lim, FILE *err)
 {
     int bad = 0;
     if (!(c->bytes <= lim->max_bytes)) {
+        char need[32], have[32];
+        human_bytes(c->bytes, need, sizeof need);
+        human_bytes(lim->max_bytes, have, sizeof have);
         fprintf(err,
-                "%s: the scene needs about %.3g GB of memory (%.4g elements), more than the limit of %.3g GB; "
-                "make it smaller (counts, flume size, placement boxes) or raise the limit with --max-memory\n",
-                s->path, c->bytes / 1e9, c->bodies, lim->max_bytes / 1e9);
+                "%s: the scene needs about %s of memory (%.4g elements), more than the limit of %s; make it smaller "
+                "(counts, flume size, placement boxes) or raise the limit with --max-memory\n",
+                s->path, need, c->bodies, have);
         bad = 1;
     }
     if (!(c->steps <= lim->max_steps)) {
