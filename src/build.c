@@ -96,8 +96,8 @@ void sd_placer_destroy(sd_placer *p)
 
 static int clampc(double v, int n)
 {
-    int i = (int)floor(v);
-    return i < 0 ? 0 : (i >= n ? n - 1 : i);
+    const double f = floor(v); /* (clamped before the conversion: NaN and huge values too) */
+    return f >= 0.0 ? (f < n ? (int)f : n - 1) : 0;
 }
 
 static void item_range(const sd_placer *p, sd_vec3 c, double ext, int r[6])
