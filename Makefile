@@ -3,7 +3,7 @@ JOBS ?= $(shell nproc)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
 
-.PHONY: setup build run test test-fast asan bench install clean
+.PHONY: setup build run test test-fast asan fuzz bench install clean
 
 setup:
 	bash scripts/setup.sh
@@ -41,8 +41,14 @@ PREFIX ?= /usr/local
 install: build
 	cmake --install $(BUILD) --prefix $(PREFIX)
 
+# the fuzz harnesses (tests/fuzz/) with clang's libFuzzer, each for FUZZ_SECONDS (docs/reliability.md)
+FUZZ_SECONDS ?= 60
+fuzz:
+	bash scripts/setup.sh --fuzz
+	FUZZ_SECONDS=$(FUZZ_SECONDS) JOBS=$(JOBS) bash scripts/fuzz.sh
+
 bench: build
 	PGO=$(PGO) bash bench/run.sh
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) build-fuzz

@@ -7,12 +7,15 @@
 
 static const app_option run_options[] = {
     {"-o", "DIR"}, {"--output", "DIR"}, {"--overwrite", NULL}, {"--set", "key=value"}, {"--threads", "N"}, {"--seed", "S"},
-    {"--checkpoint-at", "flow_end"}, {"--restart", "CHECKPOINT"}, {"--help", NULL}, {NULL, NULL}};
+    {"--checkpoint-at", "flow_end"}, {"--restart", "CHECKPOINT"}, {"--max-memory", "BYTES"}, {"--max-steps", "N"},
+    {"--help", NULL}, {NULL, NULL}};
 static const app_option check_options[] = {{"--set", "key=value"}, {"--threads", "N"}, {"--seed", "S"},
-                                           {"--png", "OUT.png"}, {"--help", NULL},  {NULL, NULL}};
+                                           {"--png", "OUT.png"}, {"--max-memory", "BYTES"}, {"--max-steps", "N"},
+                                           {"--help", NULL},  {NULL, NULL}};
 static const app_option sweep_options[] = {{"-o", "DIR"},      {"--output", "DIR"},    {"--parallel", "N"},
                                            {"--dry-run", NULL}, {"--no-branch", NULL}, {"--shard", "U/N"},
-                                           {"--collect", NULL}, {"--emit", "slurm"},   {"--help", NULL},
+                                           {"--collect", NULL}, {"--emit", "slurm"},   {"--max-memory", "BYTES"},
+                                           {"--max-steps", "N"}, {"--help", NULL},
                                            {NULL, NULL}};
 static const app_option params_options[] = {{"--markdown", NULL}, {"--help", NULL}, {NULL, NULL}};
 static const app_option man_options[] = {{"--help", NULL}, {NULL, NULL}};
@@ -21,7 +24,7 @@ static const app_option completion_options[] = {{"bash", NULL}, {"--help", NULL}
 const app_command app_commands[] = {
     {"run",
      "sabodem run FILE [-o DIR] [--overwrite] [--set key=value]... [--threads N] [--seed S]\n"
-     "                 [--checkpoint-at flow_end] [--restart CHECKPOINT]",
+     "                 [--checkpoint-at flow_end] [--restart CHECKPOINT] [--max-memory BYTES] [--max-steps N]",
      "simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
      "  -o, --output DIR          the output directory (refused if it holds another run's files)\n"
      "  --overwrite               delete another run's files in DIR first\n"
@@ -33,17 +36,23 @@ const app_command app_commands[] = {
      "                            differ from the writer's scenario only in the dam layout and\n"
      "                            capture-phase keys, docs/sweep.md) or from a periodic one\n"
      "                            (output.checkpoint_interval: DIR/checkpoint_<step>.ckpt, the same\n"
-     "                            scenario, any phase, the same bits as a run never stopped)",
+     "                            scenario, any phase, the same bits as a run never stopped)\n"
+     "  --max-memory BYTES        refuse a scene estimated to need more memory (default 8G;\n"
+     "                            suffixes K, M, G, T)\n"
+     "  --max-steps N             refuse a run of more time steps (default 1e8)",
      run_options},
-    {"check", "sabodem check FILE [--set key=value]... [--threads N] [--seed S] [--png OUT.png]",
-     "validate the scenario, build its scene without running and describe it: the debris\n"
+    {"check", "sabodem check FILE [--set key=value]... [--threads N] [--seed S] [--png OUT.png]\n"
+              "                   [--max-memory BYTES] [--max-steps N]",
+     "validate the scenario, estimate its memory and steps, build its scene without running and\n"
+     "describe it: the debris\n"
      "(counts, solid volume, K_w), the dam (axes, clear gaps, l_H/d_max, l_V/d_max)\n"
      "  --png OUT.png  also draw the dam's front view (with the largest boulder and a log to\n"
-     "                 scale) and a side view of the initial state (python3-matplotlib)",
+     "                 scale) and a side view of the initial state (python3-matplotlib)\n"
+     "  --max-memory BYTES, --max-steps N   the limits the estimate must keep to (as run)",
      check_options},
     {"sweep",
      "sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch]\n"
-     "                   [--shard U/N | --collect | --emit slurm]",
+     "                   [--shard U/N | --collect | --emit slurm] [--max-memory BYTES] [--max-steps N]",
      "run a matrix of cases x seeds in parallel (resumable), with CSV and figures; runs that\n"
      "differ only in the dam layout share one packing + flow (docs/sweep.md). Under mpirun the\n"
      "ranks share the runs (one at a time each unless --parallel), rank 0 collects.\n"
@@ -54,7 +63,8 @@ const app_command app_commands[] = {
      "  --shard U/N   run only work unit U, U+N, U+2N, ... (a shared flow and its runs, or a\n"
      "                run); no results.csv (--collect writes it)\n"
      "  --collect     run nothing: results.csv, cases.csv and figures from the finished runs\n"
-     "  --emit slurm  write DIR/slurm/: a job array (one task per unit) and a collect job",
+     "  --emit slurm  write DIR/slurm/: a job array (one task per unit) and a collect job\n"
+     "  --max-memory BYTES, --max-steps N   the limits each run's estimate must keep to (as run)",
      sweep_options},
     {"params", "sabodem params [--markdown]", "list every scenario key with its type, unit, default and range",
      params_options},

@@ -75,6 +75,29 @@ static int int_option(const char *opt, const char *text, long lo, long hi, long 
     return 0;
 }
 
+/* --max-memory (bytes, with an optional K, M, G or T: powers of 1024) or --max-steps (a count,
+ * 1e9 allowed): 0 and *v set, else a message naming the option and 2. */
+static int limit_option(const char *opt, const char *text, int bytes, double *v)
+{
+    char *end;
+    errno = 0;
+    double x = strtod(text, &end);
+    if (bytes && *end && !end[1]) {
+        const char *u = strchr("KMGT", *end);
+        if (u) {
+            x *= (double)(1ull << (10 * (u - "KMGT" + 1)));
+            end++;
+        }
+    }
+    if (errno || end == text || *end || !(x >= 1) || !(x < 1e30)) {
+        fprintf(stderr, "sabodem: %s: expected a positive %s, got '%s'\n", opt,
+                bytes ? "size in bytes (suffix K, M, G or T)" : "number of steps", text);
+        return 2;
+    }
+    *v = x;
+    return 0;
+}
+
 /* The engine's tuning from the environment (SD_SIMD, SD_PREFETCH; sd_tuning_from_env): how it
  * runs, never what it computes, so a value it does not know is a warning, not an error. */
 static void tuning_from_env(sd_tuning *t)
@@ -172,6 +195,7 @@ int main(int argc, char **argv)
         const char *file = NULL, *outdir = NULL;
         sd_sweep_opts so;
         memset(&so, 0, sizeof so);
+        so.limits = sd_scenario_limits_default();
         for (int i = 2; i < argc; i++) {
             if ((!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) && i + 1 < argc) outdir = argv[++i];
             else if (!strcmp(argv[i], "--parallel") && i + 1 < argc) {
@@ -182,6 +206,10 @@ int main(int argc, char **argv)
                     return 2;
                 }
                 so.parallel = (int)p;
+            } else if (!strcmp(argv[i], "--max-memory") && i + 1 < argc) {
+                if (limit_option("--max-memory", argv[++i], 1, &so.limits.max_bytes)) return 2;
+            } else if (!strcmp(argv[i], "--max-steps") && i + 1 < argc) {
+                if (limit_option("--max-steps", argv[++i], 0, &so.limits.max_steps)) return 2;
             } else if (!strcmp(argv[i], "--dry-run")) so.dry_run = 1;
             else if (!strcmp(argv[i], "--no-branch")) so.no_branch = 1;
             else if (!strcmp(argv[i], "--collect")) so.collect = 1;
@@ -265,6 +293,7 @@ int main(int argc, char **argv)
     }
     const char *file = NULL, *outdir = NULL, *restart = NULL, *png = NULL;
     int ckpt_flow_end = 0, overwrite = 0;
+    sd_scenario_limits lim = sd_scenario_limits_default();
     const char **sets = calloc((size_t)argc + 2, sizeof(char *));
     char seedbuf[64], thrbuf[64];
     int nsets = 0;
@@ -300,6 +329,13 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--restart") && i + 1 < argc && !strcmp(cmd, "run")) restart = argv[++i];
         else if (!strcmp(a, "--png") && i + 1 < argc && !strcmp(cmd, "check")) png = argv[++i];
         else if (!strcmp(a, "--overwrite") && !strcmp(cmd, "run")) overwrite = 1;
+        else if ((!strcmp(a, "--max-memory") || !strcmp(a, "--max-steps")) && i + 1 < argc) {
+            const int bytes = !strcmp(a, "--max-memory");
+            if (limit_option(a, argv[++i], bytes, bytes ? &lim.max_bytes : &lim.max_steps)) {
+                free(sets);
+                return 2;
+            }
+        }
         else if (a[0] == '-') {
             free(sets);
             return bad_option(cmd, a);
@@ -323,6 +359,13 @@ int main(int argc, char **argv)
     }
     free(sets);
     tuning_from_env(&s.world.tuning);
+    /* the memory and the steps it will take, before anything is allocated */
+    sd_scenario_cost cost;
+    sd_scenario_estimate(&s, &cost);
+    if (sd_scenario_check_cost(&s, &cost, &lim, stderr)) {
+        sd_scenario_free(&s);
+        return 2;
+    }
     if (!strcmp(cmd, "check")) {
         /* build the scene too: placement and stability are part of validity */
         sd_world *w;
@@ -341,7 +384,8 @@ int main(int argc, char **argv)
             fprintf(stderr, "%s: %s\n", file, sd_status_message(st));
             return 2;
         }
-        printf("%s: ok (%d elements, %d triangles)\n", file, n, t);
+        printf("%s: ok (%d elements, %d triangles; estimate: %.3g MB, %.4g steps, about %.3g s on one core)\n", file,
+               n, t, cost.bytes / 1e6, cost.steps, cost.seconds);
         sd_scene_report(stdout, &s, &info, n, t);
         int code = 0;
         if (png) code = draw_design(&s, w, png);

@@ -6,6 +6,8 @@ pkgs=(build-essential cmake pkg-config libyaml-dev libcjson-dev python3 python3-
 if [ "${1:-}" = "--bench" ]; then pkgs+=(lammps openmpi-bin); fi
 # bench/work.sh: callgrind and its client requests' header
 if [ "${1:-}" = "--work" ]; then pkgs+=(valgrind); fi
+# make fuzz (scripts/fuzz.sh): clang with libFuzzer and the sanitizers' runtime, OpenMP for clang
+if [ "${1:-}" = "--fuzz" ]; then pkgs+=(clang libclang-rt-dev libomp-dev); fi
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

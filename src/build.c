@@ -59,9 +59,15 @@ sd_placer *sd_placer_create(sd_vec3 lo, sd_vec3 hi, double cell)
     p->lo = lo;
     p->hi = hi;
     p->cell = cell;
-    p->nx = (int)((hi.x - lo.x) / cell) + 1;
-    p->ny = (int)((hi.y - lo.y) / cell) + 1;
-    p->nz = (int)((hi.z - lo.z) / cell) + 1;
+    const double ex = (hi.x - lo.x) / cell, ey = (hi.y - lo.y) / cell, ez = (hi.z - lo.z) / cell;
+    /* an inverted or absurd box: no placer (the scenario loader refuses such boxes first) */
+    if (!(ex >= 0 && ey >= 0 && ez >= 0) || (floor(ex) + 1) * (floor(ey) + 1) * (floor(ez) + 1) > 1e9) {
+        free(p);
+        return NULL;
+    }
+    p->nx = (int)ex + 1;
+    p->ny = (int)ey + 1;
+    p->nz = (int)ez + 1;
     size_t nc = (size_t)p->nx * p->ny * p->nz;
     p->cells = calloc(nc, sizeof(int *));
     p->ncell = calloc(nc, sizeof(int));
@@ -90,8 +96,8 @@ void sd_placer_destroy(sd_placer *p)
 
 static int clampc(double v, int n)
 {
-    int i = (int)floor(v);
-    return i < 0 ? 0 : (i >= n ? n - 1 : i);
+    const double f = floor(v); /* (clamped before the conversion: NaN and huge values too) */
+    return f >= 0.0 ? (f < n ? (int)f : n - 1) : 0;
 }
 
 static void item_range(const sd_placer *p, sd_vec3 c, double ext, int r[6])
@@ -168,6 +174,7 @@ static int collides(const sd_placer *p, sd_vec3 pos, sd_vec3 axis, double r, dou
 
 int sd_placer_try_sphere(sd_placer *p, sd_rng *rng, double r, double clearance, int max_tries, sd_vec3 *pos)
 {
+    if (!(2 * r < p->hi.x - p->lo.x && 2 * r < p->hi.y - p->lo.y && 2 * r < p->hi.z - p->lo.z)) return 0;
     for (int t = 0; t < max_tries; t++) {
         sd_vec3 c = v3(sd_rng_range(rng, p->lo.x + r, p->hi.x - r), sd_rng_range(rng, p->lo.y + r, p->hi.y - r),
                        sd_rng_range(rng, p->lo.z + r, p->hi.z - r));
@@ -206,6 +213,7 @@ int sd_placer_try_cylinder(sd_placer *p, sd_rng *rng, double r, double hl, doubl
 int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double *beam_z, int *n_beam)
 {
     double d = s->pipe_diam, r = 0.5 * d;
+    int over = 0;
     if (s->n_columns > 0) {
         *n_col = s->n_columns;
         for (int k = 0; k < s->n_columns; k++)
@@ -213,9 +221,9 @@ int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double 
     } else {
         /* columns centred across the width, clear spacing l_h, wall gaps no wider than l_h */
         double pitch = s->l_h + d;
-        int n = (int)ceil((s->width - s->l_h) / pitch - 1e-9);
-        if (n < 1) n = 1;
-        if (n > SD_MAX_PIPES) n = SD_MAX_PIPES;
+        const double nd = ceil((s->width - s->l_h) / pitch - 1e-9);
+        int n = nd < 1 ? 1 : nd > SD_MAX_PIPES ? SD_MAX_PIPES : (int)nd;
+        if (nd > SD_MAX_PIPES) over = 1;
         *n_col = n;
         for (int k = 0; k < n; k++)
             col_y[k] = 0.5 * s->width + (k - 0.5 * (n - 1)) * pitch;
@@ -230,7 +238,7 @@ int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double 
         beam_z[n++] = s->top_beam + r;
         *n_beam = n;
     }
-    return 0;
+    return over ? -1 : 0;
 }
 
 int sd_build_log_count(const sd_scenario *s)
@@ -247,8 +255,10 @@ int sd_build_log_count(const sd_scenario *s)
             vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
         vlog = M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
     }
-    /* K_w = V_t / (V + V_t)  =>  V_t = K_w V / (1 - K_w) */
-    return (int)lround(s->log_kw * vs / (1.0 - s->log_kw) / vlog);
+    /* K_w = V_t / (V + V_t)  =>  V_t = K_w V / (1 - K_w); the loader refuses more than
+     * SD_MAX_LOGS */
+    const double n = round(s->log_kw * vs / (1.0 - s->log_kw) / vlog);
+    return n < SD_MAX_LOGS ? (int)n : SD_MAX_LOGS;
 }
 
 sd_status sd_build_dam(sd_world *w, const sd_scenario *s, sd_build_info *info)
@@ -354,7 +364,7 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
     /* packing box above the reservoir: logs first (hardest to place), then spheres large to small */
     double gap = 0.002;
     sd_vec3 lo = v3(gap, gap, s->rough_dmax * 0.5 + gap), hi = v3(s->x_gate - gap, W - gap, s->pack_height);
-    sd_placer *pl = sd_placer_create(lo, hi, 0.025);
+    sd_placer *pl = sd_placer_create(lo, hi, SD_PLACER_CELL);
     if (!pl) return SD_ERR_NOMEM;
     info->first_moving_gid = -1;
     int nlogs = sd_build_log_count(s);
@@ -454,7 +464,7 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
     sd_status st;
     if (s->box_on && (st = sd_build_box(w, s->box_min, s->box_max, SD_GROUP_BOX))) return st;
     if (s->pile_n_classes > 0) {
-        sd_placer *pl = sd_placer_create(s->pile_min, s->pile_max, 0.025);
+        sd_placer *pl = sd_placer_create(s->pile_min, s->pile_max, SD_PLACER_CELL);
         if (!pl) return SD_ERR_NOMEM;
         for (int cl = 0; cl < s->pile_n_classes; cl++)
             for (int k = 0; k < s->pile_count[cl]; k++) {

@@ -6,6 +6,11 @@
 #include "scenario.h"
 
 enum { SD_GROUP_BED = 0, SD_GROUP_WALLS = 1, SD_GROUP_END = 2, SD_GROUP_GATE = 3, SD_GROUP_BOX = 4 };
+/* The placement grid's cell (the pile and the flume's packing box), m. */
+#define SD_PLACER_CELL 0.025
+/* The most logs a scene holds (logs.count's range; logs.k_w may not ask for more). */
+#define SD_MAX_LOGS 1000000
+
 enum { SD_TAG_ROUGH = 100, SD_TAG_LOG = 200, SD_TAG_PIPE = 300 };
 
 typedef struct {
@@ -22,6 +27,7 @@ sd_status sd_build_box(sd_world *w, sd_vec3 lo, sd_vec3 hi, int group);
 /* Put `count` spheres of diameter d at random, without overlap with anything placed so far
  * by this placer, inside [lo, hi]. */
 typedef struct sd_placer sd_placer;
+/* NULL when out of memory, or when the box is empty, not finite or too many cells. */
 sd_placer *sd_placer_create(sd_vec3 lo, sd_vec3 hi, double cell);
 void sd_placer_destroy(sd_placer *p);
 /* Returns 1 when placed, 0 when no room was found in max_tries. */
@@ -41,7 +47,9 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
 /* The grid dam of fixed cylinders, upstream face at flume.x_dam (nothing when dam.on is
  * false); appends the pipes to info's pipe lists. */
 sd_status sd_build_dam(sd_world *w, const sd_scenario *s, sd_build_info *info);
-/* Grid dam layout from l_h / l_v / top_beam or the explicit lists (SPEC §8). */
+/* Grid dam layout from l_h / l_v / top_beam or the explicit lists (SPEC §8). Returns 0, or -1
+ * when l_h across the width needs more than SD_MAX_PIPES columns (the first SD_MAX_PIPES are
+ * given). */
 int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double *beam_z, int *n_beam);
 /* Number of logs from logs.count or logs.k_w and the sphere volume (eq 54). */
 int sd_build_log_count(const sd_scenario *s);

@@ -323,9 +323,12 @@ long sd_bb_serial_pass(sd_world *w, const sd_law *law, bb_scratch *x)
     sd_bb_bed_split(w, &x->bed);
     x->q.bed_lim = x->bed.bed_lim;
     if (x->bed.bed_lim >= 0) {
-        /* the bodies before the bed as two runs (the bed's load stays zero) */
-        memset(b->force, 0, (size_t)x->bed.nf * sizeof(sd_vec3));
-        memset(b->torque, 0, (size_t)x->bed.nf * sizeof(sd_vec3));
+        /* the bodies before the bed as two runs (the bed's load stays zero; none at all: the
+         * arrays may be NULL, which memset must not get even for 0 bytes) */
+        if (x->bed.nf > 0) {
+            memset(b->force, 0, (size_t)x->bed.nf * sizeof(sd_vec3));
+            memset(b->torque, 0, (size_t)x->bed.nf * sizeof(sd_vec3));
+        }
     } else
         for (int i = 0; i < b->n; i++)
             if (!sd_body_is_bed(b, i)) { /* (two stores: the chained assignment read torque back) */

@@ -55,7 +55,10 @@ static inline void body_box(const sd_bodies *b, int i, double half_margin, sd_ve
     *hi = v3_add(c, e);
 }
 
-static inline int clampi(long v, int lo, int hi) { return v < lo ? lo : (v > hi ? hi : (int)v); }
+/* A floored cell coordinate clamped to [0, hi] as a double before the conversion (as the AVX2
+ * cell_range256): NaN gives 0, and no value outside long's range reaches the cast (undefined
+ * behaviour; a checkpoint read with a body at 1e300 m/s moved it there in one step). */
+static inline int clamp_cell(double v, int hi) { return v >= 0.0 ? (v <= (double)hi ? (int)v : hi) : 0; }
 
 #ifdef SD_SCAN512
 /* cell_range's six divisions and floors in two AVX2 operations (each lane correctly rounded, as
@@ -89,12 +92,12 @@ static inline void cell_range(const sd_grid *g, sd_vec3 lo, sd_vec3 hi, int32_t 
         return;
     }
 #endif
-    r[0] = clampi((long)floor((lo.x - g->lo.x) / g->cell), 0, g->nx - 1);
-    r[1] = clampi((long)floor((lo.y - g->lo.y) / g->cell), 0, g->ny - 1);
-    r[2] = clampi((long)floor((lo.z - g->lo.z) / g->cell), 0, g->nz - 1);
-    r[3] = clampi((long)floor((hi.x - g->lo.x) / g->cell), 0, g->nx - 1);
-    r[4] = clampi((long)floor((hi.y - g->lo.y) / g->cell), 0, g->ny - 1);
-    r[5] = clampi((long)floor((hi.z - g->lo.z) / g->cell), 0, g->nz - 1);
+    r[0] = clamp_cell(floor((lo.x - g->lo.x) / g->cell), g->nx - 1);
+    r[1] = clamp_cell(floor((lo.y - g->lo.y) / g->cell), g->ny - 1);
+    r[2] = clamp_cell(floor((lo.z - g->lo.z) / g->cell), g->nz - 1);
+    r[3] = clamp_cell(floor((hi.x - g->lo.x) / g->cell), g->nx - 1);
+    r[4] = clamp_cell(floor((hi.y - g->lo.y) / g->cell), g->ny - 1);
+    r[5] = clamp_cell(floor((hi.z - g->lo.z) / g->cell), g->nz - 1);
 }
 
 /* An entry's flag byte: along which axes (bit 0 x, 1 y, 2 z) cell (x, y, z) is the first of

@@ -9,6 +9,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "build.h"
 #include "core/hash.h"
 #include "core/nearest.h"
 #include "core/roff.h"
@@ -31,6 +32,7 @@ typedef struct {
 
 #define OFF(f) offsetof(sd_scenario, f)
 #define INF HUGE_VAL
+#define EXT SD_MAX_EXTENT
 
 static const sd_param params[] = {
     {"solver.dt", P_DOUBLE, OFF(world.dt), 0, 0, "s", 0, 1, 1, "time step Δt"},
@@ -52,34 +54,35 @@ static const sd_param params[] = {
     {"contact.cohesion", P_DOUBLE, OFF(world.contact.cohesion), 0, 0, "N", 0, INF, 0,
      "cohesion c in the Mohr–Coulomb limit"},
     {"box.on", P_BOOL, OFF(box_on), 0, 0, "-", 0, 1, 0, "add an open-top box of triangles"},
-    {"box.min", P_VEC3, OFF(box_min), 0, 0, "m", -INF, INF, 0, "box lower corner"},
-    {"box.max", P_VEC3, OFF(box_max), 0, 0, "m", -INF, INF, 0, "box upper corner"},
+    {"box.min", P_VEC3, OFF(box_min), 0, 0, "m", -EXT, EXT, 0, "box lower corner"},
+    {"box.max", P_VEC3, OFF(box_max), 0, 0, "m", -EXT, EXT, 0, "box upper corner"},
     {"pile.diameters", P_DLIST, OFF(pile_diam), OFF(pile_n_classes), SD_MAX_CLASSES, "m", 0, 1, 1,
      "sphere diameters of the random pile"},
-    {"pile.counts", P_ILIST, OFF(pile_count), OFF(pile_n_classes), SD_MAX_CLASSES, "-", 0, 1e7, 0,
+    {"pile.counts", P_ILIST, OFF(pile_count), OFF(pile_n_counts), SD_MAX_CLASSES, "-", 0, 1e7, 0,
      "sphere counts per diameter"},
     {"pile.density", P_DOUBLE, OFF(pile_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density"},
-    {"pile.min", P_VEC3, OFF(pile_min), 0, 0, "m", -INF, INF, 0, "placement region lower corner"},
-    {"pile.max", P_VEC3, OFF(pile_max), 0, 0, "m", -INF, INF, 0, "placement region upper corner"},
+    {"pile.min", P_VEC3, OFF(pile_min), 0, 0, "m", -EXT, EXT, 0, "placement region lower corner"},
+    {"pile.max", P_VEC3, OFF(pile_max), 0, 0, "m", -EXT, EXT, 0, "placement region upper corner"},
     {"flume.on", P_BOOL, OFF(flume_on), 0, 0, "-", 0, 1, 0, "build the paper's flume (SPEC §8)"},
     {"flume.slope_deg", P_DOUBLE, OFF(slope_deg), 0, 0, "deg", 0, 90, 0, "bed slope θ"},
-    {"flume.width", P_DOUBLE, OFF(width), 0, 0, "m", 0, INF, 1, "flume width"},
-    {"flume.wall_height", P_DOUBLE, OFF(wall_height), 0, 0, "m", 0, INF, 1, "side wall height"},
-    {"flume.x_gate", P_DOUBLE, OFF(x_gate), 0, 0, "m", 0, INF, 1, "gate position (reconstructed 0.35)"},
-    {"flume.x_dam", P_DOUBLE, OFF(x_dam), 0, 0, "m", 0, INF, 1, "dam upstream face (reconstructed 4.0)"},
-    {"flume.x_end", P_DOUBLE, OFF(x_end), 0, 0, "m", 0, INF, 1, "end of the bed; elements beyond are removed"},
+    {"flume.width", P_DOUBLE, OFF(width), 0, 0, "m", 0, 100, 1, "flume width"},
+    {"flume.wall_height", P_DOUBLE, OFF(wall_height), 0, 0, "m", 0, 100, 1, "side wall height"},
+    {"flume.x_gate", P_DOUBLE, OFF(x_gate), 0, 0, "m", 0, 1000, 1, "gate position (reconstructed 0.35)"},
+    {"flume.x_dam", P_DOUBLE, OFF(x_dam), 0, 0, "m", 0, 1000, 1, "dam upstream face (reconstructed 4.0)"},
+    {"flume.x_end", P_DOUBLE, OFF(x_end), 0, 0, "m", 0, 1000, 1, "end of the bed; elements beyond are removed"},
     {"flume.roughness", P_BOOL, OFF(roughness_on), 0, 0, "-", 0, 1, 0, "fixed roughness spheres on the bed"},
     {"flume.roughness_dmin", P_DOUBLE, OFF(rough_dmin), 0, 0, "m", 0, 1, 1, "smallest roughness diameter"},
     {"flume.roughness_dmax", P_DOUBLE, OFF(rough_dmax), 0, 0, "m", 0, 1, 1, "largest roughness diameter"},
     {"flume.roughness_coverage", P_DOUBLE, OFF(rough_coverage), 0, 0, "-", 0, 0.9, 1,
      "bed area fraction covered by roughness spheres (random placement stops there or when jammed)"},
-    {"flume.pack_height", P_DOUBLE, OFF(pack_height), 0, 0, "m", 0, INF, 1, "top of the packing box above the bed"},
+    {"flume.pack_height", P_DOUBLE, OFF(pack_height), 0, 0, "m", 0, 100, 1,
+     "top of the packing box above the bed (at most flume.wall_height)"},
     {"spheres.diameters", P_DLIST, OFF(class_diam), OFF(n_classes), SD_MAX_CLASSES, "m", 0, 1, 1,
      "size classes (SPEC §8: 20, 15, 10, 5 mm)"},
-    {"spheres.counts", P_ILIST, OFF(class_count), OFF(n_classes), SD_MAX_CLASSES, "-", 0, 1e7, 0,
+    {"spheres.counts", P_ILIST, OFF(class_count), OFF(n_class_counts), SD_MAX_CLASSES, "-", 0, 1e7, 0,
      "count per class (376, 891, 3010, 342)"},
     {"spheres.density", P_DOUBLE, OFF(sphere_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density (SG 1.9)"},
-    {"logs.count", P_INT, OFF(log_count), 0, 0, "-", -1, 1e6, 0, "number of logs (-1: from logs.k_w)"},
+    {"logs.count", P_INT, OFF(log_count), 0, 0, "-", -1, SD_MAX_LOGS, 0, "number of logs (-1: from logs.k_w)"},
     {"logs.k_w", P_DOUBLE, OFF(log_kw), 0, 0, "-", 0, 0.95, 0, "woody volume ratio K_w (eq 54), used when count = -1"},
     {"logs.k_w_volume", P_DOUBLE, OFF(log_kw_volume), 0, 0, "m^3", 0, INF, 0,
      "eq 54's V for the count from K_w: 0: the spheres' solid volume, each log's π d²L/4; > 0: this V, each log "
@@ -93,10 +96,10 @@ static const sd_param params[] = {
     {"dam.l_v", P_DOUBLE, OFF(l_v), 0, 0, "m", 0, 1, 0,
      "underside of the intermediate beam above the bed ℓ_V (0: none)"},
     {"dam.top_beam", P_DOUBLE, OFF(top_beam), 0, 0, "m", 0, 1, 1, "underside of the top beam above the bed"},
-    {"dam.columns", P_DLIST, OFF(column_y), OFF(n_columns), SD_MAX_PIPES, "m", 0, INF, 0,
-     "explicit column positions y (empty: from l_h)"},
-    {"dam.beams", P_DLIST, OFF(beam_z), OFF(n_beams), SD_MAX_PIPES, "m", 0, INF, 0,
-     "explicit beam undersides z (empty: from l_v, top_beam)"},
+    {"dam.columns", P_DLIST, OFF(column_y), OFF(n_columns), SD_MAX_PIPES, "m", 0, 100, 0,
+     "explicit column positions y (empty: from l_h); inside the walls, not overlapping"},
+    {"dam.beams", P_DLIST, OFF(beam_z), OFF(n_beams), SD_MAX_PIPES, "m", 0, 100, 0,
+     "explicit beam undersides z (empty: from l_v, top_beam); below the wall top, not overlapping"},
     {"dam.fixed_ends", P_BOOL, OFF(dam_support), 0, 0, "-", 0, 1, 0,
      "pipe bending moments for spans with fixed ends (default: simply supported; docs/loads.md)"},
     {"water.on", P_BOOL, OFF(water_on), 0, 0, "-", 0, 1, 0, "fluid forces (SPEC §5)"},
@@ -194,6 +197,7 @@ void sd_scenario_default(sd_scenario *s)
     s->rough_coverage = 0.5;
     s->pack_height = 0.45;
     s->n_classes = 4;
+    s->n_class_counts = 4;
     double d[4] = {0.020, 0.015, 0.010, 0.005};
     int c[4] = {376, 891, 3010, 342};
     for (int i = 0; i < 4; i++) {
@@ -238,10 +242,18 @@ void sd_scenario_free(sd_scenario *s)
     s->n_elems = 0;
 }
 
+/* Where a parameter was last set: the file (or "--set") and the value's line and column; file
+ * NULL while it holds its default. */
+typedef struct {
+    const char *file;
+    int line, col;
+} origin;
+
 typedef struct {
     FILE *err;
     const char *file;
     int errors;
+    origin *at; /* per parameter (params[] order) */
 } ectx;
 
 static void report(ectx *e, int line, int col, const char *fmt, const char *a, const char *b)
@@ -329,6 +341,7 @@ static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode
         }
         n = tmp;
     }
+    if (e->at) e->at[p - params] = (origin){e->file, tmp ? line : n->line, tmp ? col : n->col};
     switch (p->type) {
     case P_DOUBLE: {
         double v;
@@ -383,6 +396,10 @@ static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode
                    p->key, "");
             break;
         }
+        if (check_range(e, p, v.x, tmp ? line : n->line, tmp ? col : n->col) ||
+            check_range(e, p, v.y, tmp ? line : n->line, tmp ? col : n->col) ||
+            check_range(e, p, v.z, tmp ? line : n->line, tmp ? col : n->col))
+            break;
         *(sd_vec3 *)(base + p->off) = v;
         break;
     }
@@ -620,27 +637,190 @@ static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefi
 static double sphere_mass(double d, double rho) { return rho * M_PI / 6.0 * d * d * d; }
 
 /* Cross-field checks: geometry that contradicts itself, an unstable time step. */
-static void validate(ectx *e, sd_scenario *s, const sd_ynode *root)
+/* Report at where the first of the keys that was set was set (the scenario's first line when
+ * all hold their defaults). */
+static void report_keys(ectx *e, const origin *at, const char *k1, const char *k2, const char *fmt, const char *a,
+                        const char *b)
 {
-    const sd_ynode *n;
-    if (s->flume_on) {
-        if (s->x_gate >= s->x_dam) {
-            n = sd_yaml_get(sd_yaml_get(root, "flume"), "x_gate");
-            report(e, n ? n->line : 1, n ? n->col : 1, "flume.x_gate must be upstream of flume.x_dam%s%s", "", "");
-        }
-        if (s->x_end <= s->x_dam) {
-            n = sd_yaml_get(sd_yaml_get(root, "flume"), "x_end");
-            report(e, n ? n->line : 1, n ? n->col : 1, "flume.x_end must be downstream of flume.x_dam%s%s", "", "");
-        }
-        if (s->rough_dmin > s->rough_dmax) {
-            n = sd_yaml_get(sd_yaml_get(root, "flume"), "roughness_dmin");
-            report(e, n ? n->line : 1, n ? n->col : 1, "flume.roughness_dmin must not exceed roughness_dmax%s%s", "",
-                   "");
+    const char *keys[2] = {k1, k2};
+    for (int i = 0; i < 2; i++) {
+        const sd_param *p = keys[i] ? find_param(keys[i]) : NULL;
+        if (p && at[p - params].file) {
+            const origin *o = &at[p - params];
+            ectx here = {e->err, o->file, e->errors, NULL};
+            report(&here, o->line, o->col, fmt, a, b);
+            e->errors = here.errors;
+            return;
         }
     }
-    if (s->box_on && (s->box_min.x >= s->box_max.x || s->box_min.y >= s->box_max.y || s->box_min.z >= s->box_max.z)) {
-        n = sd_yaml_get(root, "box");
-        report(e, n ? n->line : 1, n ? n->col : 1, "box.min must be below box.max on every axis%s%s", "", "");
+    report(e, 1, 1, fmt, a, b);
+}
+
+static const char *num(char *buf, double v) /* buf: 32 bytes */
+{
+    snprintf(buf, 32, "%g", v);
+    return buf;
+}
+
+/* The first axis (0, 1, 2) on which the box [lo, hi] is not wider than d, or -1. */
+static int narrow_axis(sd_vec3 lo, sd_vec3 hi, double d)
+{
+    const double ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+    for (int k = 0; k < 3; k++)
+        if (!(ext[k] > d)) return k;
+    return -1;
+}
+
+static double axis_of(sd_vec3 v, int k) { return k == 0 ? v.x : k == 1 ? v.y : v.z; }
+
+/* Two lists given per class must be as long as each other. */
+static void check_lengths(ectx *e, const origin *at, const char *kd, int nd, const char *kc, int nc)
+{
+    if (nd == nc) return;
+    char a[200];
+    snprintf(a, sizeof a, "%s has %d values and %s has %d: give one count per diameter", kc, nc, kd, nd);
+    report_keys(e, at, kc, kd, "%s%s", a, "");
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The grid dam: every pipe inside the flume, below the wall top, none overlapping another. */
+static void check_dam(ectx *e, const origin *at, const sd_scenario *s)
+{
+    char a[32], b[32], m[240];
+    double y[SD_MAX_PIPES], z[SD_MAX_PIPES];
+    int nc, nb;
+    const double d = s->pipe_diam, r = 0.5 * d, W = s->width;
+    if (sd_build_dam_layout(s, y, &nc, z, &nb)) {
+        snprintf(m, sizeof m,
+                 "flume.width = %g m with dam.l_h = %g m needs %.0f columns, more than %d: widen dam.l_h or give "
+                 "dam.columns",
+                 W, s->l_h, ceil((W - s->l_h) / (s->l_h + d) - 1e-9), SD_MAX_PIPES);
+        report_keys(e, at, "flume.width", "dam.l_h", "%s%s", m, "");
+        return;
+    }
+    const char *ck = s->n_columns > 0 ? "dam.columns" : "dam.l_h";
+    for (int k = 0; k < nc; k++)
+        if (!(y[k] - r >= 0 && y[k] + r <= W)) {
+            snprintf(m, sizeof m, "%g m wide flume: the column at y = %s m (diameter %g m) reaches outside the walls", W,
+                     num(a, y[k]), d);
+            report_keys(e, at, ck, "flume.width", "%s: %s", ck, m);
+            return;
+        }
+    qsort(y, (size_t)nc, sizeof y[0], cmp_double);
+    for (int k = 1; k < nc; k++)
+        if (y[k] - y[k - 1] < d) {
+            snprintf(m, sizeof m, "the columns at y = %s and %s m overlap (pipe diameter %g m)", num(a, y[k - 1]),
+                     num(b, y[k]), d);
+            report_keys(e, at, ck, "dam.pipe_diameter", "%s: %s", ck, m);
+            return;
+        }
+    const char *bk = s->n_beams > 0 ? "dam.beams" : "dam.top_beam";
+    for (int k = 0; k < nb; k++) /* z: the beams' axes */
+        if (z[k] + r > s->wall_height) {
+            snprintf(m, sizeof m, "the beam with its underside at %s m tops out at %s m, above the %g m walls",
+                     num(a, z[k] - r), num(b, z[k] + r), s->wall_height);
+            report_keys(e, at, bk, "flume.wall_height", "%s: %s", bk, m);
+            return;
+        }
+    qsort(z, (size_t)nb, sizeof z[0], cmp_double);
+    for (int k = 1; k < nb; k++)
+        if (z[k] - z[k - 1] < d) {
+            snprintf(m, sizeof m, "the beams with undersides at %s and %s m overlap (pipe diameter %g m)",
+                     num(a, z[k - 1] - r), num(b, z[k] - r), d);
+            report_keys(e, at, bk, "dam.pipe_diameter", "%s: %s", bk, m);
+            return;
+        }
+    if (s->x_dam + d > s->x_end) {
+        snprintf(m, sizeof m, "the dam's pipes (x = %g to %g m) reach past flume.x_end = %g m", s->x_dam, s->x_dam + d,
+                 s->x_end);
+        report_keys(e, at, "flume.x_end", "dam.pipe_diameter", "%s%s", m, "");
+    }
+}
+
+/* Cross-field checks: geometry that contradicts itself, sizes that do not fit, an unstable time
+ * step. Everything a builder allocates from is checked here first. */
+static void validate(ectx *e, sd_scenario *s, const origin *at)
+{
+    char a[32], b[300];
+    check_lengths(e, at, "pile.diameters", s->pile_n_classes, "pile.counts", s->pile_n_counts);
+    check_lengths(e, at, "spheres.diameters", s->n_classes, "spheres.counts", s->n_class_counts);
+    if (e->errors) return;
+    if (s->pile_n_classes > 0) {
+        double dmax = 0;
+        for (int k = 0; k < s->pile_n_classes; k++)
+            dmax = fmax(dmax, s->pile_diam[k]);
+        const int k = narrow_axis(s->pile_min, s->pile_max, dmax);
+        if (k >= 0) {
+            const double lo = axis_of(s->pile_min, k), hi = axis_of(s->pile_max, k);
+            if (!(hi > lo))
+                snprintf(b, sizeof b, "pile.min must be below pile.max on %c (%g is not below %g)", "xyz"[k], lo, hi);
+            else
+                snprintf(b, sizeof b, "the pile region spans %g m on %c: no room for its spheres of %g m", hi - lo,
+                         "xyz"[k], dmax);
+            report_keys(e, at, "pile.max", "pile.min", "%s%s", b, "");
+        }
+    }
+    if (s->box_on && (s->box_min.x >= s->box_max.x || s->box_min.y >= s->box_max.y || s->box_min.z >= s->box_max.z))
+        report_keys(e, at, "box.min", "box.max", "box.min must be below box.max on every axis%s%s", "", "");
+    for (int i = 0; i < s->n_elems; i++) {
+        const sd_elem_def *d = &s->elems[i];
+        double big = fmax(fmax(fabs(d->pos.x), fabs(d->pos.y)), fabs(d->pos.z));
+        for (int k = 0; k < 3 && d->type == 2; k++)
+            big = fmax(big, fmax(fmax(fabs(d->v[k].x), fabs(d->v[k].y)), fabs(d->v[k].z)));
+        if (d->type != 2) big = fmax(big, fmax(d->radius, d->length));
+        if (big > SD_MAX_EXTENT) {
+            ectx here = {e->err, e->file, e->errors, NULL};
+            report(&here, d->line, 1, "elements: a coordinate or size of %s m, beyond the %s m a scene may span",
+                   num(a, big), "1e+04");
+            e->errors = here.errors;
+        }
+    }
+    if (s->flume_on) {
+        if (s->x_gate >= s->x_dam)
+            report_keys(e, at, "flume.x_gate", "flume.x_dam", "flume.x_gate must be upstream of flume.x_dam%s%s", "", "");
+        if (s->x_end <= s->x_dam)
+            report_keys(e, at, "flume.x_end", "flume.x_dam", "flume.x_end must be downstream of flume.x_dam%s%s", "", "");
+        if (s->rough_dmin > s->rough_dmax)
+            report_keys(e, at, "flume.roughness_dmin", "flume.roughness_dmax",
+                        "flume.roughness_dmin must not exceed roughness_dmax%s%s", "", "");
+        if (s->pack_height > s->wall_height)
+            report_keys(e, at, "flume.pack_height", "flume.wall_height",
+                        "flume.pack_height = %s m is above flume.wall_height = %s m", num(a, s->pack_height),
+                        num(b, s->wall_height));
+        if (s->roughness_on && !(s->rough_dmax < s->width && s->rough_dmax < s->x_end))
+            report_keys(e, at, "flume.roughness_dmax", "flume.width",
+                        "flume.roughness_dmax = %s m does not fit on the bed%s", num(a, s->rough_dmax), "");
+        /* the packing box (build.c): above the roughness, behind the gate, 2 mm from the walls */
+        double dmax = 0;
+        for (int k = 0; k < s->n_classes; k++)
+            if (s->class_count[k] > 0) dmax = fmax(dmax, s->class_diam[k]);
+        const sd_vec3 lo = v3(0.002, 0.002, 0.5 * s->rough_dmax + 0.002),
+                      hi = v3(s->x_gate - 0.002, s->width - 0.002, s->pack_height);
+        const int ax = e->errors ? -1 : narrow_axis(lo, hi, dmax);
+        if (ax >= 0) {
+            static const char *const key[3] = {"flume.x_gate", "flume.width", "flume.pack_height"};
+            snprintf(b, sizeof b,
+                     "the packing box (2 mm inside the walls and the gate, from the roughness top at %g m up to "
+                     "flume.pack_height) spans %g m on %c: no room for spheres of %g m",
+                     lo.z, axis_of(hi, ax) - axis_of(lo, ax), "xyz"[ax], dmax);
+            report_keys(e, at, key[ax], NULL, "%s: %s", key[ax], b);
+        }
+        if (s->log_count < 0 && s->log_kw > 0) {
+            double vs = 0.0;
+            for (int k = 0; k < s->n_classes; k++)
+                vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+            const double n = s->log_kw * vs / (1.0 - s->log_kw) / (M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length);
+            if (!(n <= SD_MAX_LOGS)) {
+                snprintf(b, sizeof b, "%.3g logs, more than %d", n, SD_MAX_LOGS);
+                report_keys(e, at, "logs.k_w", "logs.diameter", "logs.k_w = %s asks for %s", num(a, s->log_kw), b);
+            }
+        }
+        if (s->dam_on && e->errors == 0) check_dam(e, at, s);
     }
     /* smallest moving mass → stability of Δt */
     double mmin = INFINITY;
@@ -662,13 +842,11 @@ static void validate(ectx *e, sd_scenario *s, const sd_ynode *root)
     if (s->world.check_dt && isfinite(mmin)) {
         double dt_max = sd_stable_dt_max(s->world.contact.k_n, s->world.contact.k_s, mmin);
         if (s->world.dt > dt_max) {
-            n = sd_yaml_get(sd_yaml_get(root, "solver"), "dt");
-            char a[64], b[256];
             snprintf(a, sizeof a, "%g", s->world.dt);
             snprintf(b, sizeof b,
                      "%g s (8 steps per contact half-period for k_n = %g N/m, k_s = %g N/m and the smallest mass %g kg)",
                      dt_max, s->world.contact.k_n, s->world.contact.k_s, mmin);
-            report(e, n ? n->line : 1, n ? n->col : 1, "solver.dt = %s is unstable: it must be at most %s", a, b);
+            report_keys(e, at, "solver.dt", NULL, "solver.dt = %s is unstable: it must be at most %s", a, b);
         }
     }
 }
@@ -685,7 +863,9 @@ static int load(sd_scenario *s, const char *path, const char *text, const char *
         fprintf(err, "%s\n", msg);
         return -1;
     }
-    ectx e = {err, path, 0};
+    origin at[N_PARAMS];
+    memset(at, 0, sizeof at);
+    ectx e = {err, path, 0, at};
     if (root->kind != SD_Y_MAP)
         report(&e, root->line, root->col, "the scenario must be a mapping of sections%s%s", "", "");
     else {
@@ -697,7 +877,7 @@ static int load(sd_scenario *s, const char *path, const char *text, const char *
             s->world.gravity = v3(9.81 * sin(th), 0.0, -9.81 * cos(th));
         }
     }
-    ectx eo = {err, "--set", 0};
+    ectx eo = {err, "--set", 0, at};
     for (int i = 0; i < n_overrides; i++) {
         const char *eq = strchr(overrides[i], '=');
         char key[256];
@@ -719,7 +899,7 @@ static int load(sd_scenario *s, const char *path, const char *text, const char *
             s->world.gravity = v3(9.81 * sin(th), 0.0, -9.81 * cos(th));
         }
     }
-    if (!e.errors && !eo.errors) validate(&e, s, root);
+    if (!e.errors && !eo.errors) validate(&e, s, at);
     sd_yaml_free(root);
     int total = e.errors + eo.errors;
     if (total) {

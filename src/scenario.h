@@ -12,6 +12,8 @@
 #define SD_MAX_CLASSES 8
 #define SD_MAX_IDS 64
 #define SD_MAX_PIPES 32
+/* Every coordinate and size in a scenario lies within this many metres of the origin. */
+#define SD_MAX_EXTENT 1.0e4
 
 /* The choices of the scenario's enumerated keys (their index is the stored value). */
 enum { SD_BUOYANCY_VERTICAL = 0, SD_BUOYANCY_BED_NORMAL = 1 };
@@ -39,7 +41,7 @@ typedef struct sd_scenario {
     int box_on;
     sd_vec3 box_min, box_max;
     /* random pile of spheres */
-    int pile_n_classes;
+    int pile_n_classes, pile_n_counts; /* the two lists' lengths (equal once loaded) */
     double pile_diam[SD_MAX_CLASSES];
     int pile_count[SD_MAX_CLASSES];
     double pile_density;
@@ -49,7 +51,7 @@ typedef struct sd_scenario {
     double slope_deg, width, wall_height, x_gate, x_dam, x_end;
     int roughness_on;
     double rough_dmin, rough_dmax, rough_coverage;
-    int n_classes;
+    int n_classes, n_class_counts; /* the two lists' lengths (equal once loaded) */
     double class_diam[SD_MAX_CLASSES];
     int class_count[SD_MAX_CLASSES];
     double sphere_density;
@@ -84,6 +86,31 @@ typedef struct sd_scenario {
     double traj_interval;
     int vtk_on, png_on;
 } sd_scenario;
+
+/* What a scenario will cost, estimated from its parameters before anything is allocated
+ * (scenario_cost.c). */
+typedef struct {
+    double bodies;  /* elements the scene can hold at most (roughness at its smallest size) */
+    double bytes;   /* memory: the elements with their contacts, the placement grids */
+    double steps;   /* time steps to the end (a flume: to the sum of its phases' limits) */
+    double seconds; /* wall time on one core, at SD_COST_S_PER_ELEMENT_STEP */
+} sd_scenario_cost;
+
+/* Limits a scenario's estimate must keep to (the command line's --max-memory, --max-steps). */
+typedef struct {
+    double max_bytes, max_steps;
+} sd_scenario_limits;
+
+#define SD_DEFAULT_MAX_MEMORY (8.0 * 1024 * 1024 * 1024) /* bytes */
+#define SD_DEFAULT_MAX_STEPS 1.0e8 /* the paper's run takes 0.9e6 */
+#define SD_BYTES_PER_ELEMENT 2048.0 /* an element with its contacts; ~1 KB measured on the paper's flume */
+#define SD_COST_S_PER_ELEMENT_STEP 5.0e-8 /* one core, the paper's settled bed (docs/performance.md) */
+
+void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c);
+/* 0 when c keeps to lim; otherwise -1 and a message to err that gives the estimate and says
+ * which keys and which option change it. */
+int sd_scenario_check_cost(const sd_scenario *s, const sd_scenario_cost *c, const sd_scenario_limits *lim, FILE *err);
+sd_scenario_limits sd_scenario_limits_default(void);
 
 void sd_scenario_default(sd_scenario *s);
 /* Load a scenario file and apply "key=value" overrides. Errors are printed to err as

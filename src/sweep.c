@@ -33,6 +33,7 @@
 #define MAX_VARY 8
 #define MAX_VALUES 32
 #define MAX_SETS 64
+#define MAX_RUNS 10000 /* runs in one sweep (the paper's matrix: 60) */
 
 typedef struct {
     char base[1024];
@@ -71,17 +72,25 @@ static int load_sweep(const char *path, sweep_def *d, FILE *err)
         if (!strcmp(k, "base") && v->kind == SD_Y_SCALAR) {
             /* relative to the sweep file's directory */
             const char *slash = strrchr(path, '/');
+            int n;
             if (v->value[0] != '/' && slash)
-                snprintf(d->base, sizeof d->base, "%.*s/%s", (int)(slash - path), path, v->value);
+                n = snprintf(d->base, sizeof d->base, "%.*s/%s", (int)(slash - path), path, v->value);
             else
-                snprintf(d->base, sizeof d->base, "%s", v->value);
+                n = snprintf(d->base, sizeof d->base, "%s", v->value);
+            if (n < 0 || (size_t)n >= sizeof d->base || !v->value[0]) {
+                fprintf(err, "%s:%d:%d: base: expected a scenario file's path (at most %zu characters)\n", path,
+                        v->line, v->col, sizeof d->base - 1);
+                bad = 1;
+            }
         } else if ((!strcmp(k, "runs") || !strcmp(k, "seed_base") || !strcmp(k, "parallel")) &&
                    v->kind == SD_Y_SCALAR) {
             char *end;
+            errno = 0;
             long x = strtol(v->value, &end, 10);
-            if (*end || x < 0 || (!strcmp(k, "runs") && x < 1)) {
-                fprintf(err, "%s:%d:%d: %s: expected a %s integer\n", path, v->line, v->col, k,
-                        !strcmp(k, "runs") ? "positive" : "non-negative");
+            const int runs = !strcmp(k, "runs"), seed = !strcmp(k, "seed_base");
+            const long hi = runs ? MAX_RUNS : seed ? 2147483647L - MAX_RUNS : 4096;
+            if (errno || end == v->value || *end || x < runs || x > hi) {
+                fprintf(err, "%s:%d:%d: %s: expected an integer from %d to %ld\n", path, v->line, v->col, k, runs, hi);
                 bad = 1;
             } else if (!strcmp(k, "runs"))
                 d->runs = (int)x;
@@ -98,11 +107,18 @@ static int load_sweep(const char *path, sweep_def *d, FILE *err)
                     bad = 1;
                     break;
                 }
+                if (strlen(v->keys[j]) >= sizeof d->vary_key[0]) {
+                    fprintf(err, "%s:%d:%d: vary: a key of %zu characters (at most %zu)\n", path, v->key_line[j],
+                            v->key_col[j], strlen(v->keys[j]), sizeof d->vary_key[0] - 1);
+                    bad = 1;
+                    break;
+                }
                 snprintf(d->vary_key[d->n_vary], sizeof d->vary_key[0], "%s", v->keys[j]);
                 for (int q = 0; q < vals->n; q++) {
-                    if (vals->items[q]->kind != SD_Y_SCALAR) {
-                        fprintf(err, "%s:%d:%d: vary.%s: values must be scalars\n", path, vals->items[q]->line,
-                                vals->items[q]->col, v->keys[j]);
+                    if (vals->items[q]->kind != SD_Y_SCALAR ||
+                        strlen(vals->items[q]->value) >= sizeof d->vary_val[0][0]) {
+                        fprintf(err, "%s:%d:%d: vary.%s: values must be scalars of at most %zu characters\n", path,
+                                vals->items[q]->line, vals->items[q]->col, v->keys[j], sizeof d->vary_val[0][0] - 1);
                         bad = 1;
                         break;
                     }
@@ -111,10 +127,16 @@ static int load_sweep(const char *path, sweep_def *d, FILE *err)
                 d->n_val[d->n_vary++] = vals->n;
             }
         } else if (!strcmp(k, "set") && v->kind == SD_Y_MAP) {
-            for (int j = 0; j < v->n && d->n_set < MAX_SETS; j++) {
-                if (v->items[j]->kind != SD_Y_SCALAR) {
-                    fprintf(err, "%s:%d:%d: set.%s: expected a scalar value\n", path, v->items[j]->line,
-                            v->items[j]->col, v->keys[j]);
+            for (int j = 0; j < v->n && !bad; j++) {
+                if (d->n_set == MAX_SETS) {
+                    fprintf(err, "%s:%d:%d: set: more than %d keys\n", path, v->key_line[j], v->key_col[j], MAX_SETS);
+                    bad = 1;
+                    break;
+                }
+                if (v->items[j]->kind != SD_Y_SCALAR ||
+                    strlen(v->keys[j]) + strlen(v->items[j]->value) + 2 > sizeof d->set[0]) {
+                    fprintf(err, "%s:%d:%d: set.%s: expected a scalar value (key and value within %zu characters)\n",
+                            path, v->items[j]->line, v->items[j]->col, v->keys[j], sizeof d->set[0] - 2);
                     bad = 1;
                     break;
                 }
@@ -125,6 +147,16 @@ static int load_sweep(const char *path, sweep_def *d, FILE *err)
                     root->key_line[i], root->key_col[i], k);
             bad = 1;
         }
+    }
+    /* the number of runs, in doubles: 8 keys of 32 values each are 32^8 cases, past any int */
+    double total = d->runs;
+    for (int v = 0; v < d->n_vary; v++)
+        total *= d->n_val[v];
+    if (!bad && total > MAX_RUNS) {
+        const sd_ynode *vn = sd_yaml_get(root, "vary");
+        fprintf(err, "%s:%d:%d: vary: %.4g runs (cases x runs), more than %d: split the sweep\n", path,
+                vn ? vn->line : 1, vn ? vn->col : 1, total, MAX_RUNS);
+        bad = 1;
     }
     if (!bad && !d->base[0]) {
         fprintf(err, "%s:1:1: missing 'base' (the scenario file to vary)\n", path);
@@ -532,8 +564,16 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
             snprintf(r->dir, sizeof r->dir, "%s/runs/%s", outdir, r->name);
             if (s == 0) {
                 sd_scenario sc;
+                sd_scenario_cost cost;
+                sd_scenario_limits lim = sd_scenario_limits_default();
+                if (so->limits.max_bytes > 0) lim.max_bytes = so->limits.max_bytes;
+                if (so->limits.max_steps > 0) lim.max_steps = so->limits.max_steps;
                 if (load_run_scenario(&d, r, &sc, err)) {
                     fprintf(err, "%s: case %d is invalid (see above)\n", sweep_file, c);
+                    bad = 1;
+                } else if (sd_scenario_estimate(&sc, &cost), sd_scenario_check_cost(&sc, &cost, &lim, err)) {
+                    fprintf(err, "%s: case %d is too large (see above)\n", sweep_file, c);
+                    sd_scenario_free(&sc);
                     bad = 1;
                 } else {
                     if (c == 0) {

@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #include "run.h"
+#include "scenario.h"
 
 typedef struct {
     int parallel;  /* processes at once (0: the sweep file's, else the number of cores) */
@@ -22,6 +23,7 @@ typedef struct {
                        * that collects) and run nothing */
     const char *program; /* this program's path, for the scripts emit writes */
     sd_tuning tuning; /* how each run's engine runs (zero: the defaults) */
+    sd_scenario_limits limits; /* each case's estimate must keep to them (zero: the defaults) */
     /* called in each run's process when its run has finished (the caller draws its pictures
      * there: the sweep starts no program); NULL: nothing */
     void (*run_done)(const sd_run_result *res, FILE *log);

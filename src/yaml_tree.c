@@ -60,6 +60,13 @@ static int push_child(sd_ynode *p, sd_ynode *c, char *key, int kl, int kc)
     return 0;
 }
 
+/* The parser and the count of nodes made so far; the functions below get a pointer to its
+ * first member, the parser, and reach the count through it. */
+typedef struct {
+    yaml_parser_t ps;
+    long nodes;
+} reader;
+
 /* Recursive descent over parser events, at most SD_YAML_MAX_DEPTH collections deep. */
 static sd_ynode *parse_node(yaml_parser_t *ps, yaml_event_t *ev, const char *name, char *err, int errlen, int depth);
 
@@ -148,6 +155,12 @@ static sd_ynode *parse_collection(yaml_parser_t *ps, sd_ynode *n, const char *na
 static sd_ynode *parse_node(yaml_parser_t *ps, yaml_event_t *ev, const char *name, char *err, int errlen, int depth)
 {
     sd_ynode *n = NULL;
+    if (++((reader *)ps)->nodes > SD_YAML_MAX_NODES) {
+        snprintf(err, (size_t)errlen, "%s:%d:%d: more than %d values in one document", name, (int)ev->start_mark.line + 1,
+                 (int)ev->start_mark.column + 1, SD_YAML_MAX_NODES);
+        yaml_event_delete(ev);
+        return NULL;
+    }
     if ((ev->type == YAML_SEQUENCE_START_EVENT || ev->type == YAML_MAPPING_START_EVENT) && depth >= SD_YAML_MAX_DEPTH) {
         snprintf(err, (size_t)errlen, "%s:%d:%d: nested deeper than %d levels", name, (int)ev->start_mark.line + 1,
                  (int)ev->start_mark.column + 1, SD_YAML_MAX_DEPTH);
@@ -216,6 +229,19 @@ static sd_ynode *parse_all(yaml_parser_t *ps, const char *name, char *err, int e
     return root;
 }
 
+static sd_ynode *parse_bytes(const unsigned char *text, size_t len, const char *name, char *err, int errlen)
+{
+    reader r = {.nodes = 0};
+    if (!yaml_parser_initialize(&r.ps)) {
+        snprintf(err, (size_t)errlen, "%s: out of memory", name);
+        return NULL;
+    }
+    yaml_parser_set_input_string(&r.ps, text, len);
+    sd_ynode *root = parse_all(&r.ps, name, err, errlen);
+    yaml_parser_delete(&r.ps);
+    return root;
+}
+
 sd_ynode *sd_yaml_load(const char *path, char *err, int errlen)
 {
     FILE *f = fopen(path, "rb");
@@ -223,23 +249,43 @@ sd_ynode *sd_yaml_load(const char *path, char *err, int errlen)
         snprintf(err, (size_t)errlen, "%s: cannot open: %s", path, strerror(errno));
         return NULL;
     }
-    yaml_parser_t ps;
-    yaml_parser_initialize(&ps);
-    yaml_parser_set_input_file(&ps, f);
-    sd_ynode *r = parse_all(&ps, path, err, errlen);
-    yaml_parser_delete(&ps);
+    /* read whole, up to the limit and one byte more (a pipe or a device too, never past it) */
+    size_t n = 0, cap = 0, got = 1;
+    unsigned char *buf = NULL;
+    while (got > 0 && n <= SD_YAML_MAX_BYTES) {
+        if (n == cap) {
+            cap = cap ? 2 * cap : 16384;
+            if (cap > SD_YAML_MAX_BYTES + 1) cap = SD_YAML_MAX_BYTES + 1;
+            unsigned char *nb = realloc(buf, cap);
+            if (!nb) {
+                free(buf);
+                fclose(f);
+                snprintf(err, (size_t)errlen, "%s: out of memory", path);
+                return NULL;
+            }
+            buf = nb;
+        }
+        got = fread(buf + n, 1, cap - n, f);
+        n += got;
+    }
+    const int rerr = ferror(f);
+    const int e = errno;
     fclose(f);
-    return r;
+    sd_ynode *root = NULL;
+    if (rerr)
+        snprintf(err, (size_t)errlen, "%s: read error: %s", path, strerror(e));
+    else if (n > SD_YAML_MAX_BYTES)
+        snprintf(err, (size_t)errlen, "%s: longer than %d MiB (a scenario or sweep file is a few KB)", path,
+                 SD_YAML_MAX_BYTES / (1024 * 1024));
+    else
+        root = parse_bytes(buf, n, path, err, errlen);
+    free(buf);
+    return root;
 }
 
 sd_ynode *sd_yaml_parse_string(const char *text, const char *name, char *err, int errlen)
 {
-    yaml_parser_t ps;
-    yaml_parser_initialize(&ps);
-    yaml_parser_set_input_string(&ps, (const unsigned char *)text, strlen(text));
-    sd_ynode *r = parse_all(&ps, name, err, errlen);
-    yaml_parser_delete(&ps);
-    return r;
+    return parse_bytes((const unsigned char *)text, strlen(text), name, err, errlen);
 }
 
 const sd_ynode *sd_yaml_get(const sd_ynode *map, const char *key)

@@ -18,6 +18,11 @@ typedef struct sd_ynode {
 /* Collections nest at most this deep: deeper input is refused (the reader recurses). */
 #define SD_YAML_MAX_DEPTH 64
 
+/* A file is read up to this many bytes (a scenario is a few KB); a longer one is refused, and so
+ * is a document of more nodes (scalars and collections) than SD_YAML_MAX_NODES. */
+#define SD_YAML_MAX_BYTES (4 * 1024 * 1024)
+#define SD_YAML_MAX_NODES 500000
+
 /* Parse a file; returns NULL and writes "file:line:col: message" into err on failure. */
 sd_ynode *sd_yaml_load(const char *path, char *err, int errlen);
 sd_ynode *sd_yaml_parse_string(const char *text, const char *name, char *err, int errlen);

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Rebuild the seed corpora of tests/fuzz/corpus/ from the examples and small valid checkpoints.
+#   usage: tests/fuzz/make_corpus.sh SABODEM   (the program of a normal build)
+set -euo pipefail
+bin="$(realpath "$1")"
+here="$(cd "$(dirname "$0")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+c="$here/corpus"
+rm -rf "$c"
+mkdir -p "$c/scenario" "$c/checkpoint" "$c/sweep"
+# scenarios: the examples that are scenarios, reduced flumes, explicit elements
+for f in "$root"/examples/*.yaml; do
+  grep -q '^base:' "$f" || cp "$f" "$c/scenario/$(basename "$f")"
+done
+cp "$here/ckpt_scenario.yaml" "$c/scenario/ckpt_scenario.yaml"
+sed -e 's/counts: \[376, 891, 3010, 342\]/counts: [4, 6, 10, 3]/' -e 's/count: [0-9]*/count: 2/' \
+  "$root/examples/shibuya2009.yaml" > "$c/scenario/shibuya2009_reduced.yaml"
+cat > "$c/scenario/elements.yaml" <<'Y'
+solver: {dt: 1.0e-5, duration: 0.001, check_dt: true}
+gravity: [0, 0, -9.81]
+contact: {k_n: 1.0e4, k_s: 4.0e3, damping: 0.2, tan_phi: 0.404, cohesion: 0}
+box: {on: true, min: [-0.1, -0.1, 0], max: [0.1, 0.1, 0.2]}
+elements:
+  - {type: sphere, radius: 0.005, density: 1900, position: [0, 0, 0.1], velocity: [0.1, 0, -0.5], omega: [0, 1, 0]}
+  - {type: cylinder, radius: 0.004, length: 0.05, position: [0.02, 0, 0.05], axis: [1, 1, 0], fixed: false, tag: 3}
+  - {type: triangle, vertices: [[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0.01]], group: 7}
+output: {log_interval: 0.01, trajectory_ids: [0, 1], trajectory_interval: 1.0e-3, vtk: false, png: false}
+Y
+cat > "$c/scenario/pile_dam.yaml" <<'Y'
+solver: {dt: 1.0e-5, duration: 0.001}
+pile: {diameters: [0.01, 0.02], counts: [5, 2], density: 1900, min: [0, 0, 0.05], max: [0.1, 0.1, 0.15]}
+flume: {on: true, width: 0.1, wall_height: 0.15, x_gate: 0.1, x_dam: 0.4, x_end: 0.5, roughness: false,
+        pack_height: 0.1}
+spheres: {diameters: [0.01], counts: [4]}
+logs: {count: -1, k_w: 0.1}
+dam: {on: true, pipe_diameter: 0.01, columns: [0.02, 0.05, 0.08], beams: [0.03, 0.08]}
+water: {on: false}
+Y
+# checkpoints: the tiny flume's flow end (the scenario fuzz_checkpoint.c restarts against) and
+# another seed's
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+for seed in 2 5; do
+  "$bin" run "$here/ckpt_scenario.yaml" --seed $seed --checkpoint-at flow_end -o "$tmp/s$seed" >/dev/null 2>&1
+  cp "$tmp/s$seed/flow_end.ckpt" "$c/checkpoint/tiny_flume_seed$seed.ckpt"
+done
+# sweeps: the examples' matrices on the harness's base.yaml, and a few shapes
+for f in "$root"/examples/*.yaml; do
+  grep -q '^base:' "$f" && sed 's/^base: .*/base: base.yaml/' "$f" > "$c/sweep/$(basename "$f")"
+done
+printf 'base: base.yaml\nruns: 2\nseed_base: 7\nparallel: 1\nvary:\n  dam.l_h: [0.03, 0.05]\n  solver.dt: [1.0e-5, 2.0e-5]\nset:\n  solver.duration: 0.002\n' \
+  > "$c/sweep/branch.yaml"
+printf 'base: base.yaml\n' > "$c/sweep/minimal.yaml"
+du -sh "$c"
