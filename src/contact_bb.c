@@ -165,7 +165,7 @@ static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, i
             m1.point[0] = v3(q->px[j], q->py[j], q->pz[j]);
             m1.overlap[0] = q->ov[j];
             m1.feature[0] = q->feature[j];
-            used[i] = sd_manifold_apply(w, law, &m1, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, &out[i]);
+            used[i] = sd_manifold_apply(w, law, &m1, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, NULL, 0, &out[i]);
             continue;
         }
         h->feature = q->feature[j];

@@ -43,6 +43,24 @@ static void bt_flush(sd_world *w, const sd_law *law, bt_batch *q, int m)
     }
 }
 
+#define BT_SNAP 32 /* a body's wall springs that sd_bt_range keeps to carry across features */
+
+/* Whether a spring held last step by a body's contact (feature fo on the wall pair's triangle
+ * to_) goes on in its contact x (feature fn, on triangle tn) of this step: the same body part
+ * (a log's part, the high bits of the feature; a sphere has one), on the same triangle (a
+ * sphere or a rim passing from a face to an edge or a vertex) or on another triangle with the
+ * new point within a tenth of the body's radius of the old triangle (a seam or a crease
+ * crossed in the last step; a corner's other wall, touched a radius away from this one, is
+ * not). */
+static int bt_carries(const sd_walls *wl, int to_, int fo, int tn, int fn, sd_vec3 x, double radius)
+{
+    if ((fo >> SD_TRI_FEATURE_BITS) != (fn >> SD_TRI_FEATURE_BITS)) return 0;
+    if (to_ == tn) return 1;
+    int tf;
+    const sd_vec3 q = sd_geom_closest_on_tri(&wl->tri[to_], x, &tf);
+    return v3_norm2(v3_sub(q, x)) <= 0.01 * radius * radius;
+}
+
 /* A sphere's wall candidates from .. to-1 when they give one face contact at most and nothing
  * near an edge: the contact (if any) into the batch's next lane, the other pairs emptied.
  * Returns 0 (and touches nothing) when the general path must decide. */
@@ -65,6 +83,31 @@ static int bt_sphere_face(sd_world *w, int i, int from, int to, bt_batch *q, int
             s_hit = s;
         }
     }
+    sd_vec3 n, pt, shear = v3(0, 0, 0);
+    double ov;
+    int have = 0;
+    if (hit >= 0) {
+        const sd_pair *p = &w->bt.p[hit];
+        sd_hist *h = &w->bt.hist[p->off];
+        sd_sphere_tri_face(c, r, &wl->tri[p->b], s_hit, &n, &ov, &pt);
+        /* the spring of the same feature (a face: the first slot holding it), else one this
+         * contact carries from another feature of the triangle or from the triangle it left
+         * (bt_carries; into the slot, where the lanes' redo reads it), or a new one */
+        for (int s = 0; s < p->cap && s < SD_MANIFOLD_MAX && !have; s++)
+            if (h[s].feature == SD_TRI_FACE) {
+                shear = h[s].shear;
+                have = 1;
+            }
+        for (int k = from; k < to && !have; k++) {
+            const sd_hist *o = &w->bt.hist[w->bt.p[k].off];
+            if (o->feature >= 0 && bt_carries(wl, w->bt.p[k].b, o->feature, p->b, SD_TRI_FACE, pt, r)) {
+                shear = o->shear;
+                have = 1;
+            }
+        }
+        h->feature = SD_TRI_FACE;
+        h->shear = shear;
+    }
     for (int k = from; k < to; k++) {
         if (k == hit) continue;
         const sd_pair *p = &w->bt.p[k];
@@ -74,17 +117,6 @@ static int bt_sphere_face(sd_world *w, int i, int from, int to, bt_batch *q, int
     }
     if (hit < 0) return 1;
     const sd_pair *p = &w->bt.p[hit];
-    const sd_hist *h = &w->bt.hist[p->off];
-    sd_vec3 n, pt;
-    double ov;
-    sd_sphere_tri_face(c, r, &wl->tri[p->b], s_hit, &n, &ov, &pt);
-    /* the spring of the same feature (a face: the first slot holding it) or a new one */
-    sd_vec3 shear = v3(0, 0, 0);
-    for (int s = 0; s < p->cap && s < SD_MANIFOLD_MAX; s++)
-        if (h[s].feature == SD_TRI_FACE) {
-            shear = h[s].shear;
-            break;
-        }
     const sd_vec3 ra = v3_sub(pt, c), v = b->vel[i], om = b->omega[i];
     const int j = (*m)++;
     q->nx[j] = n.x, q->ny[j] = n.y, q->nz[j] = n.z, q->ov[j] = ov;
@@ -145,6 +177,29 @@ long sd_bt_range(sd_world *w, const sd_law *law, const int32_t *list, int nl, bt
         for (int k = from; k < to; k++)
             multi += sd_manifold_bt(b, &w->w, &w->bt.p[k], &man[k - from]) > 0;
         if (multi > 1) sd_contact_mesh_dedup(&w->w, &w->bt.p[from], man, 0, to - from);
+        /* a log's wall contacts share the stiffness where their normals agree (a face or a side
+         * lying on a floor of one or several triangles) */
+        const int weighted = b->shape[i] != SD_SHAPE_SPHERE;
+        if (weighted && multi > 0) sd_manifold_shares(man, to - from);
+        /* the body's springs of the last step, for the contacts that carry one from another
+         * feature or triangle (bt_carries): those whose feature this step's pair lacks */
+        int32_t snap_k[BT_SNAP];
+        sd_hist snap[BT_SNAP];
+        int nsnap = 0;
+        for (int k = from; k < to && nsnap < BT_SNAP; k++) {
+            const sd_pair *p = &w->bt.p[k];
+            const sd_manifold *mk = &man[k - from];
+            for (int s = 0; s < p->cap && nsnap < BT_SNAP; s++) {
+                const sd_hist *h = &w->bt.hist[p->off + s];
+                int seen = 0;
+                for (int j = 0; j < mk->n; j++)
+                    seen |= mk->feature[j] == h->feature;
+                if (h->feature >= 0 && !seen) {
+                    snap_k[nsnap] = k;
+                    snap[nsnap++] = *h;
+                }
+            }
+        }
         /* each pair into its slot (the wall loads, sd_contact_gather) and onto its body after
          * the body-body sum, in pair order */
         sd_vec3 f = b->force[i], t = b->torque[i];
@@ -161,8 +216,24 @@ long sd_bt_range(sd_world *w, const sd_law *law, const int32_t *list, int nl, bt
             /* the result summed from registers: read back from the slot, each 16-byte load
              * waited for the two 8-byte stores it spans (no store forwarding) */
             sd_pair_out o;
-            int used =
-                sd_manifold_apply(w, law, &man[k - from], p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap, &o);
+            const sd_manifold *mk = &man[k - from];
+            sd_vec3 seed[SD_MANIFOLD_MAX];
+            const sd_hist *hk = &w->bt.hist[p->off];
+            for (int j = 0; j < mk->n; j++) {
+                seed[j] = v3(0, 0, 0);
+                int own = 0;
+                for (int s = 0; s < p->cap; s++)
+                    own |= hk[s].feature == mk->feature[j];
+                for (int s = 0; s < nsnap && !own; s++)
+                    if (snap[s].feature >= 0 && bt_carries(&w->w, w->bt.p[snap_k[s]].b, snap[s].feature, p->b,
+                                                           mk->feature[j], mk->point[j], b->radius[i])) {
+                        seed[j] = snap[s].shear;
+                        snap[s].feature = -1; /* (taken) */
+                        break;
+                    }
+            }
+            int used = sd_manifold_apply(w, law, mk, p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
+                                         nsnap ? seed : NULL, weighted, &o);
             w->bt.out[k] = o.f_a;
             w->bt.active[k] = (uint8_t)(used > 0);
             count += used;

@@ -120,7 +120,18 @@ typedef struct {
 int sd_manifold_bb(const sd_bodies *b, const sd_pair *p, sd_manifold *m);
 int sd_manifold_bt(const sd_bodies *b, const sd_walls *wl, const sd_pair *p, sd_manifold *m);
 int sd_manifold_apply(const sd_world *w, const sd_law *law, const sd_manifold *m, int ia, int ib, int b_is_static,
-                      double sqm, sd_hist *slots, int cap, sd_pair_out *out);
+                      double sqm, sd_hist *slots, int cap, const sd_vec3 *seed, int weighted, sd_pair_out *out);
+/* The shares of the points of nm manifolds (one pair's, or a log's wall pairs' after the mesh
+ * rule) made weights: each raw share over the sum of the raw shares of the points whose
+ * normals agree with its own (within 10 deg fully, fading out to 30 deg), so that the points
+ * of one flat or line contact share K_n, the dashpot and K_s with weights summing to 1. At most
+ * SD_SHARE_MAX points are shared; a log with more wall contacts gets each at full weight. */
+#define SD_SHARE_MAX 64
+void sd_manifold_shares(sd_manifold *ms, int nm);
+/* The springs of a log-log pair's contacts whose feature changed (seed[k], zero if none): an
+ * end disk turning from the other's side to its end face keeps its spring, and so does the one
+ * contact of a pair that changed its type (side-side, end disk, last resort). Returns the count. */
+int sd_manifold_carry_cc(const sd_manifold *m, const sd_hist *slots, int cap, sd_vec3 *seed);
 /* a pair of another shape than two spheres (chunk entry i): a one-point sphere-log contact into
  * lane msc of q (returns 1), anything else through sd_manifold_apply now (returns 0) */
 int sd_manifold_general_pair(const sd_world *w, const sd_law *law, const sd_pair *p, int i, struct sc_lanes *q,

@@ -32,9 +32,87 @@ int sd_manifold_bt(const sd_bodies *b, const sd_walls *wl, const sd_pair *p, sd_
     return sd_geom_cyl_tri(&c, t, m);
 }
 
-/* Apply the law to every point of a manifold, matching history slots by feature. */
+/* How much two points' normals agree for sharing (cosine cn): 1 within 10 deg, 0 beyond 30 deg,
+ * linear in the cosine between, so that a point's share changes continuously as its normal
+ * turns away from the others'. */
+static double share_kernel(double cn)
+{
+    const double c10 = 0.98480775301220802, c30 = 0.86602540378443860;
+    return cn >= c10 ? 1.0 : (cn <= c30 ? 0.0 : (cn - c30) / (c10 - c30));
+}
+
+void sd_manifold_shares(sd_manifold *ms, int nm)
+{
+    double sum[SD_SHARE_MAX];
+    int nt = 0;
+    for (int p = 0; p < nm; p++)
+        nt += ms[p].n;
+    if (nt > SD_SHARE_MAX) {
+        /* (more wall contacts of one log than any scene has: each at full stiffness) */
+        for (int p = 0; p < nm; p++)
+            for (int k = 0; k < ms[p].n; k++)
+                ms[p].share[k] = 1.0;
+        return;
+    }
+    /* every sum from the raw shares first, then the weights in place */
+    int i = 0;
+    for (int p = 0; p < nm; p++)
+        for (int k = 0; k < ms[p].n; k++, i++) {
+            double s = 0.0;
+            for (int q = 0; q < nm; q++)
+                for (int j = 0; j < ms[q].n; j++)
+                    s += ms[q].share[j] * share_kernel(v3_dot(ms[p].normal[k], ms[q].normal[j]));
+            sum[i] = s;
+        }
+    i = 0;
+    for (int p = 0; p < nm; p++)
+        for (int k = 0; k < ms[p].n; k++, i++)
+            ms[p].share[k] = sum[i] > 0.0 ? ms[p].share[k] / sum[i] : 1.0;
+}
+
+int sd_manifold_carry_cc(const sd_manifold *m, const sd_hist *slots, int cap, sd_vec3 *seed)
+{
+    int nold = cap < SD_MANIFOLD_MAX ? cap : SD_MANIFOLD_MAX, carried = 0;
+    int old_free[SD_MANIFOLD_MAX], new_free[SD_MANIFOLD_MAX], nof = 0, nnf = 0;
+    for (int s = 0; s < nold; s++) {
+        if (slots[s].feature < 0) continue;
+        int seen = 0;
+        for (int k = 0; k < m->n; k++)
+            seen |= m->feature[k] == slots[s].feature;
+        if (!seen) old_free[nof++] = s;
+    }
+    for (int k = 0; k < m->n; k++) {
+        seed[k] = v3(0.0, 0.0, 0.0);
+        int seen = 0;
+        for (int s = 0; s < nold; s++)
+            seen |= slots[s].feature == m->feature[k];
+        if (!seen) new_free[nnf++] = k;
+    }
+    /* an end disk turning from a side to an end face (ids 1<->3, 2<->4, 5<->7, 6<->8) keeps its
+     * spring; so does a lone contact that changed its type (side-side, disk, last resort) */
+    for (int i = 0; i < nnf; i++) {
+        const int f = m->feature[new_free[i]];
+        for (int j = 0; j < nof; j++) {
+            const int g = old_free[j] < 0 ? -1 : slots[old_free[j]].feature;
+            const int same_disk = f >= 1 && f <= 8 && g >= 1 && g <= 8 && (f - 1) / 4 == (g - 1) / 4 &&
+                                  (f - 1) % 2 == (g - 1) % 2;
+            if (g >= 0 && (same_disk || (nnf == 1 && nof == 1))) {
+                seed[new_free[i]] = slots[old_free[j]].shear;
+                old_free[j] = -1;
+                carried++;
+                break;
+            }
+        }
+    }
+    return carried;
+}
+
+/* Apply the law to every point of a manifold, matching history slots by feature; a point with
+ * no slot of its feature starts from seed[k] (a spring carried from another feature or pair,
+ * or zero; NULL: zero). weighted: the point's force is its share (m->share, normalised) of
+ * the one-point law's, the spring kept as the one-point law's. */
 int sd_manifold_apply(const sd_world *w, const sd_law *law, const sd_manifold *m, int ia, int ib, int b_is_static,
-                      double sqm, sd_hist *slots, int cap, sd_pair_out *out)
+                      double sqm, sd_hist *slots, int cap, const sd_vec3 *seed, int weighted, sd_pair_out *out)
 {
     const sd_bodies *b = &w->b;
     sd_hist old[SD_MANIFOLD_MAX];
@@ -53,7 +131,7 @@ int sd_manifold_apply(const sd_world *w, const sd_law *law, const sd_manifold *m
             rb = v3_sub(m->point[k], b->pos[ib]);
             vb = v3_add(b->vel[ib], v3_cross(b->omega[ib], rb));
         }
-        sd_vec3 shear = v3(0, 0, 0);
+        sd_vec3 shear = seed ? seed[k] : v3(0, 0, 0);
         for (int s = 0; s < nold; s++)
             if (old[s].feature == m->feature[k]) {
                 shear = old[s].shear;
@@ -61,6 +139,7 @@ int sd_manifold_apply(const sd_world *w, const sd_law *law, const sd_manifold *m
             }
         sd_vec3 f;
         sd_contact_law(law, sqm, m->normal[k], m->overlap[k], v3_sub(va, vb), w->def.dt, &shear, &f);
+        if (weighted) f = v3_scale(f, m->share[k]);
         slots[used].feature = m->feature[k];
         slots[used].shear = shear;
         used++;
@@ -112,7 +191,10 @@ __attribute__((noinline)) int sd_manifold_general_pair(const sd_world *w, const 
         sd_vec3 sep = h->feature == SD_HIST_SEP_AXIS ? h->shear : v3(0.0, 0.0, 0.0);
         const sd_cyl ca = sd_body_cyl(&w->b, p->a), cb = sd_body_cyl(&w->b, p->b);
         sd_geom_cyl_cyl_sep(&ca, &cb, &m, &sep);
-        used[i] = sd_manifold_apply(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, &out[i]);
+        sd_vec3 seed[SD_MANIFOLD_MAX];
+        sd_manifold_carry_cc(&m, h, p->cap, seed);
+        sd_manifold_shares(&m, 1);
+        used[i] = sd_manifold_apply(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, seed, 1, &out[i]);
         if (m.n == 0 && (sep.x != 0.0 || sep.y != 0.0 || sep.z != 0.0)) {
             h->feature = SD_HIST_SEP_AXIS;
             h->shear = sep;
@@ -124,6 +206,6 @@ __attribute__((noinline)) int sd_manifold_general_pair(const sd_world *w, const 
         sc_lane_fill(w, p, &m, h, i, q, msc);
         return 1;
     }
-    used[i] = sd_manifold_apply(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, &out[i]);
+    used[i] = sd_manifold_apply(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, NULL, 0, &out[i]);
     return 0;
 }

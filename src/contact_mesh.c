@@ -45,6 +45,17 @@ static int is_line_cut(const sd_walls *wl, int t, int f, sd_vec3 n)
            fabs(v3_dot(n, wl->tri[t].n)) > 1.0 - 1e-12;
 }
 
+/* Triangles t and u in one plane (to rounding). */
+static int coplanar(const sd_walls *wl, int t, int u)
+{
+    const sd_tri *a = &wl->tri[t], *b = &wl->tri[u];
+    if (fabs(v3_dot(a->n, b->n)) < 1.0 - 1e-12) return 0;
+    for (int k = 0; k < 3; k++)
+        if (fabs(v3_dot(v3_sub(b->v[k], a->v[0]), a->n)) > 1e-12 * (1.0 + v3_norm(v3_sub(b->v[k], a->v[0]))))
+            return 0;
+    return 1;
+}
+
 static int flat_mesh_drop(const sd_walls *wl, int t, int is_edge, int32_t id, int x_cut, int tq, int fo, sd_vec3 no,
                           int y_first)
 {
@@ -81,6 +92,16 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
             int drop = 0;
             if (pairs[p].kind == SD_PAIR_CT) {
                 int x_cut = is_line_cut(wl, t, f, m->normal[k]);
+                /* a log on a floor of triangles: its face contacts on the triangles under it
+                 * carry it, and a seam of the floor under it, or an edge or vertex under its
+                 * end face (normal along the floor's), is no contact of its own (near a face's
+                 * rim a seam's deepest point can be nearer the side, normal sideways) */
+                if (!x_cut &&
+                    (fabs(v3_dot(m->normal[k], wl->tri[t].n)) > 1.0 - 1e-12 || (is_edge && wl->edge_flat[id])))
+                    for (int q = from; q < to && !drop; q++)
+                        for (int kk = 0; kk < man[q].n && !drop; kk++)
+                            drop = (man[q].feature[kk] & ((1 << SD_TRI_FEATURE_BITS) - 1)) == SD_TRI_FACE &&
+                                   coplanar(wl, t, pairs[q].b);
                 for (int q = from; q < to && !drop; q++)
                     for (int kk = 0; kk < man[q].n && !drop; kk++)
                         if (!(q == p && kk == k))
@@ -126,6 +147,7 @@ void sd_contact_mesh_dedup(const sd_walls *wl, const sd_pair *pairs, sd_manifold
                 m->point[j] = m->point[k];
                 m->overlap[j] = m->overlap[k];
                 m->feature[j] = m->feature[k];
+                m->share[j] = m->share[k];
             }
             j++;
         }

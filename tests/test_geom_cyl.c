@@ -373,6 +373,22 @@ static void ct_case(const char *what, sd_cyl a, const sd_tri *t, const expect *e
 
 #define CTF(c, t) (((c) << SD_TRI_FEATURE_BITS) | (t))
 
+/* An end disk flat on a plane: its rim points at centre pc + r (u, v, -u, -v) (pc at the
+ * contact points' level), ids first, then 5, 6, 7 of the same triangle code. */
+static expect disk4(int first, sd_vec3 pc, sd_vec3 u, sd_vec3 v, double r, sd_vec3 n, double d)
+{
+    expect e;
+    e.n = 4;
+    const sd_vec3 dir[4] = {u, v, v3_neg(u), v3_neg(v)};
+    for (int i = 0; i < 4; i++) {
+        e.feature[i] = i == 0 ? first : (((5 + i - 1) << SD_TRI_FEATURE_BITS) | (first & 7));
+        e.normal[i] = n;
+        e.overlap[i] = d;
+        e.point[i] = v3_madd(pc, dir[i], r);
+    }
+    return e;
+}
+
 static void test_cyl_tri(void)
 {
     const double r = 0.005, hl = 0.05, d = 0.0002;
@@ -414,14 +430,33 @@ static void test_cyl_tri(void)
         e = one(CTF(1, SD_TRI_FACE), v3(0, 0, 1), d, v3(0.02, 0.03, -0.5 * d));
         ct_case("tilted log rim on floor", a, &floor, &e);
     }
-    /* standing log: end disk flat on the floor (S = 0) */
+    /* standing log: end disk flat on the floor (S = 0): four rim points a quarter turn apart,
+     * the first along the triangle's first edge (x), then a x u (y), -x, -y */
     {
         sd_cyl a = mkcyl(v3(0.1, 0.2, hl - d), v3(0, 0, 1), r, hl);
-        e = one(CTF(1, SD_TRI_FACE), v3(0, 0, 1), d, v3(0.1, 0.2, -0.5 * d));
+        e = disk4(CTF(1, SD_TRI_FACE), v3(0.1, 0.2, -0.5 * d), v3(1, 0, 0), v3(0, 1, 0), r, v3(0, 0, 1), d);
         ct_case("standing log", a, &floor, &e);
         sd_cyl b = mkcyl(v3(0.1, 0.2, -(hl - d)), v3(0, 0, 1), r, hl); /* under: end + */
-        e = one(CTF(2, SD_TRI_FACE), v3(0, 0, -1), d, v3(0.1, 0.2, 0.5 * d));
+        e = disk4(CTF(2, SD_TRI_FACE), v3(0.1, 0.2, 0.5 * d), v3(1, 0, 0), v3(0, 1, 0), r, v3(0, 0, -1), d);
         ct_case("standing log under", b, &floor, &e);
+        /* tilted by 0.6 d / r about y, the disk centre at depth d/2: the rim points' depths
+         * d/2 + r sin(tilt) (deepest, +x), d/2 on the tilt axis (ids 5, 7), and the top one
+         * above the floor (no contact) */
+        const double tl = 0.6 * d / r;
+        const sd_vec3 ax = v3(sin(tl), 0, cos(tl));
+        const sd_vec3 uu = v3(cos(tl), 0, -sin(tl)); /* from the axis towards the floor, in the disk */
+        const sd_vec3 ce = v3(0.1, 0.2, -0.5 * d);
+        sd_cyl c = mkcyl(v3_madd(ce, ax, hl), ax, r, hl);
+        e.n = 3;
+        const sd_vec3 pts[3] = {v3_madd(ce, uu, r), v3_madd(ce, v3(0, 1, 0), r), v3_madd(ce, v3(0, -1, 0), r)};
+        const int ids[3] = {CTF(1, SD_TRI_FACE), CTF(5, SD_TRI_FACE), CTF(7, SD_TRI_FACE)};
+        for (int i = 0; i < 3; i++) {
+            e.feature[i] = ids[i];
+            e.normal[i] = v3(0, 0, 1);
+            e.overlap[i] = -pts[i].z;
+            e.point[i] = v3(pts[i].x, pts[i].y, 0.5 * pts[i].z);
+        }
+        ct_case("standing log tilted", c, &floor, &e);
     }
     /* log across a seam of two triangles: each supports its own part of the line */
     {
@@ -452,7 +487,7 @@ static void test_cyl_tri(void)
         sd_tri wall;
         sd_tri_init(&wall, v3(0, -1, -1), v3(0, 1, -1), v3(0, 0, 1)); /* plane x = 0 */
         sd_cyl a = mkcyl(v3(hl - d, 0.0, 0.1), v3(1, 0, 0), r, hl);   /* end disk flat on the wall */
-        e = one(CTF(1, SD_TRI_FACE), v3(1, 0, 0), d, v3(-0.5 * d, 0.0, 0.1));
+        e = disk4(CTF(1, SD_TRI_FACE), v3(-0.5 * d, 0.0, 0.1), v3(0, 1, 0), v3(0, 0, 1), r, v3(1, 0, 0), d);
         ct_case("log end against wall", a, &wall, &e);
     }
     /* log lying across a blade (vertical triangle's top edge), perpendicular: edge contact */

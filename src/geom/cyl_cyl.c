@@ -426,7 +426,7 @@ static int cc_contact(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 
     }
 
     sd_vec3 cn[5], cp[5];
-    double cov[5];
+    double cov[5], csh[5];
     int cid[5], nc = 0;
 
     /* S: side-side, common perpendicular of the axes (eqs 28-31) */
@@ -450,6 +450,7 @@ static int cc_contact(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 
             /* midway between B's surface pb + rb n and A's surface pa - ra n */
             cp[nc] = v3_madd(v3_scale(v3_add(pa, pb), 0.5), n, 0.5 * (b->r - a->r));
             cid[nc] = 0;
+            csh[nc] = ov;
             nc++;
             /* the point on pa-pb at ra - tol/2 from pa is inside both solids by tol/2 or more:
              * the two overlap, and no axis below can separate them */
@@ -488,6 +489,7 @@ static int cc_contact(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 
         }
         cp[nc] = c.p;
         cov[nc] = c.ov;
+        csh[nc] = c.ov;
         nc++;
     }
     /* Last resort, for overlaps that no feature pair above describes (two end rims crossing;
@@ -613,6 +615,7 @@ static int cc_contact(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 
                 cov[nc] = best;
                 cp[nc] = w[found];
                 cid[nc] = 9;
+                csh[nc] = best;
                 nc++;
             }
         }
@@ -631,18 +634,23 @@ static int cc_contact(const sd_cyl *a, const sd_cyl *b, sd_manifold *m, sd_vec3 
     }
     double rmin = a->r < b->r ? a->r : b->r;
     for (int i = 0; i < nc && m->n < SD_MANIFOLD_MAX; i++) {
-        int c = order[i], dup = 0;
+        int c = order[i], dup = -1;
         for (int j = 0; j < m->n; j++) {
             if (v3_dist(cp[c], m->point[j]) < 0.5 * rmin && v3_dot(cn[c], m->normal[j]) > 0.9) {
-                dup = 1;
+                dup = j;
                 break;
             }
         }
-        if (dup) continue;
+        if (dup >= 0) {
+            /* the deeper point takes the merged one's share: the pair's total is kept */
+            m->share[dup] += csh[c];
+            continue;
+        }
         m->normal[m->n] = cn[c];
         m->point[m->n] = cp[c];
         m->overlap[m->n] = cov[c];
         m->feature[m->n] = cid[c];
+        m->share[m->n] = csh[c];
         m->n++;
     }
     return m->n;

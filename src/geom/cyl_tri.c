@@ -27,6 +27,7 @@ static void ct_push(sd_manifold *m, sd_vec3 n, sd_vec3 p, double ov, int f)
     m->point[m->n] = p;
     m->overlap[m->n] = ov;
     m->feature[m->n] = f;
+    m->share[m->n] = ov;
     m->n++;
 }
 
@@ -116,20 +117,38 @@ int sd_geom_cyl_tri(const sd_cyl *a, const sd_tri *t, sd_manifold *m)
     double sg = v3_dot(a->a, np);
     sd_vec3 wv = v3_madd(np, a->a, -sg);
     double wn = v3_norm(wv);
-    if (wn < 1e-12) {
-        /* end disk parallel to the plane (S = 0) */
-        double e = sg > 0.0 ? -1.0 : 1.0;
-        sd_vec3 ce = sd_cyl_end(a, e);
-        double dep = -v3_dot(v3_sub(ce, t->v[0]), np);
-        if (dep > 0.0) {
-            sd_vec3 pr = v3_madd(ce, np, dep);
-            int tf;
-            sd_vec3 q = sd_geom_closest_on_tri(t, pr, &tf);
-            if (v3_dist(q, pr) <= a->r)
-                ct_push(&fm, np, v3_madd(q, np, -0.5 * dep), dep, CT_FEAT(e < 0.0 ? 1 : 2, tf));
+    /* u: from the axis towards the plane, in the end disks' plane (the deepest rim point of
+     * each disk is c +- hl a + r u); for a disk flat on the plane (S = 0) any direction, taken
+     * from the triangle's first edge: all rim points are then equally deep */
+    sd_vec3 u = wn >= 1e-12 ? v3_scale(wv, -1.0 / wn) : sd_perp_dir(a->a, v3_sub(t->v[1], t->v[0]), np);
+    /* a face within 30 deg of the plane: the lower end disk's rim points, the deepest one
+     * and three more a quarter turn apart (ids 1 or 2, then 5, 6, 7); else the deepest line
+     * of the side surface, clipped to the triangle */
+    if (fabs(sg) >= 0.86602540378443860) {
+        /* Each counts where it is below the plane and its projection lies on the triangle
+         * (the next triangle of a floor takes it beyond an edge). With the deepest one they
+         * carry a moment when the face lies on the plane, and they leave it one by one, at
+         * zero depth, as the face tilts away. A point is a contact where the plate's point
+         * over it is in the log, true to first order in the tilt; past 30 deg the three are
+         * clear of the plane unless the disk centre is r/2 deep. */
+        const double e = sg > 0.0 ? -1.0 : 1.0;
+        const sd_vec3 ce = sd_cyl_end(a, e), v = v3_cross(a->a, u);
+        const sd_vec3 dirs[4] = {u, v, v3_neg(u), v3_neg(v)};
+        for (int k = 0; k < 4; k++) {
+            sd_vec3 x = v3_madd(ce, dirs[k], a->r);
+            double dep = -v3_dot(v3_sub(x, t->v[0]), np);
+            /* (deeper than the rounding: a log standing across a blade's plane has the
+             * three in it) */
+            if (!(dep > (k ? tol : 0.0))) continue;
+            int inside = 1;
+            for (int j = 0; j < 3 && inside; j++) {
+                sd_vec3 vi = t->v[j], vj = t->v[(j + 1) % 3];
+                inside = v3_dot(v3_sub(x, vi), v3_cross(t->n, v3_sub(vj, vi))) >= 0.0;
+            }
+            const int cf = k ? 4 + k : (e < 0.0 ? 1 : 2);
+            if (inside) ct_push(&fm, np, v3_madd(x, np, 0.5 * dep), dep, CT_FEAT(cf, SD_TRI_FACE));
         }
     } else {
-        sd_vec3 u = v3_scale(wv, -1.0 / wn);
         sd_vec3 l0 = v3_madd(a->c, u, a->r); /* deepest line l0 + s a, s in [-hl, hl] */
         double lo = -a->hl, hi = a->hl;
         int elo = -1, ehi = -1, empty = 0;
@@ -203,7 +222,12 @@ int sd_geom_cyl_tri(const sd_cyl *a, const sd_tri *t, sd_manifold *m)
     double face_dep = 0.0;
     for (int i = 0; i < fm.n; i++)
         if (fm.overlap[i] > face_dep) face_dep = fm.overlap[i];
-    int use_edge = best_k >= 0 && (fm.n == 0 || (best_strict && best_pen < face_dep - tol));
+    /* (a face resting on the plane, less than r/10 deep, keeps its rim points: on a floor of
+     * triangles an edge under the face is a seam, where a rim point 1 um from it would
+     * otherwise go to a sideways edge contact that the flat-mesh rule then drops, losing the
+     * point; a triangle cutting deep into a log, as a blade across it, is an edge contact) */
+    const int face_on_plane = fabs(sg) >= 0.86602540378443860 && face_dep < 0.1 * a->r;
+    int use_edge = best_k >= 0 && (fm.n == 0 || (!face_on_plane && best_strict && best_pen < face_dep - tol));
     if (!use_edge) {
         *m = fm;
         return m->n;

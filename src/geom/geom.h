@@ -11,6 +11,11 @@
  *    (e.g. which end rim touches), stable while the configuration changes continuously,
  *    so that tangential spring history can be matched from one step to the next.
  *    Features of one manifold are distinct.
+ *  - share[k] (cylinder kernels only) is the point's raw share of the pair's stiffness: its
+ *    overlap, or less for a point that fades in continuously (a side-side crossing of nearly
+ *    parallel logs). The engine divides the shares of the points whose normals agree by
+ *    their sum (sd_manifold_shares), so that a flat or line contact has the stiffness and
+ *    damping of one point in total, continuous as the points come and go (docs/geometry.md).
  * No kernel may return NaN or Inf for finite input; degenerate configurations (parallel or
  * coincident axes, a sphere centre on an axis, a disk flat on a plane) give finite answers.
  */
@@ -27,6 +32,7 @@ typedef struct {
     sd_vec3 point[SD_MANIFOLD_MAX];
     double overlap[SD_MANIFOLD_MAX];
     int feature[SD_MANIFOLD_MAX];
+    double share[SD_MANIFOLD_MAX];
 } sd_manifold;
 
 /* Cylinder with flat end faces: centre c, unit axis a, radius r, half length hl. */

@@ -1,0 +1,274 @@
+/* Contact manifolds against closed forms (docs/geometry.md "Shares", docs/model.md §4):
+ *  1. flat faces carry moments: a disc (a short log) lying on its face on an incline of many
+ *     triangles stays at rest without turning below the friction angle and slides at
+ *     g(sinθ − tanφ cosθ) without spinning above it; a sphere resting off the axis of a
+ *     standing log's top face turns nothing; a log released tilted on its end settles upright
+ *     below the tipping angle atan(d/L) and topples above it;
+ *  2. log jams without stiffness jumps: a log resting on a fixed pipe and on a fixed log, the
+ *     crossing angle swept 0–90°: the normal forces sum to the weight at every angle and the
+ *     settled overlap stays within 0.95–1.4 m g / K_n.
+ * Paper values (K_n = 1e4 N/m, K_s = 4e3 N/m, h = 0.2, Δt = 1e-5 s). Deterministic. */
+#include <string.h>
+
+#include "check.h"
+#include "sabodem.h"
+#include "core/vmath.h"
+
+static const double G = 9.81;
+static const double KN = 1.0e4;
+
+static sd_world *make_world(sd_vec3 g, double tan_phi)
+{
+    sd_world_def def = sd_world_def_default();
+    def.gravity = g;
+    def.dt = 1e-5;
+    def.contact.tan_phi = tan_phi;
+    sd_world *w = NULL;
+    CHECK(sd_world_create(&def, &w) == SD_OK);
+    return w;
+}
+
+/* Floor z = 0 over [x0,x1] × [y0,y1]: nx × ny squares, each split along a diagonal, group 0. */
+static void add_floor(sd_world *w, double x0, double x1, double y0, double y1, int nx, int ny)
+{
+    double dx = (x1 - x0) / nx, dy = (y1 - y0) / ny;
+    for (int i = 0; i < nx; i++)
+        for (int j = 0; j < ny; j++) {
+            double a = x0 + i * dx, b = a + dx, c = y0 + j * dy, d = c + dy;
+            CHECK(sd_world_add_triangle(w, v3(a, c, 0), v3(b, c, 0), v3(b, d, 0), 0) >= 0);
+            CHECK(sd_world_add_triangle(w, v3(a, c, 0), v3(b, d, 0), v3(a, d, 0), 0) >= 0);
+        }
+}
+
+static int add_log(sd_world *w, sd_vec3 pos, sd_vec3 axis, double r, double len, double rho, int fixed)
+{
+    sd_cylinder_def c = sd_cylinder_def_default();
+    c.pos = pos;
+    c.axis = axis;
+    c.radius = r;
+    c.length = len;
+    c.density = rho;
+    c.fixed = fixed;
+    int id = sd_world_add_cylinder(w, &c);
+    CHECK(id >= 0);
+    return id;
+}
+
+static int add_ball(sd_world *w, sd_vec3 pos, sd_vec3 vel, sd_vec3 omega, double r, double rho)
+{
+    sd_sphere_def s = sd_sphere_def_default();
+    s.pos = pos;
+    s.vel = vel;
+    s.omega = omega;
+    s.radius = r;
+    s.density = rho;
+    int id = sd_world_add_sphere(w, &s);
+    CHECK(id >= 0);
+    return id;
+}
+
+static sd_body_state body(const sd_world *w, int id)
+{
+    sd_body_state b;
+    memset(&b, 0, sizeof(b));
+    CHECK(sd_world_body(w, id, &b) == SD_OK);
+    return b;
+}
+
+static int run_for(sd_world *w, double t) { return sd_world_run(w, lround(t / 1e-5)) == SD_OK; }
+
+/* ---- 1. flat faces ------------------------------------------------------------------------ */
+
+/* A disc r 20 mm, 10 mm thick (wood, 800 kg/m^3) on its face on a θ incline (gravity tilted:
+ * the floor stays z = 0, downslope is +x), floor of 12 × 4 squares of 25 mm. */
+static void disc_on_incline(double theta_deg, double tan_phi)
+{
+    const double r = 0.02, len = 0.01, rho = 800.0, th = theta_deg * M_PI / 180.0;
+    const double m = rho * M_PI * r * r * len;
+    sd_world *w = make_world(v3(G * sin(th), 0, -G * cos(th)), tan_phi);
+    add_floor(w, -0.05, 0.25, -0.05, 0.05, 12, 4);
+    /* resting (centre at len/2 - m g cosθ / K_n), off the seams and vertices */
+    const double z0 = 0.5 * len - m * G * cos(th) / KN;
+    const int id = add_log(w, v3(0.0031, 0.0043, z0), v3(0, 0, 1), r, len, rho, 0);
+    const int sliding = tan_phi < tan(th);
+    double wmax = 0.0, tilt_max = 0.0;
+    double t_s[64], x_s[64];
+    int ns = 0;
+    for (int k = 0; k < 40; k++) {
+        CHECK(run_for(w, 0.005));
+        sd_body_state b = body(w, id);
+        if (k >= 4) {
+            if (v3_norm(b.omega) > wmax) wmax = v3_norm(b.omega);
+            if (hypot(b.axis.x, b.axis.y) > tilt_max) tilt_max = hypot(b.axis.x, b.axis.y);
+            t_s[ns] = sd_world_time(w);
+            x_s[ns++] = b.pos.x;
+        }
+    }
+    sd_body_state b = body(w, id);
+    /* a from a least-squares parabola x = c0 + c1 t + a/2 t^2 */
+    double S[5] = {0}, R[3] = {0};
+    for (int i = 0; i < ns; i++) {
+        double p = 1.0;
+        for (int k = 0; k < 5; k++) {
+            S[k] += p;
+            if (k < 3) R[k] += p * x_s[i];
+            p *= t_s[i];
+        }
+    }
+    double A[3][4] = {{S[0], S[1], S[2], R[0]}, {S[1], S[2], S[3], R[1]}, {S[2], S[3], S[4], R[2]}}, c[3];
+    for (int i = 0; i < 3; i++)
+        for (int j = i + 1; j < 3; j++) {
+            double f = A[j][i] / A[i][i];
+            for (int k = i; k < 4; k++)
+                A[j][k] -= f * A[i][k];
+        }
+    for (int i = 2; i >= 0; i--) {
+        double s = A[i][3];
+        for (int k = i + 1; k < 3; k++)
+            s -= A[i][k] * c[k];
+        c[i] = s / A[i][i];
+    }
+    const double a = 2.0 * c[2], a_th = sliding ? G * (sin(th) - tan_phi * cos(th)) : 0.0;
+    printf("1 disc on a %.0f deg incline (tan_phi %.3f): a = %.5f m/s^2 (closed form %.5f), |v| %.2e m/s, "
+           "max |w| %.2e rad/s, max tilt %.2e, contacts %ld\n",
+           theta_deg, tan_phi, a, a_th, v3_norm(b.vel), wmax, tilt_max, sd_world_contact_count(w));
+    if (sliding) {
+        CHECK_REL(a, a_th, 0.005);
+        CHECK(wmax < 1e-3); /* (1 mm/s at the rim) */
+    } else {
+        CHECK(v3_norm(b.vel) < 1e-5);
+        CHECK(fabs(b.pos.x - 0.0031) < 1e-5);
+        CHECK(wmax < 1e-3);
+    }
+    CHECK(tilt_max < 1e-3);
+    sd_world_destroy(w);
+}
+
+/* A sphere (r 5 mm, 2650 kg/m^3) resting 15 mm off the axis of a standing log's top face (the
+ * log r 20 mm, 100 mm long, free on a floor of triangles): nothing turns. */
+static void sphere_off_axis(void)
+{
+    const double r = 0.02, len = 0.1, rho = 800.0, rs = 0.005, rhos = 2650.0, off = 0.015;
+    const double m = rho * M_PI * r * r * len, ms = rhos * 4.0 / 3.0 * M_PI * rs * rs * rs;
+    sd_world *w = make_world(v3(0, 0, -G), 0.404);
+    add_floor(w, -0.1, 0.1, -0.1, 0.1, 4, 4);
+    const double zl = 0.5 * len - (m + ms) * G / KN;
+    const int il = add_log(w, v3(0.011, 0.007, zl), v3(0, 0, 1), r, len, rho, 0);
+    const int is = add_ball(w, v3(0.011 + off, 0.007, zl + 0.5 * len + rs - ms * G / KN + 1e-6), v3(0, 0, 0),
+                            v3(0, 0, 0), rs, rhos);
+    double wmax = 0.0;
+    for (int k = 0; k < 150; k++) {
+        CHECK(run_for(w, 0.01));
+        if (k >= 140) {
+            const double wl = v3_norm(body(w, il).omega);
+            if (wl > wmax) wmax = wl;
+        }
+    }
+    sd_body_state l = body(w, il), s = body(w, is);
+    /* the floor's moment m_s g off balances through the face's rim points: tilt ~ m_s g off /
+     * (K_n r^2 / 2) (four points of K_n / 4 each, two of them r off the tilt axis) */
+    const double tilt_th = ms * G * off / (0.5 * KN * r * r);
+    printf("1 sphere %.0f mm off the axis of a standing log: log tilt %.2e (rigid face estimate %.2e), max |w_log| over "
+           "1.4-1.5 s %.2e rad/s, |v_s| %.2e, F_s,z/m_s g - 1 = %.2e\n",
+           off * 1e3, hypot(l.axis.x, l.axis.y), tilt_th, wmax, v3_norm(s.vel), s.force.z / (ms * G) - 1.0);
+    CHECK(wmax < 1e-4);
+    /* the face tilted by the load is an incline of that slope, down which the sphere rolls
+     * at (5/7) g tilt (no rolling resistance in the law), never faster */
+    const double tilt = hypot(l.axis.x, l.axis.y);
+    CHECK(v3_norm(s.vel) < 1.2 * 5.0 / 7.0 * G * tilt * sd_world_time(w));
+    CHECK(tilt < 3.0 * tilt_th);
+    CHECK_REL(s.force.z, ms * G, 0.005);
+    sd_world_destroy(w);
+}
+
+/* A log d 40 mm × L 80 mm (tipping angle atan(d/L) = 26.57 deg) released from rest standing on
+ * its end, tilted by tilt_deg about y, the lower rim point on the floor. Returns the final
+ * angle of its axis from the vertical, deg. */
+static double tilted_release(double tilt_deg, double t_end)
+{
+    const double r = 0.02, len = 0.08, rho = 800.0, hl = 0.5 * len, ps = tilt_deg * M_PI / 180.0;
+    sd_world *w = make_world(v3(0, 0, -G), 0.404);
+    add_floor(w, -0.2, 0.2, -0.2, 0.2, 4, 4);
+    const int id = add_log(w, v3(0.013, 0.021, hl * cos(ps) + r * sin(ps) + 1e-5), v3(sin(ps), 0, cos(ps)), r,
+                           len, rho, 0);
+    CHECK(run_for(w, t_end));
+    sd_body_state b = body(w, id);
+    const double ang = acos(fabs(b.axis.z)) * 180.0 / M_PI;
+    printf("1 log d/L = 0.5 released %.1f deg from vertical (tipping angle %.2f deg): after %.1f s axis %.3g deg from "
+           "vertical, |v| %.2e, |w| %.2e, contacts %ld\n",
+           tilt_deg, atan(2.0 * r / len) * 180.0 / M_PI, t_end, ang, v3_norm(b.vel), v3_norm(b.omega),
+           sd_world_contact_count(w));
+    sd_world_destroy(w);
+    return ang;
+}
+
+static void test_flat_faces(void)
+{
+    disc_on_incline(15.0, 0.404); /* below the friction angle (22 deg) */
+    disc_on_incline(30.0, 0.404); /* above */
+    sphere_off_axis();
+    const double crit = atan(0.5) * 180.0 / M_PI;
+    CHECK(tilted_release(5.0, 1.0) < 0.05);
+    CHECK(tilted_release(crit - 2.0, 1.5) < 0.05);
+    CHECK(tilted_release(crit + 2.0, 1.0) > 80.0);
+}
+
+
+/* ---- 3. a log resting across a fixed pipe or log, the crossing angle swept ------------------ */
+
+/* The log (r 5 mm, 100 mm, 800 kg/m^3) released at rest just touching, centred over the fixed
+ * cylinder (radius rb, length lb) and crossing it at ang deg; after 0.15 s the depth of its
+ * axis below r + rb (the settled overlap of a line contact) over m g / K_n, and the normal
+ * force on it over m g. */
+static void rest_across(double rb, double lb, double ang_deg, double *ov_rel, double *f_rel)
+{
+    const double r = 0.005, len = 0.1, rho = 800.0, a = ang_deg * M_PI / 180.0;
+    const double m = rho * M_PI * r * r * len;
+    sd_world *w = make_world(v3(0, 0, -G), 0.404);
+    add_log(w, v3(0, 0, 0), v3(1, 0, 0), rb, lb, 7850.0, 1);
+    const int id = add_log(w, v3(0, 0, r + rb - m * G / KN), v3(cos(a), sin(a), 0), r, len, rho, 0);
+    CHECK(run_for(w, 0.15));
+    sd_body_state b = body(w, id);
+    *ov_rel = (r + rb - b.pos.z) / (m * G / KN);
+    *f_rel = b.force.z / (m * G);
+    sd_world_destroy(w);
+}
+
+static void test_crossing_sweep(void)
+{
+    static const double ang[] = {0.0, 0.005, 0.01, 0.02, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.325, 0.35, 0.375, 0.4, 0.45, 0.5, 0.75, 1.0, 1.25, 1.5,
+                                 1.75, 2.0,   2.5,  3.0,  5.0,  10., 20., 45., 90.};
+    const int na = (int)(sizeof(ang) / sizeof(ang[0]));
+    for (int pipe = 1; pipe >= 0; pipe--) {
+        double ov_min = INFINITY, ov_max = 0.0, jump = 0.0, f_dev = 0.0, prev = 0.0;
+        for (int i = 0; i < na; i++) {
+            double ov, f;
+            rest_across(pipe ? 0.009 : 0.005, pipe ? 0.5 : 0.1, ang[i], &ov, &f);
+            printf("2 log on a %s at %5.3f deg: overlap / (m g / K_n) %.4f, F_n / m g - 1 %.1e\n", pipe ? "pipe" : "log",
+                   ang[i], ov, f - 1.0);
+            if (ov < ov_min) ov_min = ov;
+            if (ov > ov_max) ov_max = ov;
+            if (i > 0 && fabs(ov - prev) > jump) jump = fabs(ov - prev);
+            if (fabs(f - 1.0) > f_dev) f_dev = fabs(f - 1.0);
+            prev = ov;
+        }
+        printf("2 log on a %s, 0-90 deg: settled overlap %.4f-%.4f m g / K_n, largest step between neighbouring "
+               "angles %.4f, max |F_n / m g - 1| %.1e\n",
+               pipe ? "pipe" : "log", ov_min, ov_max, jump, f_dev);
+        /* the normal forces sum to the weight at every angle; the settled overlap stays within
+         * 0.95-1.4 m g / K_n (parallel and crossed: 1; the old full-stiffness points gave 0.5
+         * parallel, 1 crossed). Measured: on the pipe it rises to 1.36 at 0.45 deg, where the
+         * end disks' contacts carry less than the deeper crossing, and drops to 1 at ~0.47 deg
+         * as they leave (at a nonzero depth: docs/geometry.md, known limitations) */
+        CHECK(f_dev < 1e-3);
+        CHECK(ov_min > 0.95 && ov_max < 1.4);
+        CHECK(jump < 0.4);
+    }
+}
+
+int main(void)
+{
+    test_flat_faces();
+    test_crossing_sweep();
+    return check_report("test_contact_manifolds");
+}
