@@ -15,7 +15,7 @@ import sys
 
 LAYERS = ["core", "geom", "engine", "driver", "app"]
 DRIVER = {"scenario", "yaml_tree", "build", "run", "run_ctx", "run_output", "run_state", "trap", "water", "fluid",
-          "io_vtk", "sweep"}
+          "io_vtk", "sweep", "slabs"}
 
 
 def layer_of(rel):
