@@ -184,7 +184,9 @@ static void test_slabs(void)
         CHECK(sd_world_run(w, 250) == SD_OK);
         const uint64_t h = sd_world_state_hash_canonical(w);
         for (int k = 0; k < NS; k++) {
-            CHECK(sd_slabs_run(s[k], 250) == SD_OK);
+            const sd_status rs = sd_slabs_run(s[k], 250);
+            if (rs) fprintf(stderr, "%d slabs: %s\n", k + 1, sd_status_message(rs));
+            CHECK(rs == SD_OK);
             const uint64_t hk = sd_slabs_state_hash(s[k]);
             if (hk != h) fprintf(stderr, "step %d, %d slabs: %016llx, one world %016llx\n", 250 * q, k + 1,
                                  (unsigned long long)hk, (unsigned long long)h);
