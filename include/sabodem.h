@@ -223,6 +223,67 @@ void sd_world_set_rebuild_every_step(sd_world *w, int on);
 /* Hash of the full dynamic state (positions, velocities, attitudes, history). */
 uint64_t sd_world_state_hash(const sd_world *w);
 
+/* ---- Spatial decomposition (docs/decomposition.md): one system held by several worlds, each
+ * the bodies of a slab along x (owned) plus ghost copies of its neighbours' bodies near it, and
+ * each owned body's forces the same bits as in one world holding everything. ---- */
+
+/* A fixed body grid: origin lo, cell size and counts. With it a rebuild sorts the bodies by
+ * (cell, gid) instead of (cell, previous order), so that the store's order, and with it every
+ * body's pair order, depends on the positions and gids alone: worlds holding parts of one
+ * system with the same grid order their common bodies alike. The one-world reference of a
+ * decomposed run uses it too (its bits differ from the automatic grid's). Bodies outside the
+ * grid count in its edge cells. cell must be at least the largest sphere diameter plus the
+ * margin (a rebuild returns SD_ERR_ARG otherwise). NULL: back to the automatic grid. */
+typedef struct {
+    sd_vec3 lo;
+    double cell;
+    int nx, ny, nz;
+} sd_grid_def;
+sd_status sd_world_set_fixed_grid(sd_world *w, const sd_grid_def *g);
+/* The grid's cell for a world's bodies (the largest sphere diameter plus the margin) */
+double sd_world_min_grid_cell(const sd_world *w);
+
+/* A body's whole state (every field of the store, bit for bit) as an opaque record of
+ * sd_body_record_size() bytes, and its gid. */
+size_t sd_body_record_size(void);
+sd_status sd_world_body_record(const sd_world *w, int gid, void *rec);
+int sd_body_record_gid(const void *rec);
+/* Puts a record into w: a body of its gid is added when w has none (the pairs are remade at
+ * the next step, as after sd_world_add_sphere), else that body's state is overwritten in place
+ * (same shape and fixedness, else SD_ERR_ARG; no rebuild). ghost 1: the body takes part in the
+ * contacts but is not moved by this world (its owner moves it and sends it back each step); 0:
+ * an ordinary body. */
+sd_status sd_world_body_put(sd_world *w, const void *rec, int ghost);
+int sd_world_body_is_ghost(const sd_world *w, int gid);
+
+/* A tangential spring of a pair: body-body pairs (kind 0-2) by the gids of their bodies in
+ * (shape, gid) order, body-triangle pairs (kind 3-4) by the body's gid and the triangle's index;
+ * feature: which of the pair's contact points. */
+typedef struct {
+    int32_t gid_a, kind, id_b, feature;
+    sd_vec3 shear; /* N */
+} sd_spring;
+/* The springs w holds now (its pairs in contact, or those taken out for the coming rebuild):
+ * fills out[0 .. min(count, cap)) and returns the count. */
+int sd_world_springs(const sd_world *w, sd_spring *out, int cap);
+/* Springs for w's next rebuild to give its pairs of those keys (the pairs' own first, where w
+ * has them); sets off that rebuild. */
+sd_status sd_world_springs_put(sd_world *w, const sd_spring *s, int n);
+
+/* Whether the next step remakes the candidate pairs (a body moved past half the margin,
+ * t_reset passed, the store or the walls changed), and a request that it does. */
+int sd_world_needs_rebuild(const sd_world *w);
+void sd_world_request_rebuild(sd_world *w);
+/* The clock of a world made from another's state (time in s, steps done). */
+sd_status sd_world_set_clock(sd_world *w, double time, long step);
+
+/* Hash of a state given as body records and springs, in a canonical order (bodies by gid:
+ * position, velocity, spin, attitude, force; springs by key: shear), the same FNV-1a as
+ * sd_world_state_hash; equal hashes, the same state bit for bit. The one of a whole world:
+ * every body and spring of w. */
+uint64_t sd_state_hash_records(const void *recs, int nb, const sd_spring *springs, int ns);
+uint64_t sd_world_state_hash_canonical(const sd_world *w);
+
 /* Checkpoints: the whole state of a world in one versioned, checksummed file, from which a run
  * continues bit for bit as if never stopped (the format: src/io_checkpoint.h).
  * Write w and an opaque blob of the caller's (extra) to path atomically: a temporary file in the

@@ -246,3 +246,43 @@ sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n, int thread
     free(blk);
     return SD_OK;
 }
+
+size_t sd_bodies_record_size(void)
+{
+    size_t n = 0;
+#define SD_X_FIELD(name, type) n += sizeof(type);
+    SD_BODY_FIELDS(SD_X_FIELD)
+#undef SD_X_FIELD
+    return n;
+}
+
+void sd_bodies_get_record(const sd_bodies *b, int i, void *rec)
+{
+    char *p = rec;
+#define SD_X_FIELD(name, type)                                                                                         \
+    memcpy(p, &b->name[i], sizeof(type));                                                                              \
+    p += sizeof(type);
+    SD_BODY_FIELDS(SD_X_FIELD)
+#undef SD_X_FIELD
+}
+
+void sd_bodies_set_record(sd_bodies *b, int i, const void *rec)
+{
+    const char *p = rec;
+#define SD_X_FIELD(name, type)                                                                                         \
+    memcpy(&b->name[i], p, sizeof(type));                                                                              \
+    p += sizeof(type);
+    SD_BODY_FIELDS(SD_X_FIELD)
+#undef SD_X_FIELD
+}
+
+size_t sd_bodies_record_offset(const char *field)
+{
+    size_t n = 0;
+#define SD_X_FIELD(name, type)                                                                                         \
+    if (strcmp(field, #name) == 0) return n;                                                                           \
+    n += sizeof(type);
+    SD_BODY_FIELDS(SD_X_FIELD)
+#undef SD_X_FIELD
+    return (size_t)-1;
+}

@@ -70,6 +70,18 @@ sd_status sd_grid_layout(sd_grid *g, sd_vec3 lo, sd_vec3 hi, double cell, long m
     return SD_OK;
 }
 
+/* A grid laid out as given (a fixed grid, decomp.c): origin lo, cells of `cell`, nx x ny x nz. */
+sd_status sd_grid_layout_fixed(sd_grid *g, sd_vec3 lo, double cell, int nx, int ny, int nz)
+{
+    g->cell = cell;
+    g->lo = lo;
+    g->nx = nx, g->ny = ny, g->nz = nz;
+    const int ncell = nx * ny * nz;
+    if (sd_grow((void **)&g->cell_start, &g->cap_cells, ncell + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+    memset(g->cell_start, 0, (size_t)(ncell + 1) * sizeof(int32_t));
+    return SD_OK;
+}
+
 /* Counting sort of items into cells given each item's range. With reg0 and slot: item i's
  * entries are reg0[i] .. reg0[i+1]-1 in the order z, y, x of its range, and slot[r] is where
  * entry r went in items (so the items after it in that cell are exactly those above i). */

@@ -71,6 +71,28 @@ static sd_status sort_bodies_by_cell(sd_world *w, int n)
          * moves, keeps its place from one rebuild to the next */
         cell[i] += sd_body_is_bed(b, i) ? ncell : 0;
     }
+    if (w->fgrid_on) {
+        /* a fixed grid (decomp.c): a cell's bodies by gid, whatever the order before, so that
+         * worlds holding parts of one system order their common bodies alike: the bodies in
+         * gid order, then a stable counting sort over the cells */
+        for (int i = 1; i < n; i++)
+            unsorted |= cell[i] < cell[i - 1] || (cell[i] == cell[i - 1] && b->gid[i] < b->gid[i - 1]);
+        if (!unsorted) goto done;
+        count = calloc(2 * (size_t)ncell + 1, sizeof(int32_t));
+        if (!count) {
+            st = SD_ERR_NOMEM;
+            goto done;
+        }
+        for (int i = 0; i < n; i++)
+            count[cell[i] + 1]++;
+        for (int c = 0; c < 2 * ncell; c++)
+            count[c + 1] += count[c];
+        for (int id = 0; id < w->next_gid; id++) {
+            const int i = w->gid_map[id];
+            if (i >= 0 && i < n) perm[count[cell[i]]++] = i;
+        }
+        goto permute;
+    }
     for (int i = 1; i < n; i++)
         unsorted |= cell[i] < cell[i - 1];
     if (!unsorted) goto done;
@@ -101,6 +123,7 @@ static sd_status sort_bodies_by_cell(sd_world *w, int n)
         for (int i = 0; i < n; i++)
             perm[count[cell[i]]++] = i;
     }
+permute:;
     /* the bed at the end stays where it was: permute the part before it only */
     int m = n;
     while (m > 0 && perm[m - 1] == m - 1)
@@ -172,6 +195,10 @@ sd_status sd_neighbor_rebuild(sd_world *w)
         dmax = 2.0 * b->radius[i] > dmax ? 2.0 * b->radius[i] : dmax;
     if (dmax <= 0.0) dmax = 0.01;
     double cell = dmax + w->def.margin;
+    if (w->fgrid_on) { /* a fixed grid (decomp.c): the same cells in every world that has it */
+        if (!(w->fgrid.cell >= cell)) return SD_ERR_ARG;
+        cell = w->fgrid.cell;
+    }
 
     if (w->w.dirty) {
         st = sd_grid_tri_rebuild(w, cell);
@@ -205,7 +232,10 @@ sd_status sd_neighbor_rebuild(sd_world *w)
     if (b->n == 0) lo = hi = v3(0, 0, 0);
     const sd_vec3 anchor = v3(ax, ay, az);
     long max_cells = 8L * b->n + 4096;
-    st = sd_grid_layout(&w->grid, lo, hi, cell, max_cells, nbed ? &anchor : NULL);
+    if (w->fgrid_on)
+        st = sd_grid_layout_fixed(&w->grid, w->fgrid.lo, cell, w->fgrid.nx, w->fgrid.ny, w->fgrid.nz);
+    else
+        st = sd_grid_layout(&w->grid, lo, hi, cell, max_cells, nbed ? &anchor : NULL);
     if (st) return st;
     RB_STAGE(SD_RB_LAYOUT);
     const sd_grid *g = &w->grid;
@@ -305,7 +335,7 @@ sd_status sd_neighbor_moving_update(sd_world *w)
     int m = 0;
     for (int i = 0; i < b->n; i++) {
         w->mov[m] = i;
-        m += !b->fixed[i];
+        m += !b->fixed[i] && !sd_body_is_ghost(w, i); /* (a ghost's owner moves it) */
     }
     w->mov_n = m;
     w->mov_bn = b->n;

@@ -109,6 +109,7 @@ static inline uint8_t range_begins(const int32_t *r, int x, int y, int z)
 
 /* grid.c */
 sd_status sd_grid_layout(sd_grid *g, sd_vec3 lo, sd_vec3 hi, double cell, long max_cells, const sd_vec3 *anchor);
+sd_status sd_grid_layout_fixed(sd_grid *g, sd_vec3 lo, double cell, int nx, int ny, int nz);
 sd_status sd_grid_fill(sd_grid *g, int n, const int32_t (*range)[6], const uint8_t *skip, int32_t *reg0, int32_t **slot,
                        int *slot_cap, uint8_t **flag, int *flag_cap, const sd_bed_cache *bed);
 #ifdef _OPENMP

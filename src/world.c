@@ -128,6 +128,7 @@ void sd_world_destroy(sd_world *w)
     free(w->near);
     free(w->near_hist);
     free(w->near_mark);
+    free(w->ghost);
     free(w->wall_list);
     sd_pair_soa_free(&w->near_soa);
     free(w);
@@ -256,6 +257,8 @@ sd_status sd_world_remove_body(sd_world *w, int gid)
     w->body_version++;
     if (i != last) w->gid_map[w->b.gid[i]] = i;
     w->gid_map[gid] = -1;
+    if (gid < w->ghost_cap) w->ghost[gid] = 0;
+    w->mov_stamp = -1;
     w->need_rebuild = 1;
     return SD_OK;
 }
@@ -299,7 +302,8 @@ double sd_world_front_x(const sd_world *w)
     const sd_bodies *b = &w->b;
     double f = -INFINITY;
     for (int i = 0; i < b->n; i++)
-        if (!b->fixed[i] && b->pos[i].x + sd_body_x_extent(b, i) > f) f = b->pos[i].x + sd_body_x_extent(b, i);
+        if (!b->fixed[i] && !sd_body_is_ghost(w, i) && b->pos[i].x + sd_body_x_extent(b, i) > f)
+            f = b->pos[i].x + sd_body_x_extent(b, i);
     return f;
 }
 
@@ -318,7 +322,7 @@ static void check_caches(const sd_world *w)
     if (w->mov && w->mov_stamp == w->timers.rebuilds && w->mov_bn == b->n) {
         int moving = 0;
         for (int i = 0; i < b->n; i++)
-            moving += !b->fixed[i];
+            moving += !b->fixed[i] && !sd_body_is_ghost(w, i);
         assert(w->mov_n == moving);
         for (int k = 0; k < w->mov_n; k++) {
             assert(!b->fixed[w->mov[k]]);

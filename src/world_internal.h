@@ -412,6 +412,13 @@ struct sd_world {
     sd_bed_cache bed;
     /* derived, never saved: the front prefetch's trial in auto mode (world.c, sd_pf_trial) */
     sd_pf_trial pf;
+    /* derived, never saved: the decomposition's settings (decomp.c, docs/decomposition.md): a
+     * fixed body grid (fgrid_on), whose rebuilds sort a cell's bodies by gid; the ghosts, by
+     * gid (ghost[g] 1: in the contacts, not moved, not in mov) */
+    int fgrid_on;
+    sd_grid_def fgrid;
+    uint8_t *ghost;
+    int ghost_cap;
 };
 
 /* The near skin as a fraction of the margin. Any skin gives the same bits; 0.05-0.1 ran
@@ -430,6 +437,13 @@ sd_status sd_bodies_permute(sd_bodies *b, const int32_t *perm, int n, int thread
 /* Iterate over the field table: calls fn(ptr, elem_size, ctx) for each field array. */
 typedef void (*sd_field_fn)(void *array, size_t elem_size, const char *name, void *ctx);
 void sd_bodies_for_each_field(sd_bodies *b, sd_field_fn fn, void *ctx);
+/* One body's every field as a record (sd_body_record_size bytes, in the field table's order) */
+size_t sd_bodies_record_size(void);
+void sd_bodies_get_record(const sd_bodies *b, int i, void *rec);
+void sd_bodies_set_record(sd_bodies *b, int i, const void *rec);
+size_t sd_bodies_record_offset(const char *field); /* (size_t)-1: no such field */
+/* whether body i of w is a ghost (decomp.c) */
+static inline int sd_body_is_ghost(const sd_world *w, int i);
 
 /* walls.c */
 sd_status sd_walls_reserve(sd_walls *w, int cap);
@@ -500,6 +514,11 @@ void sd_near_springs_home(sd_world *w);
  * cylinders) are summed. */
 /* Whether body i is of the bed (a fixed sphere). */
 static inline int sd_body_is_bed(const sd_bodies *b, int i) { return b->fixed[i] && b->shape[i] == SD_SHAPE_SPHERE; }
+static inline int sd_body_is_ghost(const sd_world *w, int i)
+{
+    const int g = w->b.gid[i];
+    return w->ghost && g < w->ghost_cap && w->ghost[g];
+}
 /* The first body of the trailing bed (n when none): bodies from there on are the bed, which the
  * rebuild sorts after every other body. */
 static inline int sd_bed_start(const sd_bodies *b)

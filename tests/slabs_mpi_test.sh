@@ -1,0 +1,16 @@
+#!/bin/bash
+# One run over MPI ranks (tests/mpi_slabs.c): mpirun -np 1, 2, 3 and 4 (oversubscribed), each
+# rank a slab; every 250 steps the state hash gathered on rank 0 equals one world's.
+set -u
+bin="$1"
+code=0
+for n in 1 2 3 4; do
+  if OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_mpi_yield_when_idle=1 \
+     OMPI_NUM_THREADS=1 OMP_NUM_THREADS=1 mpirun --oversubscribe -np "$n" "$bin"; then
+    echo "ok   mpirun -np $n"
+  else
+    echo "FAIL mpirun -np $n"
+    code=1
+  fi
+done
+exit $code
