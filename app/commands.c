@@ -6,7 +6,7 @@
 #include "core/nearest.h"
 
 static const app_option run_options[] = {
-    {"-o", "DIR"}, {"--output", "DIR"}, {"--overwrite", NULL}, {"--set", "key=value"}, {"--threads", "N"}, {"--seed", "S"},
+    {"-o", "DIR"}, {"--output", "DIR"}, {"--overwrite", NULL}, {"--progress", "S"}, {"--set", "key=value"}, {"--threads", "N"}, {"--seed", "S"},
     {"--checkpoint-at", "flow_end"}, {"--restart", "CHECKPOINT"}, {"--max-memory", "BYTES"}, {"--max-steps", "N"},
     {"--help", NULL}, {NULL, NULL}};
 static const app_option check_options[] = {{"--set", "key=value"}, {"--threads", "N"}, {"--seed", "S"},
@@ -23,11 +23,13 @@ static const app_option completion_options[] = {{"bash", NULL}, {"--help", NULL}
 
 const app_command app_commands[] = {
     {"run",
-     "sabodem run FILE [-o DIR] [--overwrite] [--set key=value]... [--threads N] [--seed S]\n"
+     "sabodem run FILE [-o DIR] [--overwrite] [--progress S] [--set key=value]... [--threads N] [--seed S]\n"
      "                 [--checkpoint-at flow_end] [--restart CHECKPOINT] [--max-memory BYTES] [--max-steps N]",
      "simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
      "  -o, --output DIR          the output directory (refused if it holds another run's files)\n"
      "  --overwrite               delete another run's files in DIR first\n"
+     "  --progress S              in a log (not a terminal), a progress line every S s of wall\n"
+     "                            time (default 5; 0: every 2000 steps)\n"
      "  --set key=value           override a scenario key (sabodem params lists them)\n"
      "  --threads N               threads (solver.threads; 0: all cores)\n"
      "  --seed S                  the random seed (solver.seed)\n"

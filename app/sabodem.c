@@ -293,6 +293,7 @@ int main(int argc, char **argv)
     }
     const char *file = NULL, *outdir = NULL, *restart = NULL, *png = NULL;
     int ckpt_flow_end = 0, overwrite = 0;
+    double progress = 5.0; /* s of wall time between progress lines in a log (--progress) */
     sd_scenario_limits lim = sd_scenario_limits_default();
     const char **sets = calloc((size_t)argc + 2, sizeof(char *));
     char seedbuf[64], thrbuf[64];
@@ -329,6 +330,15 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--restart") && i + 1 < argc && !strcmp(cmd, "run")) restart = argv[++i];
         else if (!strcmp(a, "--png") && i + 1 < argc && !strcmp(cmd, "check")) png = argv[++i];
         else if (!strcmp(a, "--overwrite") && !strcmp(cmd, "run")) overwrite = 1;
+        else if (!strcmp(a, "--progress") && i + 1 < argc && !strcmp(cmd, "run")) {
+            char *end;
+            progress = strtod(argv[++i], &end);
+            if (*end || end == argv[i] || !(progress >= 0.0 && progress <= 86400.0)) {
+                fprintf(stderr, "sabodem: --progress: expected seconds from 0 to 86400, got '%s'\n", argv[i]);
+                free(sets);
+                return 2;
+            }
+        }
         else if ((!strcmp(a, "--max-memory") || !strcmp(a, "--max-steps")) && i + 1 < argc) {
             const int bytes = !strcmp(a, "--max-memory");
             if (limit_option(a, argv[++i], bytes, bytes ? &lim.max_bytes : &lim.max_steps)) {
@@ -409,7 +419,8 @@ int main(int argc, char **argv)
     }
     char ckpt_path[600];
     snprintf(ckpt_path, sizeof ckpt_path, "%s/flow_end.ckpt", outdir);
-    sd_run_opts o = {.outdir = outdir, .progress_tty = isatty(fileno(stderr)), .stop = &stop_flag, .log = stderr, .err = stderr};
+    sd_run_opts o = {.outdir = outdir, .progress_tty = isatty(fileno(stderr)), .progress_interval = progress,
+                     .stop = &stop_flag, .log = stderr, .err = stderr};
     o.checkpoint_flow_end = ckpt_flow_end ? ckpt_path : NULL;
     o.restart = restart;
     o.overwrite = overwrite;

@@ -6,34 +6,17 @@ usage: plot_sweep.py SWEEP_DIR
 Reads SWEEP_DIR/results.csv (one row per run, written by `sabodem sweep`; columns in
 docs/sweep.md), writes
 SWEEP_DIR/cases.csv and, with matplotlib (Debian's python3-matplotlib, Agg backend):
-  fig16_pv_vs_kw.png     trap ratio vs woody volume ratio K_w, at l_V/d_max = 2.0 (Fig. 16)
-  fig17_pv_vs_lv.png     trap ratio vs l_V/d_max, at K_w = 5 % (Fig. 17)
-  heatmap_pv.png         mean trap ratio over the whole matrix
-each run a point, the case mean a line. Columns named logs.count are converted to K_w with
-the sphere solid volume of SPEC §8 (4.748 L) and the log volume (phi 10 x 100 mm); dam.l_v
-is converted to l_V/d_max with d_max = 20 mm, and l_V = 0 (no intermediate beam) is the
-top beam's 118 mm (5.9).
+  fig16_pv_vs_kw.png     trap ratio vs woody volume ratio K_w, at the l_V/d_max nearest 2.0 (Fig. 16)
+  fig17_pv_vs_lv.png     trap ratio vs l_V/d_max, at the K_w nearest 5 % (Fig. 17)
+  heatmap_pv.png         mean trap ratio over the first two varied keys
+each run a point, the case mean a line, one line per value of the other varied keys (labelled
+with them). K_w and l_V/d_max are each run's own (results.csv's k_w and l_v_d_max, from its
+scenario's counts, sizes and dam), so the figures hold for any flume, not only the paper's.
 """
 import csv
-import math
 import os
 import statistics
 import sys
-
-V_SPHERES = 4.7479e-3
-V_LOG = math.pi * 0.005 ** 2 * 0.1
-D_MAX = 0.020
-TOP_BEAM = 0.118
-
-
-def kw_of(count):
-    vt = float(count) * V_LOG
-    return 100.0 * vt / (vt + V_SPHERES)
-
-
-def lv_ratio(lv):
-    lv = float(lv)
-    return (lv if lv > 0 else TOP_BEAM) / D_MAX
 
 
 def main():
@@ -69,64 +52,68 @@ def main():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    def xval(k, v):
-        if k == "logs.count":
-            return kw_of(v)
-        if k == "logs.k_w":
-            return 100.0 * float(v)
+    def case_x(k, rs):
+        """a case's x for key k: its runs' own K_w (%) or l_V/d_max for those keys, else the value"""
+        if k in ("logs.count", "logs.k_w"):
+            return round(100.0 * statistics.mean(float(r["k_w"]) for r in rs), 3)
         if k == "dam.l_v":
-            return lv_ratio(v)
-        return float(v)
+            return round(statistics.mean(float(r["l_v_d_max"]) for r in rs), 3)
+        return float(rs[0][k])
 
     def label(k):
         return {"logs.count": "woody volume ratio K_w (%)", "logs.k_w": "woody volume ratio K_w (%)",
                 "dam.l_v": "l_V / d_max"}.get(k, k)
 
-    def line_plot(xkey, fixed_key, fixed_pick, fname, title):
-        pts, means = [], {}
+    def line_plot(xkey, fixed_key, fixed_x, fname, title):
+        others = [k for k in vary if k not in (xkey, fixed_key)]
+        groups = {}
         for key, rs in cases.items():
-            kv = dict(zip(vary, key))
-            if fixed_key and fixed_key in kv and not fixed_pick(kv[fixed_key]):
+            if fixed_key and case_x(fixed_key, rs) != fixed_x:
                 continue
-            x = xval(xkey, kv[xkey])
-            for r in rs:
-                pts.append((x, float(r["p_v"])))
-            means[x] = statistics.mean(float(r["p_v"]) for r in rs)
-        if not pts:
+            kv = dict(zip(vary, key))
+            groups.setdefault(tuple(kv[k] for k in others), []).append((case_x(xkey, rs), rs))
+        if not groups:
             return
-        fig, ax = plt.subplots(figsize=(5, 4))
-        ax.scatter([p[0] for p in pts], [p[1] for p in pts], s=18, alpha=0.7, label="runs")
-        xs = sorted(means)
-        ax.plot(xs, [means[x] for x in xs], "-o", color="C3", label="mean")
+        fig, ax = plt.subplots(figsize=(5.5, 4))
+        for n, (g, members) in enumerate(sorted(groups.items())):
+            name = ", ".join(f"{k}={v}" for k, v in zip(others, g))
+            xs = sorted(x for x, _ in members)
+            ax.scatter([x for x, rs in members for _ in rs], [float(r["p_v"]) for _, rs in members for r in rs],
+                       s=18, alpha=0.6, color=f"C{n % 10}")
+            means = {x: statistics.mean(float(r["p_v"]) for r in rs) for x, rs in members}
+            ax.plot(xs, [means[x] for x in xs], "-o", color=f"C{n % 10}", label=("mean " + name) if name else "mean")
         ax.set_xlabel(label(xkey))
         ax.set_ylabel("trap ratio P_V")
         ax.set_ylim(0, 1.05)
         ax.set_title(title, fontsize=9)
         ax.grid(alpha=0.3)
-        ax.legend()
+        ax.legend(fontsize=7)
         fig.tight_layout()
         fig.savefig(os.path.join(d, fname), dpi=120)
         plt.close(fig)
 
+    def nearest(key, target):
+        xs = sorted({case_x(key, rs) for rs in cases.values()})
+        return min(xs, key=lambda x: abs(x - target))
+
     kw_key = next((k for k in vary if k in ("logs.count", "logs.k_w")), None)
     lv_key = next((k for k in vary if k == "dam.l_v"), None)
     if kw_key:
-        pick = (lambda v: abs(lv_ratio(v) - 2.0) < 1e-6) if lv_key else None
-        line_plot(kw_key, lv_key, pick, "fig16_pv_vs_kw.png", "Fig. 16 analogue: l_V/d_max = 2.0")
+        lv = nearest(lv_key, 2.0) if lv_key else None
+        line_plot(kw_key, lv_key, lv, "fig16_pv_vs_kw.png",
+                  "Fig. 16 analogue" + (f": l_V/d_max = {lv:g}" if lv_key else ""))
     if lv_key:
-        pick = None
-        if kw_key:
-            kws = sorted({xval(kw_key, dict(zip(vary, k))[kw_key]) for k in cases})
-            target = min(kws, key=lambda x: abs(x - 5.0))
-            pick = lambda v: abs(xval(kw_key, v) - target) < 1e-9
-        line_plot(lv_key, kw_key, pick, "fig17_pv_vs_lv.png", "Fig. 17 analogue: K_w = 5 %")
+        kw = nearest(kw_key, 5.0) if kw_key else None
+        line_plot(lv_key, kw_key, kw, "fig17_pv_vs_lv.png",
+                  "Fig. 17 analogue" + (f": K_w = {kw:g} %" if kw_key else ""))
     if len(vary) >= 2:
         a, b = vary[0], vary[1]
-        xs = sorted({xval(a, k[0]) for k in cases})
-        ys = sorted({xval(b, k[1]) for k in cases})
-        grid = [[float("nan")] * len(xs) for _ in ys]
-        for key, rs in cases.items():
-            grid[ys.index(xval(b, key[1]))][xs.index(xval(a, key[0]))] = statistics.mean(float(r["p_v"]) for r in rs)
+        xs = sorted({case_x(a, rs) for rs in cases.values()})
+        ys = sorted({case_x(b, rs) for rs in cases.values()})
+        cell = {}
+        for rs in cases.values():  # (other varied keys, if any, averaged over)
+            cell.setdefault((case_x(a, rs), case_x(b, rs)), []).extend(float(r["p_v"]) for r in rs)
+        grid = [[statistics.mean(cell[(x, y)]) if (x, y) in cell else float("nan") for x in xs] for y in ys]
         fig, ax = plt.subplots(figsize=(5.5, 4))
         im = ax.imshow(grid, origin="lower", cmap="viridis", vmin=0, vmax=1, aspect="auto")
         ax.set_xticks(range(len(xs)), ["%.3g" % x for x in xs])

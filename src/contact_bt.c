@@ -83,8 +83,8 @@ static int bt_sphere_face(sd_world *w, int i, int from, int to, bt_batch *q, int
             s_hit = s;
         }
     }
-    sd_vec3 n, pt, shear = v3(0, 0, 0);
-    double ov;
+    sd_vec3 n = v3(0, 0, 0), pt = v3(0, 0, 0), shear = v3(0, 0, 0);
+    double ov = 0.0;
     int have = 0;
     if (hit >= 0) {
         const sd_pair *p = &w->bt.p[hit];

@@ -11,6 +11,7 @@
 typedef struct {
     const char *outdir;          /* output directory (created) */
     int progress_tty;            /* 1: live progress line; 0: plain log lines */
+    double progress_interval;    /* plain log lines at most this often, s of wall time (0: every 2000 steps) */
     volatile sig_atomic_t *stop; /* set asynchronously to stop cleanly (Ctrl-C) */
     FILE *log;                   /* progress and messages */
     FILE *err;                   /* errors */

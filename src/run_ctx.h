@@ -37,6 +37,8 @@ typedef struct {
     double ke_peak;
     sd_pipe_loads loads; /* the pipes' loads (from the capture start, when the pipes go in) */
     int capture_cut;     /* the capture ended at its time limit, not settled */
+    double progress_wall; /* when the last progress line was written (sd_now) */
+    long progress_lines;  /* how many */
     double dam_force_now;
     double phase_end[4];
     int pack_at_rest;      /* the packing ended at rest (else at phases.packing_time) */

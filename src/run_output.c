@@ -154,6 +154,12 @@ void sd_output_progress(run_ctx *c, double t_end_est)
     double sps = wall > 0 ? (double)(sd_world_step_count(c->w) - c->rate_step0) / wall : 0.0;
     double eta = sps > 0 && t_end_est > sd_world_time(c->w) ? (t_end_est - sd_world_time(c->w)) / sd_world_definition(c->w)->dt / sps : 0.0;
     if (!c->o->log) return;
+    /* to a pipe or a file: a line at most every progress_interval seconds of wall time (the
+     * command line's default: 5 s), so that the log of a long run stays short */
+    const double now = sd_now();
+    if (!c->o->progress_tty && c->progress_lines > 0 && now - c->progress_wall < c->o->progress_interval) return;
+    c->progress_wall = now;
+    c->progress_lines++;
     if (c->o->progress_tty)
         fprintf(c->o->log, "\r%-8s t = %8.4f s  %9.0f steps/s  %6d elements  ETA %6.0f s   ", sd_run_phase_name(c->phase),
                 sd_world_time(c->w), sps, sd_world_body_count(c->w), eta);

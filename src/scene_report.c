@@ -28,6 +28,15 @@ void sd_dam_report_make(const sd_scenario *s, sd_dam_report *d)
     d->gap_z[d->n_beam] = s->wall_height - prev;
 }
 
+double sd_scene_k_w(const sd_scenario *s)
+{
+    double vs = 0.0;
+    for (int k = 0; k < s->n_classes; k++)
+        vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+    const double vlog = sd_build_log_count(s) * M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
+    return vs + vlog > 0.0 ? vlog / (vs + vlog) : 0.0;
+}
+
 static void list_mm(FILE *f, const double *v, int n)
 {
     for (int k = 0; k < n; k++)

@@ -20,6 +20,10 @@ typedef struct {
 /* The dam of a flume scenario (n_col = n_beam = 0 without one). */
 void sd_dam_report_make(const sd_scenario *s, sd_dam_report *d);
 
+/* The woody volume ratio K_w = V_logs / (V_spheres + V_logs) of a flume scenario (model.md
+ * eq. (54)), from its counts and sizes. */
+double sd_scene_k_w(const sd_scenario *s);
+
 /* The scene as text: the flume, the debris (counts, solid volume, K_w per class), the dam
  * (axes, clear gaps, their ratios to d_max and to the log length); info and the element and
  * triangle counts from the built scene. */

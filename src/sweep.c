@@ -27,6 +27,7 @@
 
 #include "run.h"
 #include "scenario.h"
+#include "scene_report.h"
 #include "core/status.h"
 #include "yaml_tree.h"
 
@@ -358,7 +359,12 @@ static int child_run(const sweep_def *d, const run_item *r, const char *restart)
             fprintf(f, ",%.6f", res.p_v);
             for (int k = 0; k < SD_MAX_CLASSES && k < s.n_classes; k++)
                 fprintf(f, ",%.6f", res.p_v_class[k]);
-            fprintf(f, ",%.6f,%.6e,%.6e,%.6e,%s,%.6e,%d,%.2f,%.4f,%.2f,%d,%016llx\n", res.p_v_logs, res.v_held,
+            /* the run's own K_w and l_V/d_max (docs/sweep.md), for the figures */
+            sd_dam_report dr;
+            sd_dam_report_make(&s, &dr);
+            const double lvd = dr.n_beam > 0 && dr.d_max > 0 ? dr.gap_z[0] / dr.d_max : 0.0;
+            fprintf(f, ",%.6f,%.6f,%.4f", res.p_v_logs, sd_scene_k_w(&s), lvd);
+            fprintf(f, ",%.6e,%.6e,%.6e,%s,%.6e,%d,%.2f,%.4f,%.2f,%d,%016llx\n", res.v_held,
                     res.v_channel, res.v_passed, res.capture_cut ? "limit" : "settled", res.peak_dam_force,
                     res.n_passed, wall, s.capture_limit, res.flow_wall, restart != NULL,
                     (unsigned long long)res.state_hash);
@@ -905,7 +911,7 @@ collect:
         fprintf(f, ",p_v");
         for (int k = 0; k < n_classes; k++)
             fprintf(f, ",p_v_class%d", k);
-        fprintf(f, ",p_v_logs,v_held_m3,v_channel_m3,v_passed_m3,capture_end,peak_dam_force_N,passed,wall_s,"
+        fprintf(f, ",p_v_logs,k_w,l_v_d_max,v_held_m3,v_channel_m3,v_passed_m3,capture_end,peak_dam_force_N,passed,wall_s,"
                    "capture_limit_s,flow_wall_s,branched,state_hash\n");
         for (int i = 0; i < total; i++) {
             char rp[1300], line[2048], copy[2048];
@@ -917,7 +923,7 @@ collect:
                 memcpy(copy, line, sizeof copy);
                 char *fl[64];
                 int nf = split_csv(copy, fl, 64);
-                int want = 2 + d.n_vary + 1 + n_classes + 12;
+                int want = 2 + d.n_vary + 1 + n_classes + 14;
                 if (nf == want && gflow && gdone) {
                     double wall = atof(fl[nf - 5]), fw = atof(fl[nf - 3]);
                     int br = atoi(fl[nf - 2]);

@@ -99,7 +99,7 @@ expect sweep-parallel-bad 2 "--parallel: expected a positive integer" sweep "$sr
 # flow phase has started (not after a fixed time: a faster engine would finish first), and a
 # long capture limit keeps the run from ending on its own. A closed terminal (SIGHUP) the same.
 interrupted() { # name, signal
-  "$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/$1" --set output.png=false --set phases.capture_limit=60 \
+  "$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/$1" --progress 0 --set output.png=false --set phases.capture_limit=60 \
     >"$tmp/$1.log" 2>&1 &
   local pid=$! code
   for _ in $(seq 600); do grep -q '^phase=flow' "$tmp/$1.log" 2>/dev/null && break; sleep 0.1; done
@@ -154,6 +154,13 @@ else
 fi
 if [ "$code" -eq 0 ] && [ "$png_ok" -eq 1 ]; then pass=$((pass + 1)); else
   echo "FAIL side views: exit $code"; cat "$tmp/png.log"; ls "$tmp/png"; fail=$((fail + 1)); fi
+# in a log, a progress line at most every 5 s of wall time (--progress's default): no more
+# lines than 2 + wall / 5 (the first line comes at once)
+lines=$(grep -c '^phase=' "$tmp/png.log")
+most=$(/usr/bin/python3 -c "import json; print(2 + int(json.load(open('$tmp/png/summary.json'))['wall_time_s'] / 5))")
+if [ "$lines" -ge 1 ] && [ "$lines" -le "$most" ]; then pass=$((pass + 1)); else
+  echo "FAIL progress lines in a log: $lines (at most $most)"; fail=$((fail + 1)); fi
+expect progress-bad 2 "--progress: expected seconds from 0 to 86400, got '-1'" run "$tmp/good.yaml" --progress -1 -o "$tmp/pb"
 
 # check describes the paper's flume in design terms; the numbers by hand (SPEC §8): 4 columns
 # of pitch 50 + 18 mm centred across 300 mm (axes 150 -/+ 34, 102); wall gaps 48 - 9 = 39 mm;

@@ -70,7 +70,7 @@ for w in "${windows[@]}"; do
   t_kill=$(/usr/bin/python3 -c "print(f'{$1 + ($2 - $1) * $r / 32767:.3f}')")
   ck=$(newest "$run_dir")
   if [ -n "$ck" ]; then args=(--restart "$ck"); else args=(--overwrite); fi
-  "$bin" run "$scen" -o "$run_dir" "${sets[@]}" --set output.checkpoint_interval=0.05 "${args[@]}" \
+  "$bin" run "$scen" -o "$run_dir" --progress 0 "${sets[@]}" --set output.checkpoint_interval=0.05 "${args[@]}" \
     > "$tmp/kill$kills.log" 2>&1 &
   bg=$!
   for _ in $(seq 3000); do
