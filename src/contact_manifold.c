@@ -191,7 +191,7 @@ __attribute__((noinline)) int sd_manifold_general_pair(const sd_world *w, const 
         sd_vec3 sep = h->feature == SD_HIST_SEP_AXIS ? h->shear : v3(0.0, 0.0, 0.0);
         const sd_cyl ca = sd_body_cyl(&w->b, p->a), cb = sd_body_cyl(&w->b, p->b);
         sd_geom_cyl_cyl_sep(&ca, &cb, &m, &sep);
-        sd_vec3 seed[SD_MANIFOLD_MAX];
+        sd_vec3 seed[SD_MANIFOLD_MAX] = {{0}};
         sd_manifold_carry_cc(&m, h, p->cap, seed);
         sd_manifold_shares(&m, 1);
         used[i] = sd_manifold_apply(w, law, &m, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, seed, 1, &out[i]);
