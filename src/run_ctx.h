@@ -132,9 +132,10 @@ void sd_trap_fixed_loads(const run_ctx *c, sd_vec3 *roughness, sd_vec3 *bed);
 /* the highest point of body i above the bed (z): a sphere's centre + r, a log's from its axis
  * and radius, z + hl |a_z| + r sqrt(1 - a_z^2) */
 double sd_trap_body_top(const sd_body_view *b, int i);
-/* the deposit at the dam, between x_dam - water.probe and the trap plane: the highest top of
- * the elements denser than the water (all of them without water), and apart, the elements
- * lighter than it (floating logs): how many and their highest top (0 if none) */
+/* the deposit at the dam, between x_dam - water.probe and the trap plane: the highest true
+ * top of its elements (a log jam included), and the floating logs among them (lighter than the
+ * water, the centre within one diameter of the pond's surface h_D, a contact force under a
+ * tenth of the weight): how many and their highest top (0 if none) */
 void sd_trap_deposit(const run_ctx *c, double *height, int *n_floating, double *floating_top);
 /* the flow length 1 m before the dam (model.md), into c->flow_len and its fields */
 void sd_trap_flow_length(run_ctx *c);

@@ -164,11 +164,16 @@ void sd_trap_deposit(const run_ctx *c, double *height, int *n_floating, double *
     for (int i = 0; i < b->n; i++) {
         if (b->fixed[i] || b->pos[i].x < lo || b->pos[i].x > hi) continue;
         const double top = sd_trap_body_top(b, i);
-        if (s->water_on && b->mass[i] <= s->water_rho * sd_trap_body_volume(b, i)) {
+        *height = fmax(*height, top); /* a log jam is deposit too */
+        /* floating: lighter than the water, riding on the pond (its centre within one diameter
+         * of the surface h_D) and held by the water, not by the others (its contact force under
+         * a tenth of its weight); a light log jammed in the deposit is not */
+        const int light = s->water_on && b->mass[i] <= s->water_rho * sd_trap_body_volume(b, i);
+        const double g = v3_norm(sd_world_definition(c->w)->gravity);
+        if (light && fabs(b->pos[i].z - c->h_d) <= 2.0 * b->radius[i] && v3_norm(b->force[i]) < 0.1 * b->mass[i] * g) {
             (*n_floating)++;
             *floating_top = fmax(*floating_top, top);
-        } else
-            *height = fmax(*height, top);
+        }
     }
 }
 
