@@ -43,6 +43,19 @@ sd_status sd_neighbor_tgrid_flags(sd_world *w)
  * neighbours in space are neighbours in memory; the history was already taken out by key.
  * Bodies 0 .. n-1 only: the caller knows the rest (the bed, in the bed cache's layout) to be
  * in order already, after every other body. */
+/* A counting sort's start of each of the 2 ncell cells (moving, then bed) for the bodies'
+ * cells: calloc'ed (the caller frees it), NULL when out of memory. */
+static int32_t *cell_starts(const int32_t *cell, int n, int ncell)
+{
+    int32_t *count = calloc(2 * (size_t)ncell + 1, sizeof(int32_t));
+    if (!count) return NULL;
+    for (int i = 0; i < n; i++)
+        count[cell[i] + 1]++;
+    for (int c = 0; c < 2 * ncell; c++)
+        count[c + 1] += count[c];
+    return count;
+}
+
 static sd_status sort_bodies_by_cell(sd_world *w, int n)
 {
     sd_bodies *b = &w->b;
@@ -78,15 +91,10 @@ static sd_status sort_bodies_by_cell(sd_world *w, int n)
         for (int i = 1; i < n; i++)
             unsorted |= cell[i] < cell[i - 1] || (cell[i] == cell[i - 1] && b->gid[i] < b->gid[i - 1]);
         if (!unsorted) goto done;
-        count = calloc(2 * (size_t)ncell + 1, sizeof(int32_t));
-        if (!count) {
+        if (!(count = cell_starts(cell, n, ncell))) {
             st = SD_ERR_NOMEM;
             goto done;
         }
-        for (int i = 0; i < n; i++)
-            count[cell[i] + 1]++;
-        for (int c = 0; c < 2 * ncell; c++)
-            count[c + 1] += count[c];
         for (int id = 0; id < w->next_gid; id++) {
             const int i = w->gid_map[id];
             if (i >= 0 && i < n) perm[count[cell[i]]++] = i;
@@ -111,15 +119,10 @@ static sd_status sort_bodies_by_cell(sd_world *w, int n)
         perm[j + 1] = x;
     }
     if (moves > max_moves) {
-        count = calloc(2 * (size_t)ncell + 1, sizeof(int32_t));
-        if (!count) {
+        if (!(count = cell_starts(cell, n, ncell))) {
             st = SD_ERR_NOMEM;
             goto done;
         }
-        for (int i = 0; i < n; i++)
-            count[cell[i] + 1]++;
-        for (int c = 0; c < 2 * ncell; c++)
-            count[c + 1] += count[c];
         for (int i = 0; i < n; i++)
             perm[count[cell[i]]++] = i;
     }
