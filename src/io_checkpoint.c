@@ -537,6 +537,15 @@ static sd_status read_bodies(const rd_ctx *r, sd_bin_reader *c, sd_world *w)
         free(ff);
         return SD_OK;
     }
+    /* every field of the store is in the file (an unknown one is refused below): so n is
+     * bounded by the bytes read, and a short file cannot make the store reserve room for
+     * millions of bodies */
+    field_wctx store = {0};
+    sd_bodies_for_each_field(&w->b, count_field, &store);
+    if (nf < store.count) {
+        free(ff);
+        return fail(r, "section BODY: %d body fields, this build has %d (a damaged or incompatible file)", nf, store.count);
+    }
     if (sd_bodies_reserve(&w->b, n)) {
         free(ff);
         return SD_ERR_NOMEM;
