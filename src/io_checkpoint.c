@@ -564,6 +564,12 @@ static sd_status read_pairs(const rd_ctx *r, sd_bin_reader *c, sd_world *w, sd_p
     int n = get_count(c, 24);
     int nh = get_count(c, 0);
     if (c->bad) return SD_OK;
+    /* the history slots (28 bytes each) follow the n pairs (24 bytes each), at most
+     * SD_MANIFOLD_MAX a pair: bounded before anything is reserved for them */
+    if ((size_t)nh > (size_t)n * SD_MANIFOLD_MAX || (size_t)nh > (sd_bin_left(c) - (size_t)n * 24) / 28) {
+        c->bad = 1;
+        return SD_OK;
+    }
     if (sd_grow((void **)&l->p, &l->cap, n + 1, sizeof(sd_pair)) ||
         sd_grow((void **)&l->hist, &l->hcap, nh + 1, sizeof(sd_hist)))
         return SD_ERR_NOMEM;
