@@ -181,7 +181,14 @@ sd_status sd_slab_create(const sd_world *whole, const sd_grid_def *g, const sd_s
         int group, active;
         sd_world_triangle(whole, t, c, &group, &active);
         if (sd_world_add_triangle(s->w, c[0], c[1], c[2], group) != t) st = SD_ERR_ARG;
+        if (!st) st = sd_world_set_triangle_material(s->w, t, sd_world_triangle_material(whole, t));
     }
+    /* the springs of the pairs of materials that have their own */
+    for (int a = 0; a < SD_MATERIALS_MAX && !st; a++)
+        for (int b = a; b < SD_MATERIALS_MAX && !st; b++) {
+            sd_contact_def cd;
+            if (sd_world_pair_contact(whole, a, b, &cd) == 1) st = sd_world_set_pair_contact(s->w, a, b, &cd);
+        }
     for (int t = 0; t < nt && !st; t++) {
         sd_vec3 c[3];
         int group, active;
