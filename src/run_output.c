@@ -337,6 +337,18 @@ char *sd_output_summary_text(run_ctx *c, sd_run_result *res, int status_code, co
     if (!o) return NULL;
     int bad = summary_run(c, o, status_code, status_msg) | summary_engine(c, o) | summary_elements(c, o);
     if (c->s->flume_on) bad |= summary_trap(c, o, res) | summary_debris(c, o, res) | summary_pipes(c, o);
+    /* the materials and the springs of each pair that can meet (or is given) */
+    cJSON *mat = sd_scenario_materials_json(c->s);
+    for (int k = 0; k < 2 && mat; k++) {
+        const char *key = k ? "contact_pairs" : "materials";
+        cJSON *item = cJSON_DetachItemFromObject(mat, key);
+        if (!item || !cJSON_AddItemToObject(o, key, item)) {
+            cJSON_Delete(item);
+            bad = 1;
+        }
+    }
+    bad |= !mat;
+    cJSON_Delete(mat);
     cJSON *par = sd_scenario_params_json(c->s);
     if (!par || !cJSON_AddItemToObject(o, "parameters", par)) {
         cJSON_Delete(par);

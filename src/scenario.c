@@ -16,7 +16,8 @@
 #include "core/vmath.h"
 #include "yaml_tree.h"
 
-typedef enum { P_DOUBLE, P_INT, P_BOOL, P_VEC3, P_DLIST, P_ILIST, P_ENUM } ptype;
+/* P_MAT: a material's name, stored as its id (int); P_MLIST: a list of them */
+typedef enum { P_DOUBLE, P_INT, P_BOOL, P_VEC3, P_DLIST, P_ILIST, P_ENUM, P_MAT, P_MLIST } ptype;
 
 typedef struct {
     const char *key;
@@ -56,6 +57,7 @@ static const sd_param params[] = {
     {"box.on", P_BOOL, OFF(box_on), 0, 0, "-", 0, 1, 0, "add an open-top box of triangles"},
     {"box.min", P_VEC3, OFF(box_min), 0, 0, "m", -EXT, EXT, 0, "box lower corner"},
     {"box.max", P_VEC3, OFF(box_max), 0, 0, "m", -EXT, EXT, 0, "box upper corner"},
+    {"box.material", P_MAT, OFF(box_mat), 0, 0, "-", 0, 0, 0, "material of the box's triangles"},
     {"pile.diameters", P_DLIST, OFF(pile_diam), OFF(pile_n_classes), SD_MAX_CLASSES, "m", 0, 1, 1,
      "sphere diameters of the random pile"},
     {"pile.counts", P_ILIST, OFF(pile_count), OFF(pile_n_counts), SD_MAX_CLASSES, "-", 0, 1e7, 0,
@@ -63,6 +65,7 @@ static const sd_param params[] = {
     {"pile.density", P_DOUBLE, OFF(pile_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density"},
     {"pile.min", P_VEC3, OFF(pile_min), 0, 0, "m", -EXT, EXT, 0, "placement region lower corner"},
     {"pile.max", P_VEC3, OFF(pile_max), 0, 0, "m", -EXT, EXT, 0, "placement region upper corner"},
+    {"pile.material", P_MAT, OFF(pile_mat), 0, 0, "-", 0, 0, 0, "material of the pile's spheres"},
     {"flume.on", P_BOOL, OFF(flume_on), 0, 0, "-", 0, 1, 0, "build the paper's flume (SPEC §8)"},
     {"flume.slope_deg", P_DOUBLE, OFF(slope_deg), 0, 0, "deg", 0, 90, 0, "bed slope θ"},
     {"flume.width", P_DOUBLE, OFF(width), 0, 0, "m", 0, 100, 1, "flume width"},
@@ -77,11 +80,18 @@ static const sd_param params[] = {
      "bed area fraction covered by roughness spheres (random placement stops there or when jammed)"},
     {"flume.pack_height", P_DOUBLE, OFF(pack_height), 0, 0, "m", 0, 100, 1,
      "top of the packing box above the bed (at most flume.wall_height)"},
+    {"flume.bed_material", P_MAT, OFF(bed_mat), 0, 0, "-", 0, 0, 0, "material of the bed's triangles"},
+    {"flume.wall_material", P_MAT, OFF(wall_mat), 0, 0, "-", 0, 0, 0,
+     "material of the side walls and the upstream end wall"},
+    {"flume.roughness_material", P_MAT, OFF(rough_mat), 0, 0, "-", 0, 0, 0, "material of the bed roughness spheres"},
+    {"flume.gate_material", P_MAT, OFF(gate_mat), 0, 0, "-", 0, 0, 0, "material of the gate"},
     {"spheres.diameters", P_DLIST, OFF(class_diam), OFF(n_classes), SD_MAX_CLASSES, "m", 0, 1, 1,
      "size classes (SPEC §8: 20, 15, 10, 5 mm)"},
     {"spheres.counts", P_ILIST, OFF(class_count), OFF(n_class_counts), SD_MAX_CLASSES, "-", 0, 1e7, 0,
      "count per class (376, 891, 3010, 342)"},
     {"spheres.density", P_DOUBLE, OFF(sphere_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density (SG 1.9)"},
+    {"spheres.materials", P_MLIST, OFF(sphere_mat), OFF(n_sphere_mats), SD_MAX_CLASSES, "-", 0, 0, 0,
+     "material of each size class (one name: every class; empty: default)"},
     {"logs.count", P_INT, OFF(log_count), 0, 0, "-", -1, SD_MAX_LOGS, 0, "number of logs (-1: from logs.k_w)"},
     {"logs.k_w", P_DOUBLE, OFF(log_kw), 0, 0, "-", 0, 0.95, 0, "woody volume ratio K_w (eq 54), used when count = -1"},
     {"logs.k_w_volume", P_DOUBLE, OFF(log_kw_volume), 0, 0, "m^3", 0, INF, 0,
@@ -90,6 +100,7 @@ static const sd_param params[] = {
     {"logs.diameter", P_DOUBLE, OFF(log_diam), 0, 0, "m", 0, 1, 1, "log diameter"},
     {"logs.length", P_DOUBLE, OFF(log_length), 0, 0, "m", 0, 10, 1, "log length"},
     {"logs.density", P_DOUBLE, OFF(log_density), 0, 0, "kg/m^3", 0, INF, 1, "log density (SG 0.8)"},
+    {"logs.material", P_MAT, OFF(log_mat), 0, 0, "-", 0, 0, 0, "material of the logs"},
     {"dam.on", P_BOOL, OFF(dam_on), 0, 0, "-", 0, 1, 0, "build the grid dam"},
     {"dam.pipe_diameter", P_DOUBLE, OFF(pipe_diam), 0, 0, "m", 0, 1, 1, "pipe diameter"},
     {"dam.l_h", P_DOUBLE, OFF(l_h), 0, 0, "m", 0, 1, 1, "clear spacing of the columns ℓ_H"},
@@ -102,6 +113,7 @@ static const sd_param params[] = {
      "explicit beam undersides z (empty: from l_v, top_beam); below the wall top, not overlapping"},
     {"dam.fixed_ends", P_BOOL, OFF(dam_support), 0, 0, "-", 0, 1, 0,
      "pipe bending moments for spans with fixed ends (default: simply supported; docs/loads.md)"},
+    {"dam.material", P_MAT, OFF(pipe_mat), 0, 0, "-", 0, 0, 0, "material of the dam's pipes"},
     {"water.on", P_BOOL, OFF(water_on), 0, 0, "-", 0, 1, 0, "fluid forces (SPEC §5)"},
     {"water.u", P_DOUBLE, OFF(water_u), 0, 0, "m/s", 0, INF, 0, "reference velocity U"},
     {"water.h", P_DOUBLE, OFF(water_h), 0, 0, "m", 0, INF, 1, "flow depth h"},
@@ -182,6 +194,8 @@ void sd_scenario_default(sd_scenario *s)
     memset(s, 0, sizeof(*s));
     s->world = sd_world_def_default();
     s->world.gravity = v3(0.0, 0.0, -9.81);
+    s->n_materials = 1;
+    snprintf(s->material_name[0], SD_MATERIAL_NAME_MAX, "default");
     s->duration = 1.0;
     s->seed = 1;
     s->pile_density = 1900.0;
@@ -300,19 +314,40 @@ static int parse_bool(const char *txt, int *out)
     return 0;
 }
 
-static int check_range(ectx *e, const sd_param *p, double v, int line, int col)
+/* 0 when v is in p's range, else -1 with the range in buf */
+static int in_range(const sd_param *p, double v, char *buf, size_t n)
 {
     int bad = p->strict_min ? !(v > p->min) : !(v >= p->min);
-    if (bad || v > p->max) {
-        char buf[160];
-        if (p->strict_min)
-            snprintf(buf, sizeof buf, "must be > %g and <= %g (%s)", p->min, p->max, p->unit);
-        else
-            snprintf(buf, sizeof buf, "must be in [%g, %g] (%s)", p->min, p->max, p->unit);
-        report(e, line, col, "%s: %s", p->key, buf);
+    if (!bad && !(v > p->max)) return 0;
+    if (p->strict_min)
+        snprintf(buf, n, "must be > %g and <= %g (%s)", p->min, p->max, p->unit);
+    else
+        snprintf(buf, n, "must be in [%g, %g] (%s)", p->min, p->max, p->unit);
+    return -1;
+}
+
+static int check_range(ectx *e, const sd_param *p, double v, int line, int col)
+{
+    char buf[160];
+    if (!in_range(p, v, buf, sizeof buf)) return 0;
+    report(e, line, col, "%s: %s", p->key, buf);
+    return -1;
+}
+
+/* A material's name at n into *id; else reported (n: a scalar). */
+static int material_param(ectx *e, const sd_scenario *s, const sd_param *p, const sd_ynode *n, int line, int col,
+                          int *id)
+{
+    char hint[SD_MATERIALS_MAX * SD_MATERIAL_NAME_MAX + 64], msg[sizeof hint + 96];
+    if (n->kind != SD_Y_SCALAR) {
+        report(e, line, col, "%s: expected a material's name%s", p->key, "");
         return -1;
     }
-    return 0;
+    *id = sd_scenario_material_id(s, n->value, hint, sizeof hint);
+    if (*id >= 0) return 0;
+    snprintf(msg, sizeof msg, "unknown material '%s'%s", n->value, hint);
+    report(e, line, col, "%s: %s", p->key, msg);
+    return -1;
 }
 
 static int parse_vec3_node(const sd_ynode *n, sd_vec3 *v)
@@ -403,6 +438,28 @@ static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode
         *(sd_vec3 *)(base + p->off) = v;
         break;
     }
+    case P_MAT: {
+        int id;
+        if (!material_param(e, s, p, n, tmp ? line : n->line, tmp ? col : n->col, &id)) *(int *)(base + p->off) = id;
+        break;
+    }
+    case P_MLIST: {
+        if (n->kind != SD_Y_SEQ || n->n > p->max_count) {
+            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected a list of material names (at most %s)",
+                   p->key, p->max_count == SD_MAX_CLASSES ? "one per size class" : "the allowed length");
+            break;
+        }
+        int ok = 1, ids[SD_MAX_CLASSES];
+        for (int k = 0; k < n->n; k++) {
+            const sd_ynode *it = n->items[k];
+            ok &= !material_param(e, s, p, it, tmp ? line : it->line, tmp ? col : it->col, &ids[k]);
+        }
+        if (ok) {
+            memcpy(base + p->off, ids, (size_t)n->n * sizeof(int));
+            *(int *)(base + p->count_off) = n->n;
+        }
+        break;
+    }
     case P_DLIST:
     case P_ILIST: {
         if (n->kind != SD_Y_SEQ || n->n > p->max_count) {
@@ -460,7 +517,7 @@ static int is_section(const char *prefix)
  * "elements"), else "" */
 static const char *did_you_mean(const char *key, char *buf, size_t n)
 {
-    const char *cand[2 * N_PARAMS + 1];
+    const char *cand[2 * N_PARAMS + 3];
     char sections[N_PARAMS][32];
     size_t nc = 0;
     for (int i = 0; i < N_PARAMS; i++) {
@@ -472,6 +529,8 @@ static const char *did_you_mean(const char *key, char *buf, size_t n)
         }
     }
     cand[nc++] = "elements";
+    cand[nc++] = "materials";
+    cand[nc++] = "contact_pairs";
     const char *best = sd_nearest_word(key, cand, nc);
     if (best)
         snprintf(buf, n, " (did you mean '%s'?)", best);
@@ -481,8 +540,8 @@ static const char *did_you_mean(const char *key, char *buf, size_t n)
 }
 
 /* Element list entry keys. */
-static const char *elem_keys[] = {"type",  "radius", "diameter", "length", "density",  "position", "velocity",
-                                  "omega", "axis",   "fixed",    "tag",    "vertices", "group",    NULL};
+static const char *elem_keys[] = {"type", "radius", "diameter", "length",   "density", "position", "velocity", "omega",
+                                  "axis", "fixed",  "tag",      "vertices", "group",   "material", NULL};
 
 static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
 {
@@ -571,6 +630,13 @@ static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
                 d.tag = (int)iv;
             else
                 d.group = (int)iv;
+        } else if (!strcmp(k, "material")) {
+            char hint[SD_MATERIALS_MAX * SD_MATERIAL_NAME_MAX + 64];
+            d.material = v->kind == SD_Y_SCALAR ? sd_scenario_material_id(s, v->value, hint, sizeof hint) : -1;
+            if (v->kind != SD_Y_SCALAR)
+                report(e, v->line, v->col, "elements.material: expected a material's name%s%s", "", "");
+            else if (d.material < 0)
+                report(e, v->line, v->col, "elements.material: unknown material '%s'%s", v->value, hint);
         } else if (!strcmp(k, "vertices")) {
             if (v->kind != SD_Y_SEQ || v->n != 3 || parse_vec3_node(v->items[0], &d.v[0]) ||
                 parse_vec3_node(v->items[1], &d.v[1]) || parse_vec3_node(v->items[2], &d.v[2]))
@@ -601,6 +667,21 @@ static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
     s->elems[s->n_elems++] = d;
 }
 
+static void report_cb(void *ctx, int line, int col, const char *msg) { report(ctx, line, col, "%s%s", msg, ""); }
+
+/* a contact_pairs constant: the number in text, in the range of its contact.* key */
+static int pair_value(int key, const char *text, double *v, char *why, size_t n)
+{
+    char k[32];
+    snprintf(k, sizeof k, "contact.%s", sd_scenario_pair_key(key));
+    const sd_param *p = find_param(k);
+    if (!text || parse_double(text, v)) {
+        snprintf(why, n, "expected a number");
+        return -1;
+    }
+    return in_range(p, *v, why, n);
+}
+
 static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefix)
 {
     for (int i = 0; i < map->n; i++) {
@@ -619,6 +700,11 @@ static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefi
                 parse_element(e, s, v->items[k]);
             continue;
         }
+        if (!*prefix && !strcmp(key, "materials")) continue; /* (read first: load) */
+        if (!*prefix && !strcmp(key, "contact_pairs")) {
+            sd_scenario_parse_pairs(s, v, pair_value, report_cb, e);
+            continue;
+        }
         const sd_param *p = find_param(key);
         if (p) {
             set_param(e, s, p, v, NULL, v->line, v->col);
@@ -633,8 +719,6 @@ static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefi
         }
     }
 }
-
-static double sphere_mass(double d, double rho) { return rho * M_PI / 6.0 * d * d * d; }
 
 /* Cross-field checks: geometry that contradicts itself, an unstable time step. */
 /* Report at where the first of the keys that was set was set (the scenario's first line when
@@ -749,6 +833,11 @@ static void validate(ectx *e, sd_scenario *s, const origin *at)
     char a[32], b[300];
     check_lengths(e, at, "pile.diameters", s->pile_n_classes, "pile.counts", s->pile_n_counts);
     check_lengths(e, at, "spheres.diameters", s->n_classes, "spheres.counts", s->n_class_counts);
+    if (s->n_sphere_mats > 1 && s->n_sphere_mats != s->n_classes) {
+        snprintf(b, sizeof b, "spheres.materials has %d names and spheres.diameters %d: give one material, or one per class",
+                 s->n_sphere_mats, s->n_classes);
+        report_keys(e, at, "spheres.materials", NULL, "%s%s", b, "");
+    }
     if (e->errors) return;
     if (s->pile_n_classes > 0) {
         double dmax = 0;
@@ -822,32 +911,28 @@ static void validate(ectx *e, sd_scenario *s, const origin *at)
         }
         if (s->dam_on && e->errors == 0) check_dam(e, at, s);
     }
-    /* smallest moving mass → stability of Δt */
+    /* the stiffest pair of materials that can meet, with its lightest moving mass → stability of Δt */
+    int ma = 0, mb = 0;
     double mmin = INFINITY;
-    for (int i = 0; i < s->n_elems; i++) {
-        const sd_elem_def *d = &s->elems[i];
-        if (d->fixed || d->type == 2) continue;
-        double m = d->type == 0 ? sphere_mass(2 * d->radius, d->density)
-                                : d->density * M_PI * d->radius * d->radius * d->length;
-        mmin = fmin(mmin, m);
-    }
-    for (int k = 0; k < s->pile_n_classes; k++)
-        if (s->pile_count[k] > 0) mmin = fmin(mmin, sphere_mass(s->pile_diam[k], s->pile_density));
-    if (s->flume_on) {
-        for (int k = 0; k < s->n_classes; k++)
-            if (s->class_count[k] > 0) mmin = fmin(mmin, sphere_mass(s->class_diam[k], s->sphere_density));
-        if (s->log_count != 0)
-            mmin = fmin(mmin, s->log_density * M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length);
-    }
-    if (s->world.check_dt && isfinite(mmin)) {
-        double dt_max = sd_stable_dt_max(s->world.contact.k_n, s->world.contact.k_s, mmin);
-        if (s->world.dt > dt_max) {
-            snprintf(a, sizeof a, "%g", s->world.dt);
-            snprintf(b, sizeof b,
-                     "%g s (8 steps per contact half-period for k_n = %g N/m, k_s = %g N/m and the smallest mass %g kg)",
-                     dt_max, s->world.contact.k_n, s->world.contact.k_s, mmin);
+    const double dt_max = sd_scenario_stable_dt(s, &ma, &mb, &mmin);
+    if (s->world.check_dt && isfinite(dt_max) && s->world.dt > dt_max) {
+        const sd_contact_def c = sd_scenario_pair_contact(s, ma, mb, NULL);
+        char pair[2 * SD_MATERIAL_NAME_MAX + 32] = "";
+        if (s->n_materials > 1)
+            snprintf(pair, sizeof pair, " of the pair %s-%s", s->material_name[ma], s->material_name[mb]);
+        snprintf(a, sizeof a, "%g", s->world.dt);
+        snprintf(b, sizeof b,
+                 "%g s (8 steps per contact half-period for k_n = %g N/m, k_s = %g N/m%s and the smallest mass %g kg)",
+                 dt_max, c.k_n, c.k_s, pair, mmin);
+        /* at the pair's entry where contact_pairs made it the stiffest, else at solver.dt */
+        int entry = -1;
+        for (int p = 0; p < s->n_pairs; p++)
+            if (s->pairs[p].a == (ma < mb ? ma : mb) && s->pairs[p].b == (ma < mb ? mb : ma)) entry = p;
+        if (entry >= 0 && !at[find_param("solver.dt") - params].file) {
+            report(e, s->pairs[entry].line, s->pairs[entry].col, "solver.dt = %s is unstable: it must be at most %s", a,
+                   b);
+        } else
             report_keys(e, at, "solver.dt", NULL, "solver.dt = %s is unstable: it must be at most %s", a, b);
-        }
     }
 }
 
@@ -871,6 +956,9 @@ static int load(sd_scenario *s, const char *path, const char *text, const char *
     else {
         /* flume scenes default gravity to the slope unless given */
         const sd_ynode *fl = sd_yaml_get(root, "flume");
+        /* the materials first: every other key may name them */
+        const sd_ynode *mats = sd_yaml_get(root, "materials");
+        if (mats) sd_scenario_parse_materials(s, mats, report_cb, &e);
         walk(&e, s, root, "");
         if (fl && s->flume_on && !sd_yaml_get(root, "gravity")) {
             double th = s->slope_deg * M_PI / 180.0;
@@ -938,6 +1026,10 @@ static const char *type_name(ptype t)
         return "list of integers";
     case P_ENUM:
         return "choice";
+    case P_MAT:
+        return "material";
+    case P_MLIST:
+        return "list of materials";
     }
     return "?";
 }
@@ -964,6 +1056,17 @@ static void print_value(FILE *f, const sd_scenario *s, const sd_param *p, int js
     case P_VEC3: {
         const sd_vec3 *v = (const sd_vec3 *)(base + p->off);
         fprintf(f, "[%.10g, %.10g, %.10g]", v->x, v->y, v->z);
+        break;
+    }
+    case P_MAT:
+        fprintf(f, json ? "\"%s\"" : "%s", s->material_name[*(const int *)(base + p->off)]);
+        break;
+    case P_MLIST: {
+        const int n = *(const int *)(base + p->count_off);
+        fputc('[', f);
+        for (int k = 0; k < n; k++)
+            fprintf(f, "%s%s", k ? ", " : "", s->material_name[((const int *)(base + p->off))[k]]);
+        fputc(']', f);
         break;
     }
     case P_DLIST:
@@ -1004,7 +1107,7 @@ void sd_scenario_print_params(FILE *f, int format)
                 char list[128];
                 choices_text(p, list, sizeof list);
                 snprintf(range, sizeof range, ", one of %s", list);
-            } else if (p->type != P_BOOL && p->type != P_VEC3)
+            } else if (p->type != P_BOOL && p->type != P_VEC3 && p->type != P_MAT && p->type != P_MLIST)
                 snprintf(range, sizeof range, ", range %s%g, %g]", p->strict_min ? "(" : "[", p->min, p->max);
             fputs(".TP\n.B ", f);
             sd_roff_puts(f, p->key);
@@ -1029,7 +1132,9 @@ void sd_scenario_print_params(FILE *f, int format)
             char list[128];
             choices_text(p, list, sizeof list);
             fprintf(f, md ? "` | %s | %s |\n" : "  [%s]  %s\n", list, p->doc);
-        } else if (p->type == P_BOOL || p->type == P_VEC3)
+        } else if (p->type == P_MAT || p->type == P_MLIST)
+            fprintf(f, md ? "` | a name in materials | %s |\n" : "  [a name in materials]  %s\n", p->doc);
+        else if (p->type == P_BOOL || p->type == P_VEC3)
             fprintf(f, md ? "` | | %s |\n" : "  %s\n", p->doc);
         else
             fprintf(f, md ? "` | %s%g, %g] | %s |\n" : "  %s%g, %g]  %s\n", p->strict_min ? "(" : "[", p->min, p->max,
@@ -1065,6 +1170,15 @@ static cJSON *param_json(const sd_scenario *s, const sd_param *p)
         return cJSON_CreateDoubleArray((const double *)(base + p->off), *(const int *)(base + p->count_off));
     case P_ILIST:
         return cJSON_CreateIntArray((const int *)(base + p->off), *(const int *)(base + p->count_off));
+    case P_MAT:
+        return cJSON_CreateString(s->material_name[*(const int *)(base + p->off)]);
+    case P_MLIST: {
+        const int n = *(const int *)(base + p->count_off);
+        const char *names[SD_MAX_CLASSES];
+        for (int k = 0; k < n; k++)
+            names[k] = s->material_name[((const int *)(base + p->off))[k]];
+        return cJSON_CreateStringArray(names, n);
+    }
     }
     return cJSON_CreateNull();
 }
@@ -1092,7 +1206,7 @@ static const char *const capture_keys[] = {"dam.l_h",           "dam.l_v",
                                            "phases.quiet_time", "phases.ke_fraction",
                                            "water.probe",       "water.h_d_floating",
                                            "water.capture_length", "water.capture_end",
-                                           "dam.fixed_ends"};
+                                           "dam.fixed_ends",    "dam.material"};
 
 int sd_scenario_is_capture_key(const char *key)
 {
@@ -1126,13 +1240,15 @@ static uint64_t scenario_hash(const sd_scenario *s, int with_capture)
             break;
         case P_BOOL:
         case P_ENUM:
+        case P_MAT:
             h = sd_hash_bytes(h, base + p->off, sizeof(int));
             break;
         case P_VEC3:
             h = sd_hash_bytes(h, base + p->off, sizeof(sd_vec3));
             break;
         case P_DLIST:
-        case P_ILIST: {
+        case P_ILIST:
+        case P_MLIST: {
             int n = *(const int *)(base + p->count_off);
             h = sd_hash_bytes(h, &n, sizeof n);
             h = sd_hash_bytes(h, base + p->off, (size_t)n * (p->type == P_DLIST ? sizeof(double) : sizeof(int)));
@@ -1155,8 +1271,11 @@ static uint64_t scenario_hash(const sd_scenario *s, int with_capture)
         h = sd_hash_bytes(h, &d->fixed, sizeof d->fixed);
         h = sd_hash_bytes(h, &d->tag, sizeof d->tag);
         h = sd_hash_bytes(h, &d->group, sizeof d->group);
+        h = sd_hash_bytes(h, &d->material, sizeof d->material);
         h = sd_hash_bytes(h, d->v, sizeof d->v);
     }
+    /* the materials' names and the pairs' springs (the table keys name materials by id) */
+    h = sd_scenario_materials_hash(s, h);
     /* fields outside the table that the scene uses */
     h = sd_hash_bytes(h, &s->world.parallel_min, sizeof s->world.parallel_min);
     return h;

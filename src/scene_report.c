@@ -47,6 +47,7 @@ void sd_scene_report(FILE *f, const sd_scenario *s, const sd_build_info *info, i
 {
     fprintf(f, "scene: %d elements (%d moving), %d triangles\n", n_bodies, n_bodies - info->n_rough - info->n_pipes,
             n_triangles);
+    sd_scenario_materials_report(f, s);
     if (!s->flume_on) return;
     fprintf(f, "flume: %.3f m to the end of the bed, %.3f m wide, walls %.3f m high, slope %.1f deg; gate at x = %.3f m, "
                "dam face at x = %.3f m\n",
