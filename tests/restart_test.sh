@@ -190,6 +190,19 @@ echo "materials: hash $mref, restarted from $(basename "$ck"): $(hash "$tmp/mres
 if [ "$code" -eq 0 ] && [ "$code2" -eq 0 ] && [ -n "$mref" ] && [ "$mref" != "$ref" ] \
    && [ "$(hash "$tmp/mres/summary.json")" = "$mref" ]; then ok
 else bad "materials restart: exit $code/$code2"; cat "$tmp/mref.log" "$tmp/mres.log"; fi
+# the summary lists the materials, what uses each, and each pair's springs
+/usr/bin/python3 - "$tmp/mref/summary.json" <<'PY' && ok || bad "materials in summary.json"
+import json, sys
+d = json.load(open(sys.argv[1]))
+names = [m["name"] for m in d["materials"]]
+pairs = {tuple(p["pair"]): p for p in d["contact_pairs"]}
+rs, rr = pairs[("rock", "steel")], pairs[("rock", "rock")]
+assert names == ["default", "rock", "wood", "steel", "concrete"], names
+assert d["materials"][3]["used_by"] == ["dam", "gate"], d["materials"][3]
+assert (rs["k_n"], rs["k_s"], rs["tan_phi"], rs["damping"], rs["from"]) == (2e4, 8e3, 0.3, 0.2, "contact_pairs"), rs
+assert (rr["k_n"], rr["tan_phi"], rr["from"], rr["can_meet"]) == (1e4, 0.404, "contact", True), rr
+assert d["parameters"]["dam.material"] == "steel" and d["parameters"]["spheres.materials"] == ["rock"]
+PY
 sed 's/^materials: \[rock, wood, steel, concrete\]/materials: [rock, wood, steel, concrete, mud]/' "$ms" > "$tmp/mud.yaml"
 "$bin" run "$tmp/mud.yaml" -o "$tmp/mud" "${sets[@]}" --restart "$ck" > "$tmp/mud.log" 2>&1
 [ $? -eq 2 ] && grep -q "holds the materials (default, rock, wood, steel, concrete); .*mud.yaml declares others" "$tmp/mud.log" \
