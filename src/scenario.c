@@ -118,7 +118,8 @@ static const sd_param params[] = {
      "every beam's underside, the top beam's included (instead of all the beam keys above; empty: from them); below "
      "the wall top, not overlapping"},
     {"dam.members", P_MEMBERS, OFF(members), OFF(n_members), SD_MAX_MEMBERS, "m", 0, 1, 1,
-     "pipes at any orientation, besides the grid or instead of it (dam.n_columns: 0, dam.top_beam: false): "
+     "pipes at any orientation, besides the grid or instead of it (dam.n_columns: 0, dam.l_v: 0, dam.top_beam: "
+     "false): "
      "[{from: [x, y, z], to: [x, y, z], diameter: d}, ...], fixed; between flume.x_dam and flume.x_end, inside the "
      "walls, no nearer another pipe's axis than the two radii"},
     {"dam.fixed_ends", P_BOOL, OFF(dam_support), 0, 0, "-", 0, 1, 0,
