@@ -381,7 +381,7 @@ static int parse_member(ectx *e, const sd_param *p, const sd_ynode *n, int k, sd
         }
         have[which] = 1;
         if (which < 2) {
-            sd_vec3 x;
+            sd_vec3 x = v3(0, 0, 0);
             if (parse_vec3_node(v, &x)) {
                 snprintf(msg, sizeof msg, "%s of member %d: expected [x, y, z]", keys[which], k);
                 report(e, l, c, "%s: %s", p->key, msg);
@@ -394,7 +394,7 @@ static int parse_member(ectx *e, const sd_param *p, const sd_ynode *n, int k, sd
             else
                 m->to = x;
         } else {
-            double d;
+            double d = 0.0;
             if (v->kind != SD_Y_SCALAR || parse_double(v->value, &d) || !(d > p->min) || d > p->max) {
                 snprintf(msg, sizeof msg, "diameter of member %d: must be > %g and <= %g (m)", k, p->min, p->max);
                 report(e, l, c, "%s: %s", p->key, msg);
@@ -494,8 +494,8 @@ static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode
         break;
     }
     case P_NUM_OR_OFF: {
-        double v;
-        int on;
+        double v = 0.0;
+        int on = 1;
         const int l = tmp ? line : n->line, c = tmp ? col : n->col;
         if (n->kind == SD_Y_SCALAR && !parse_bool(n->value, &on) && !on) {
             *(int *)(base + p->count_off) = 0;

@@ -111,7 +111,7 @@ static void paper_dam_unchanged(void)
         CHECK(info.n_pipes == n_want[c]);
         for (int k = 0; k < info.n_pipes && k < n_want[c]; k++) {
             const pin *p = &want[c][k];
-            sd_body_state b;
+            sd_body_state b = {0};
             CHECK(sd_world_body(w, info.pipe_gid[k], &b) == SD_OK);
             CHECK(info.pipe_kind[k] == p->kind && b.fixed);
             CHECK(same_bits(b.pos.x, p->c[0]) && same_bits(b.pos.y, p->c[1]) && same_bits(b.pos.z, p->c[2]));
@@ -347,7 +347,7 @@ static void member_contact_exact(void)
             CHECK(w != NULL);
             if (!w) return;
             CHECK(info.n_pipes == 1 && info.pipe_kind[0] == SD_PIPE_MEMBER && info.pipe_coord[0] == 0.0);
-            sd_body_state p;
+            sd_body_state p = {0};
             sd_world_body(w, info.pipe_gid[0], &p);
             const sd_dam_member *m = &s.members[0];
             CHECK_NEAR(p.length, v3_norm(v3_sub(m->to, m->from)), 1e-15);
@@ -358,7 +358,7 @@ static void member_contact_exact(void)
             const sd_vec3 foot = v3_madd(p.pos, p.axis, sa);
             const int ball = add_ball(w, v3_madd(foot, n, p.radius + r - delta), r);
             CHECK(sd_world_step(w) == SD_OK);
-            sd_body_state b;
+            sd_body_state b = {0};
             sd_world_body(w, ball, &b);
             sd_world_body(w, info.pipe_gid[0], &p);
             const double fn = s.world.contact.k_n * delta;
@@ -389,7 +389,7 @@ static void member_incline(double tan_phi)
                                tan_phi, 0.2, v3(0, 0, -g), &s, &info);
     CHECK(w != NULL);
     if (!w) return;
-    sd_body_state p, b;
+    sd_body_state p = {0}, b = {0};
     sd_world_body(w, info.pipe_gid[0], &p);
     const double s0 = 0.06, h0 = (R + r) / cos(th) + 0.005;
     const sd_vec3 above = v3_madd(p.pos, p.axis, s0);
@@ -450,7 +450,7 @@ static void member_loads(void)
                                v3(0, 0, -g), &s, &info);
     CHECK(w != NULL);
     if (!w) return;
-    sd_body_state p, b;
+    sd_body_state p = {0}, b = {0};
     sd_world_body(w, info.pipe_gid[0], &p);
     const double L = sqrt(0.3 * 0.3 + 0.2 * 0.2), s0 = 0.04; /* the foot, from the centre toward the second end */
     CHECK_NEAR(p.length, L, 1e-15);
