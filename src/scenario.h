@@ -12,6 +12,8 @@
 #define SD_MAX_CLASSES 8
 #define SD_MAX_IDS 64
 #define SD_MAX_PIPES 32
+/* The most arbitrary dam members (dam.members). */
+#define SD_MAX_MEMBERS 32
 /* Every coordinate and size in a scenario lies within this many metres of the origin. */
 #define SD_MAX_EXTENT 1.0e4
 
@@ -28,6 +30,13 @@ typedef struct {
     sd_vec3 v[3];
     int line;
 } sd_elem_def;
+
+/* A dam member (dam.members): a fixed steel pipe from one point to another, any orientation. */
+typedef struct {
+    sd_vec3 from, to; /* the ends of its axis, m (the flume frame) */
+    double diameter;  /* m */
+    int line, col;    /* where it was given (the file's, or the --set's) */
+} sd_dam_member;
 
 typedef struct sd_scenario {
     char path[1024];
@@ -59,13 +68,23 @@ typedef struct sd_scenario {
     double log_kw; /* woody volume ratio; used when >= 0 and log_count < 0 */
     double log_diam, log_length, log_density;
     double pack_x0, pack_height; /* packing box: x from pack_x0 to x_gate, up to pack_height */
-    /* grid dam */
+    /* grid dam: the columns from one of dam.columns, dam.n_columns, dam.l_h (in that order of
+     * precedence; the loader lets only one be given); the beams from one of dam.beams (every
+     * beam), dam.beam_axes, dam.beam_gaps, dam.l_v (each with the top beam unless
+     * dam.top_beam is false); then the members */
     int dam_on;
     double pipe_diam, l_h, l_v, top_beam;
+    int top_beam_on;  /* 0: dam.top_beam: false (no top beam) */
     int n_columns, n_beams;
+    int column_count; /* dam.n_columns: -1 not given */
     int dam_support; /* bending moments: 0 simple supports, 1 fixed ends (pipe_loads.h) */
     double column_y[SD_MAX_PIPES];
     double beam_z[SD_MAX_PIPES]; /* underside heights */
+    int n_beam_axes, n_beam_gaps;
+    double beam_axis_z[SD_MAX_PIPES]; /* dam.beam_axes: axis heights above the bed */
+    double beam_gap[SD_MAX_PIPES];    /* dam.beam_gaps: clear gaps, bed to the lowest beam, then beam to beam */
+    int n_members;
+    sd_dam_member members[SD_MAX_MEMBERS];
     /* water */
     int water_on;
     double water_u, water_h, water_rho, water_cd, water_probe;
@@ -132,7 +151,8 @@ const char *sd_scenario_param_key(int i);
 struct cJSON;
 struct cJSON *sd_scenario_params_json(const sd_scenario *s);
 /* 1 for the keys that act only from the capture phase on: the dam layout (dam.l_h, dam.l_v,
- * dam.top_beam, dam.columns, dam.beams) and the capture-phase settings (phases.capture_limit,
+ * dam.top_beam, dam.columns, dam.beams, dam.n_columns, dam.beam_axes, dam.beam_gaps,
+ * dam.members) and the capture-phase settings (phases.capture_limit,
  * quiet_time, ke_fraction, water.probe, water.h_d_floating, water.capture_length,
  * water.capture_end). Runs that differ only in these
  * share their packing and flow, bit for bit: a sweep branches them from one flow-end

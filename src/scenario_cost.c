@@ -42,7 +42,7 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c)
             const double dm = s->rough_dmax;
             bytes += placer_bytes(v3(0, 0, -dm), v3(L, W, dm), dm);
         }
-        if (s->dam_on) bodies += 2 * SD_MAX_PIPES;
+        if (s->dam_on) bodies += 2 * SD_MAX_PIPES + s->n_members;
         bytes += placer_bytes(v3(0, 0, 0), v3(s->x_gate, W, s->pack_height), SD_PLACER_CELL);
         bytes += 4.0 * (ceil(L / 0.25) + 2) * 512.0; /* the walls' triangles */
         duration = s->packing_time + s->flow_limit + s->capture_limit;
