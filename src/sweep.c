@@ -909,9 +909,11 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
     if (so->dry_run) {
         fprintf(log, "sweep %s (dry run, outputs would go to %s): %d cases x %d seeds = %d runs, %d already done\n",
                 sweep_file, outdir, ncase, file->runs, total, skipped);
-        int n_branched = 0;
+        int n_branched = 0, any_flume = 0;
         for (int g = 0; g < ng; g++)
             n_branched += groups[g].n_runs;
+        for (int c = 0; c < ncase; c++)
+            any_flume |= cases[c].flume;
         if (branching)
             fprintf(log,
                     "branching on %s: %d shared flows (packing + flow, once each) for %d runs; %d to compute, %d "
@@ -919,7 +921,9 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
                     branch_axes[0] ? branch_axes : "nothing (equal cases)", ng, n_branched, to_compute, reused);
         else
             fprintf(log, "no branching (%s): every run packs and flows on its own\n",
-                    so->no_branch ? "--no-branch" : "no two runs have the same packing and flow");
+                    so->no_branch ? "--no-branch"
+                    : !any_flume  ? "not a flume scenario"
+                                  : "no two runs have the same packing and flow");
         for (int g = 0; g < ng; g++) {
             char est[48];
             sd_scenario_ms_text(groups[g].flow_ms, est, sizeof est);
