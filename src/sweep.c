@@ -719,6 +719,10 @@ static double estimate_elapsed(const run_item *items, int total, const branch_it
         int next = -1;
         for (int k = 0; k < parallel; k++)
             if (end[k] >= 0.0 && (next < 0 || end[k] < end[next])) next = k;
+        if (next < 0) { /* (an estimate that is not a number: none to give) */
+            now = NAN;
+            break;
+        }
         now = end[next];
         if (task[next] < 0) flow[-task[next] - 1] = 2;
         end[next] = -1.0;
