@@ -8,7 +8,8 @@
 # - named variants (layout: narrow / wide, two keys each) x a list-valued key (spheres.counts):
 #   two shared flows, one per grading, each branched into the two layouts; results.csv carries the
 #   variant names and the lists, and its trap ratios and state hashes equal those of the four
-#   scenarios run one by one with `sabodem run`; cases.csv and the heatmap are labelled with them;
+#   scenarios run one by one with `sabodem run`; cases.csv, the heatmap and Fig. 16's lines are
+#   labelled with them (variants in the sweep file's order);
 #   a variant that also sets a key acting before the flow end gets a flow of its own;
 # - a flow checkpoint is reused only when its identity matches: after its stored engine identity is
 #   edited, or a key acting before the flow end (logs.count) is edited in the sweep file, or its
@@ -173,6 +174,23 @@ PY
 then ok; else bad "variants: branched results differ from the straight runs"; cat "$tmp/v/results.csv"; fi
 if /usr/bin/python3 -c "import matplotlib" 2>/dev/null; then
   [ -s "$tmp/v/heatmap_pv.png" ] && ! grep -q Traceback "$tmp/v/plot.log" && ok || { bad "variants heatmap"; cat "$tmp/v/plot.log"; }
+fi
+# the figures over variants x logs.count (results.csv made up): Fig. 16 with a line per layout
+mkdir -p "$tmp/fig"
+/usr/bin/python3 - "$tmp/fig/results.csv" <<'PY'
+import csv, sys
+w = csv.writer(open(sys.argv[1], "w", newline=""))
+w.writerow("case,seed,layout,logs.count,p_v,p_v_class0,p_v_logs,k_w,l_v_d_max,v_held_m3,v_channel_m3,v_passed_m3,"
+           "capture_end,peak_dam_force_N,passed,wall_s,capture_limit_s,flow_wall_s,branched,state_hash".split(","))
+for c, (layout, lv, logs, kw) in enumerate((l, lv, n, k) for l, lv in (("wide", 5.9), ("narrow", 1.5))
+                                          for n, k in ((0, 0.0), (32, 0.05))):
+    w.writerow([c, 1, layout, logs, 0.5 + 0.1 * c, 0.5, 0.5, kw, lv, 1e-5, 1e-5, 1e-5, "settled", 1, 0, 1, 6, 1, 1, "0"])
+PY
+if /usr/bin/python3 -c "import matplotlib" 2>/dev/null; then
+  /usr/bin/python3 "$src_dir/scripts/plot_sweep.py" "$tmp/fig" > "$tmp/fig.log" 2>&1
+  [ -s "$tmp/fig/fig16_pv_vs_kw.png" ] && [ -s "$tmp/fig/heatmap_pv.png" ] \
+    && [ "$(cut -d, -f1,2 "$tmp/fig/cases.csv" | tr '\n' ' ')" = "layout,logs.count wide,0 wide,32 narrow,0 narrow,32 " ] \
+    && ok || { bad "figures over variants"; cat "$tmp/fig.log" "$tmp/fig/cases.csv"; }
 fi
 cp "$tmp/v/results.csv" "$tmp/v_results0.csv"
 hash_of() { /usr/bin/python3 -c 'import csv, sys
