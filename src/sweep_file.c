@@ -86,8 +86,8 @@ static void put_node(flow_text *t, const sd_ynode *n)
 }
 
 /* o := "key=<v as flow text>"; 0, or -1 with the error reported */
-static int make_override(sd_sweep_override *o, const char *where, const char *key, const sd_ynode *v,
-                         const char *path, FILE *err)
+static int make_override(sd_sweep_override *o, const char *where, const char *key, const sd_ynode *v, const char *path,
+                         FILE *err)
 {
     flow_text *t = malloc(sizeof *t);
     if (!t) {
@@ -137,10 +137,10 @@ static int is_scenario_key(const char *k)
 /* results.csv's own columns, which a set of variants may not be called */
 static int reserved_column(const char *k)
 {
-    static const char *const cols[] = {"case",        "seed",         "p_v",          "p_v_logs",        "k_w",
-                                       "l_v_d_max",   "v_held_m3",    "v_channel_m3", "v_passed_m3",     "capture_end",
-                                       "peak_dam_force_N", "passed",  "wall_s",       "capture_limit_s", "flow_wall_s",
-                                       "branched",    "state_hash"};
+    static const char *const cols[] = {
+        "case",         "seed",        "p_v",         "p_v_logs",         "k_w",    "l_v_d_max", "v_held_m3",
+        "v_channel_m3", "v_passed_m3", "capture_end", "peak_dam_force_N", "passed", "wall_s",    "capture_limit_s",
+        "flow_wall_s",  "branched",    "state_hash"};
     for (size_t i = 0; i < sizeof cols / sizeof cols[0]; i++)
         if (!strcmp(k, cols[i])) return 1;
     return !strncmp(k, "p_v_class", 9);
@@ -216,7 +216,7 @@ static int load_axis(sd_sweep_file *d, const sd_ynode *vary, int j, FILE *err)
                 "%s:%d:%d: vary.%s: %s; named variants go under a name of your own, of letters, digits and ._+- "
                 "(e.g. layout: {narrow: {dam.l_h: 0.04}, wide: {dam.l_h: 0.06}})\n",
                 path, vary->key_line[j], vary->key_col[j], name,
-                is_scenario_key(name) ? "a scenario key takes a list of values ([a, b, ...])"
+                is_scenario_key(name)   ? "a scenario key takes a list of values ([a, b, ...])"
                 : reserved_column(name) ? "the name of a results.csv column"
                                         : "not a name for a set of variants");
         return -1;
@@ -313,8 +313,10 @@ int sd_sweep_file_load(sd_sweep_file *d, const char *path, FILE *err)
                 }
                 char where[300];
                 snprintf(where, sizeof where, "set.%s", v->keys[j]);
-                if (make_override(&d->set[d->n_set], where, v->keys[j], v->items[j], path, err)) bad = 1;
-                else d->n_set++;
+                if (make_override(&d->set[d->n_set], where, v->keys[j], v->items[j], path, err))
+                    bad = 1;
+                else
+                    d->n_set++;
             }
         } else {
             fprintf(err, "%s:%d:%d: unknown or malformed key '%s' (base, runs, seed_base, parallel, vary, set)\n", path,

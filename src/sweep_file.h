@@ -10,12 +10,12 @@
 #include "scenario.h"
 
 #define SD_SWEEP_MAX_AXES 8
-#define SD_SWEEP_MAX_VALUES 32   /* values (or variants) of one axis */
-#define SD_SWEEP_MAX_KEYS 16     /* keys one variant sets */
-#define SD_SWEEP_MAX_SETS 64     /* fixed overrides (set:) */
-#define SD_SWEEP_MAX_RUNS 10000  /* runs in one sweep (the paper's matrix: 60) */
-#define SD_SWEEP_MAX_TEXT 8192   /* one override, "key=value" with the value in YAML flow form */
-#define SD_SWEEP_MAX_NAME 64     /* a variant's or a set of variants' name, with its terminator */
+#define SD_SWEEP_MAX_VALUES 32  /* values (or variants) of one axis */
+#define SD_SWEEP_MAX_KEYS 16    /* keys one variant sets */
+#define SD_SWEEP_MAX_SETS 64    /* fixed overrides (set:) */
+#define SD_SWEEP_MAX_RUNS 10000 /* runs in one sweep (the paper's matrix: 60) */
+#define SD_SWEEP_MAX_TEXT 8192  /* one override, "key=value" with the value in YAML flow form */
+#define SD_SWEEP_MAX_NAME 64    /* a variant's or a set of variants' name, with its terminator */
 
 /* One "key=value" override, as `--set` takes it, and where its value stands in the sweep file. */
 typedef struct {
@@ -44,7 +44,7 @@ typedef struct {
     char base[1024]; /* the scenario it varies (relative paths: from the sweep file's directory) */
     int runs;        /* seeds per case */
     long seed_base;
-    int parallel;    /* processes at once (0: not given) */
+    int parallel; /* processes at once (0: not given) */
     int n_axes;
     sd_sweep_axis axis[SD_SWEEP_MAX_AXES];
     int n_set;

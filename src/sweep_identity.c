@@ -115,8 +115,10 @@ static void list_changes(const cJSON *was, const cJSON *now, char *msg, size_t n
         if (w > 0) len += (size_t)w;
         listed++;
     }
-    if (more && len < n) snprintf(msg + len, n - len, " and %d more", more);
-    else if (!listed && len < n) snprintf(msg + len, n - len, "the explicit elements or other settings differ");
+    if (more && len < n)
+        snprintf(msg + len, n - len, " and %d more", more);
+    else if (!listed && len < n)
+        snprintf(msg + len, n - len, "the explicit elements or other settings differ");
 }
 
 int sd_sweep_identity_check(const char *path, const sd_scenario *s, char *msg, size_t n)
