@@ -20,6 +20,8 @@
  * step; the driver draws none later, so there is no rng state to carry. */
 #define BLOB_MAGIC "SDRUNv3"
 
+const char *sd_run_state_version(void) { return BLOB_MAGIC; }
+
 static long file_len(FILE *f)
 {
     if (!f || fflush(f)) return -1;

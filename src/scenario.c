@@ -1445,18 +1445,24 @@ int sd_scenario_is_capture_key(const char *key)
     return 0;
 }
 
-/* The scenario's keys hashed, but for those that never change the bits (the thread count,
- * tests/test_threads.c; how often checkpoints are written) and, unless with_capture, the capture
- * keys. */
+/* Keys that never change the bits: the thread count (tests/test_threads.c), how often
+ * checkpoints are written. */
+static int changes_no_bit(const char *key)
+{
+    return !strcmp(key, "solver.threads") || !strcmp(key, "output.checkpoint_interval");
+}
+
+int sd_scenario_in_branch_hash(const char *key) { return !changes_no_bit(key) && !sd_scenario_is_capture_key(key); }
+
+/* The scenario's keys hashed, but for those that change no bit and, unless with_capture, the
+ * capture keys. */
 static uint64_t scenario_hash(const sd_scenario *s, int with_capture)
 {
     uint64_t h = sd_hash_init();
     const char *base = (const char *)s;
     for (int i = 0; i < N_PARAMS; i++) {
         const sd_param *p = &params[i];
-        if ((!with_capture && sd_scenario_is_capture_key(p->key)) || !strcmp(p->key, "solver.threads") ||
-            !strcmp(p->key, "output.checkpoint_interval"))
-            continue;
+        if (changes_no_bit(p->key) || (!with_capture && sd_scenario_is_capture_key(p->key))) continue;
         h = sd_hash_bytes(h, p->key, strlen(p->key) + 1);
         switch (p->type) {
         case P_DOUBLE:

@@ -113,6 +113,8 @@ typedef struct {
     double bytes;   /* memory: the elements with their contacts, the placement grids */
     double steps;   /* time steps to the end (a flume: to the sum of its phases' limits) */
     double seconds; /* wall time on one core, at SD_COST_S_PER_ELEMENT_STEP */
+    double flow_steps, flow_seconds; /* of those, the packing's and the flow's (a flume; else 0):
+                                      * what the runs a sweep branches from one flow share */
 } sd_scenario_cost;
 
 /* Limits a scenario's estimate must keep to (the command line's --max-memory, --max-steps). */
@@ -130,6 +132,15 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c);
  * which keys and which option change it. */
 int sd_scenario_check_cost(const sd_scenario *s, const sd_scenario_cost *c, const sd_scenario_limits *lim, FILE *err);
 sd_scenario_limits sd_scenario_limits_default(void);
+/* Seconds as whole milliseconds, the unit in which a sweep adds estimates up (exact in a double
+ * below 2^53 ms, 285,000 years), and such a count as text, "12.345 s". */
+double sd_scenario_ms(double seconds);
+void sd_scenario_ms_text(double ms, char *buf, size_t n);
+/* A time in seconds in words: "38 s", "12 min", "3.2 h", "41 days". */
+void sd_scenario_human_time(double seconds, char *buf, size_t n);
+/* `check`'s line: "time estimate: 12.345 s on one core (packing and flow 8.230 s, capture
+ * 4.115 s)", in whole milliseconds, the numbers a sweep's estimate adds up. */
+void sd_scenario_print_time(FILE *f, const sd_scenario *s, const sd_scenario_cost *c);
 
 void sd_scenario_default(sd_scenario *s);
 /* Load a scenario file and apply "key=value" overrides. Errors are printed to err as
@@ -162,6 +173,8 @@ int sd_scenario_is_capture_key(const char *key);
  * equal for two scenarios whose packing and flow are identical. Stored in a flow-end
  * checkpoint; a restart with a scenario of another fingerprint is refused. */
 uint64_t sd_scenario_branch_hash(const sd_scenario *s);
+/* 1 for the keys that sd_scenario_branch_hash counts (the explicit elements aside). */
+int sd_scenario_in_branch_hash(const char *key);
 /* The same with the capture keys too: equal for two scenarios whose whole runs are identical
  * (neither counts solver.threads or output.checkpoint_interval, which change no bit). Stored in
  * a periodic checkpoint. */
