@@ -290,7 +290,7 @@ void sd_build_log_stats(const sd_scenario *s, sd_log_stats *st)
     memset(st, 0, sizeof *st);
     st->n = sd_build_log_count(s);
     sd_rng r = sd_debris_log_stream(s->seed);
-    double sl = 0.0, sl2 = 0.0, sd = 0.0, sd2 = 0.0;
+    double ml2 = 0.0, md2 = 0.0; /* Welford's sums of squared deviations: no cancellation */
     for (int k = 0; k < st->n; k++) {
         double len = s->log_length, d = s->log_diam;
         if (sd_build_log_sizes_vary(s))
@@ -299,18 +299,16 @@ void sd_build_log_stats(const sd_scenario *s, sd_log_stats *st)
         st->len_max = k ? fmax(st->len_max, len) : len;
         st->d_min = k ? fmin(st->d_min, d) : d;
         st->d_max = k ? fmax(st->d_max, d) : d;
-        sl += len;
-        sl2 += len * len;
-        sd += d;
-        sd2 += d * d;
+        const double dl = len - st->len_mean, dd = d - st->d_mean;
+        st->len_mean += dl / (k + 1);
+        st->d_mean += dd / (k + 1);
+        ml2 += dl * (len - st->len_mean);
+        md2 += dd * (d - st->d_mean);
         st->volume += M_PI * 0.25 * d * d * len;
     }
-    if (st->n > 0) {
-        st->len_mean = sl / st->n;
-        st->d_mean = sd / st->n;
-        /* the sample's own spread (divided by n): 0 for one log or fixed sizes */
-        st->len_sd = sqrt(fmax(0.0, sl2 / st->n - st->len_mean * st->len_mean));
-        st->d_sd = sqrt(fmax(0.0, sd2 / st->n - st->d_mean * st->d_mean));
+    if (st->n > 0) { /* the sample's own spread (divided by n): 0 for one log or fixed sizes */
+        st->len_sd = sqrt(ml2 / st->n);
+        st->d_sd = sqrt(md2 / st->n);
     }
 }
 
