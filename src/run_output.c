@@ -287,7 +287,8 @@ static int summary_pipes(run_ctx *c, cJSON *o)
 {
     cJSON *pipes = cJSON_AddArrayToObject(o, "pipes");
     if (!pipes) return -1;
-    int bad = add_str(o, "pipe_support", c->s->dam_support ? "fixed ends" : "simply supported");
+    int bad = add_str(o, "pipe_support", c->s->dam_support ? "fixed ends" : "simply supported") |
+              add_num(o, "event_threshold_N", c->loads.ev_threshold) | add_num(o, "event_time_s", c->loads.ev_time);
     for (int k = 0; k < c->loads.n; k++) {
         const sd_pipe_load *L = &c->loads.p[k];
         cJSON *p = cJSON_CreateObject();
@@ -308,6 +309,10 @@ static int summary_pipes(run_ctx *c, cJSON *o)
                add_num(p, "peak_moment_Nm", L->m_peak) | add_num(p, "peak_moment_time_s", L->t_m_peak) |
                add_num(p, "peak_moment_at_m", L->s_at_m_peak) |
                (cJSON_AddBoolToObject(p, "rising_at_end", L->rising) ? 0 : -1);
+        cJSON *ev = add_obj(p, "events");
+        if (!ev) return -1;
+        bad |= add_num(ev, "count", L->n_events) | add_num(ev, "largest_peak_N", L->ev_peak) |
+               add_num(ev, "largest_impulse_Ns", L->ev_impulse) | add_num(ev, "largest_energy_J", L->ev_energy);
     }
     return bad;
 }

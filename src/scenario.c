@@ -144,8 +144,8 @@ static const sd_param params[] = {
     {"dam.fixed_ends", P_BOOL, OFF(dam_support), 0, 0, "-", 0, 1, 0,
      "pipe bending moments for spans with fixed ends (default: simply supported; docs/loads.md)"},
     {"dam.event_threshold", P_DOUBLE, OFF(event_threshold), 0, 0, "N", 0, INF, 0,
-     "a pipe's impact event begins when |F| exceeds its baseline by this and ends below half of it (0: twice the "
-     "weight of the heaviest moving element; docs/loads.md)"},
+     "a pipe's impact event begins when |F| exceeds its baseline by this and ends below half of it (0: four times "
+     "the weight of the heaviest moving element; docs/loads.md)"},
     {"dam.event_time", P_DOUBLE, OFF(event_time), 0, 0, "s", 0, INF, 1,
      "time constant of a pipe's baseline (its quasi-static load) and the longest an event lasts"},
     {"water.on", P_BOOL, OFF(water_on), 0, 0, "-", 0, 1, 0, "fluid forces (SPEC §5)"},
