@@ -37,6 +37,7 @@ static int attach(sd_pipe_loads *L, const sd_scenario *s, const sd_build_info *i
     L->n = info->n_pipes;
     L->ev_time = s->event_time;
     L->gravity = sd_world_definition(w)->gravity;
+    L->near_step = -1;
     for (int k = 0; k < L->n; k++) {
         sd_pipe_load *p = &L->p[k];
         p->gid = info->pipe_gid[k];
@@ -107,26 +108,31 @@ static double pipe_moment(const sd_pipe_loads *L, const sd_pipe_load *p, const s
     return sd_pipe_bending_moment(L->support, p->span, *s_from_start, fa);
 }
 
-double sd_pipe_impact_power(const sd_body_state *pipe, sd_vec3 f, const sd_world *w, sd_vec3 gravity, double dt)
+double sd_pipe_impact_power(const sd_body_state *pipe, sd_vec3 f, const sd_body_view *b, const sd_pipe_near *near,
+                            int n, sd_vec3 gravity, double dt, int *stale)
 {
     const sd_cyl cy = {pipe->pos, pipe->axis, pipe->radius, 0.5 * pipe->length};
     const sd_vec3 h = v3_scale(pipe->axis, 0.5 * pipe->length);
     const sd_vec3 ext = v3(fabs(h.x) + pipe->radius, fabs(h.y) + pipe->radius, fabs(h.z) + pipe->radius);
-    const sd_body_view b = sd_world_bodies(w);
     sd_vec3 u_sum = v3(0, 0, 0);
     double w_sum = 0.0;
-    for (int i = 0; i < b.n; i++) {
-        if (b.fixed[i]) continue;
+    *stale = 0;
+    for (int j = 0; j < n; j++) {
+        const int i = near[j].index;
+        if (i >= b->n || b->gid[i] != near[j].gid) {
+            *stale = -1;
+            return 0.0;
+        }
         /* grown by the step's travel: the force was found where the body was a step ago */
-        const double slack = v3_norm(b.vel[i]) * dt + 1e-9, reach = b.bound_radius[i] + slack;
-        const sd_vec3 d = v3_sub(b.pos[i], pipe->pos);
+        const double slack = v3_norm(b->vel[i]) * dt + 1e-9, reach = b->bound_radius[i] + slack;
+        const sd_vec3 d = v3_sub(b->pos[i], pipe->pos);
         if (fabs(d.x) > ext.x + reach || fabs(d.y) > ext.y + reach || fabs(d.z) > ext.z + reach) continue;
         sd_manifold m;
         int hit;
-        if (b.shape[i] == SD_SHAPE_SPHERE)
-            hit = sd_geom_sphere_cyl(b.pos[i], b.radius[i] + slack, &cy, &m);
+        if (b->shape[i] == SD_SHAPE_SPHERE)
+            hit = sd_geom_sphere_cyl(b->pos[i], b->radius[i] + slack, &cy, &m);
         else {
-            const sd_cyl a = {b.pos[i], b.axis[i], b.radius[i] + slack, b.half_length[i] + slack};
+            const sd_cyl a = {b->pos[i], b->axis[i], b->radius[i] + slack, b->half_length[i] + slack};
             hit = sd_geom_cyl_cyl(&a, &cy, &m);
         }
         if (!hit) continue;
@@ -140,16 +146,73 @@ double sd_pipe_impact_power(const sd_body_state *pipe, sd_vec3 f, const sd_world
         pc = v3_scale(pc, 1.0 / wt);
         /* the velocity at the middle of the step: leapfrog's v(t + Δt/2) less half the step's
          * acceleration (contact and gravity; the water's, not in the view, is small beside them) */
-        const sd_vec3 acc = v3_add(v3_scale(b.force[i], 1.0 / b.mass[i]), gravity);
-        const sd_vec3 v = v3_madd(b.vel[i], acc, -0.5 * dt);
-        sd_vec3 om = b.omega[i];
-        if (b.shape[i] == SD_SHAPE_SPHERE)
-            om = v3_madd(om, b.torque[i], -0.5 * dt / (0.4 * b.mass[i] * b.radius[i] * b.radius[i]));
-        const sd_vec3 u = v3_add(v, v3_cross(om, v3_sub(pc, b.pos[i])));
+        const sd_vec3 acc = v3_add(v3_scale(b->force[i], 1.0 / b->mass[i]), gravity);
+        const sd_vec3 v = v3_madd(b->vel[i], acc, -0.5 * dt);
+        sd_vec3 om = b->omega[i];
+        if (b->shape[i] == SD_SHAPE_SPHERE)
+            om = v3_madd(om, b->torque[i], -0.5 * dt / (0.4 * b->mass[i] * b->radius[i] * b->radius[i]));
+        const sd_vec3 u = v3_add(v, v3_cross(om, v3_sub(pc, b->pos[i])));
         u_sum = v3_madd(u_sum, u, wt);
         w_sum += wt;
     }
     return w_sum > 0.0 ? v3_dot(f, u_sum) / w_sum : 0.0;
+}
+
+static int cmp_near(const void *a, const void *b)
+{
+    const int x = ((const sd_pipe_near *)a)->gid, y = ((const sd_pipe_near *)b)->gid;
+    return (x > y) - (x < y);
+}
+
+/* every pipe's near list anew; -1 when out of memory */
+static int near_lists(sd_pipe_loads *L, const sd_body_view *b, double dt)
+{
+    const double horizon = 2.0 * SD_PIPE_NEAR_STEPS * dt;
+    for (int k = 0; k < L->n; k++)
+        L->p[k].n_near = 0;
+    for (int i = 0; i < b->n; i++) {
+        if (b->fixed[i]) continue;
+        const double g = b->bound_radius[i] + v3_norm(b->vel[i]) * horizon + SD_PIPE_NEAR_MARGIN;
+        const sd_vec3 x = b->pos[i];
+        for (int k = 0; k < L->n; k++) {
+            sd_pipe_load *p = &L->p[k];
+            if (x.x < p->lo.x - g || x.x > p->hi.x + g || x.y < p->lo.y - g || x.y > p->hi.y + g ||
+                x.z < p->lo.z - g || x.z > p->hi.z + g)
+                continue;
+            if (p->n_near == p->cap_near) {
+                const int cap = p->cap_near ? 2 * p->cap_near : 64;
+                sd_pipe_near *q = realloc(p->near, (size_t)cap * sizeof *q);
+                if (!q) return -1;
+                p->near = q;
+                p->cap_near = cap;
+            }
+            p->near[p->n_near++] = (sd_pipe_near){b->gid[i], i};
+        }
+    }
+    for (int k = 0; k < L->n; k++)
+        qsort(L->p[k].near, (size_t)L->p[k].n_near, sizeof(sd_pipe_near), cmp_near);
+    return 0;
+}
+
+/* the power on pipe k's strikers (sd_pipe_impact_power), its near lists made anew when stale */
+static double event_power(sd_pipe_loads *L, int k, const sd_body_state *st, const sd_world *w, double dt)
+{
+    const sd_body_view b = sd_world_bodies(w);
+    const long step = sd_world_step_count(w);
+    sd_pipe_load *p = &L->p[k];
+    int stale = L->near_step < 0 || step - L->near_step >= SD_PIPE_NEAR_STEPS;
+    for (int pass = 0; pass < 2; pass++) {
+        if (stale) {
+            if (near_lists(L, &b, dt)) {
+                L->ev_csv_bad = 1; /* (out of memory: reported as a failed write) */
+                return 0.0;
+            }
+            L->near_step = step;
+        }
+        const double pw = sd_pipe_impact_power(st, st->force, &b, p->near, p->n_near, L->gravity, dt, &stale);
+        if (!stale) return pw;
+    }
+    return 0.0; /* (not reached: a list just made holds its indices) */
 }
 
 static int event_row(sd_pipe_loads *L, int k, int why)
@@ -224,7 +287,7 @@ double sd_pipe_loads_step(sd_pipe_loads *L, const sd_world *w, double t, double 
         }
         e->impulse += f * dt;
         e->impulse_vec = v3_madd(e->impulse_vec, st.force, dt);
-        const double pw = sd_pipe_impact_power(&st, st.force, w, L->gravity, dt);
+        const double pw = event_power(L, k, &st, w, dt);
         if (pw > 0.0) e->energy += pw * dt;
     }
     return tot;
@@ -301,8 +364,10 @@ void sd_pipe_loads_free(sd_pipe_loads *L)
     L->csv = L->ev_csv = NULL;
     for (int k = 0; k < L->n; k++) {
         free(L->p[k].f);
+        free(L->p[k].near);
         L->p[k].f = NULL;
-        L->p[k].n_f = L->p[k].cap_f = 0;
+        L->p[k].near = NULL;
+        L->p[k].n_f = L->p[k].cap_f = L->p[k].n_near = L->p[k].cap_near = 0;
     }
 }
 

@@ -18,6 +18,12 @@ enum { SD_SUPPORT_SIMPLE = 0, SD_SUPPORT_FIXED = 1 };
  * the run ended during it. */
 enum { SD_EVENT_FELL = 0, SD_EVENT_SUSTAINED = 1, SD_EVENT_RUN_END = 2 };
 
+/* A moving body near a pipe: its gid and its index in the body store when the list was made
+ * (valid while the store keeps its order: until the next rebuild or removal). */
+typedef struct {
+    int gid, index;
+} sd_pipe_near;
+
 /* One impact event on a pipe (docs/loads.md "Impact events"): the steps from the first whose
  * |F| exceeds the baseline by the threshold to the last before |F| falls below the baseline plus
  * half the threshold. */
@@ -56,6 +62,8 @@ typedef struct {
     int n_events;
     double ev_peak, ev_impulse, ev_energy; /* the largest of its events' peaks, N; impulses, N s; energies, J */
     sd_vec3 lo, hi;               /* the pipe's box (for the bodies touching it), m */
+    sd_pipe_near *near;           /* the moving bodies near it, by gid (a cache: not saved) */
+    int n_near, cap_near;
 } sd_pipe_load;
 
 typedef struct {
@@ -70,7 +78,15 @@ typedef struct {
                                    * four times the weight of the heaviest moving body at the capture's start) */
     double ev_time;               /* dam.event_time, s */
     sd_vec3 gravity;              /* m/s^2 */
+    long near_step;               /* the step the near lists were made at (-1: never) */
 } sd_pipe_loads;
+
+/* The near lists are remade every SD_PIPE_NEAR_STEPS steps while an event goes on, and when the
+ * store has changed its order: the moving bodies whose bounding sphere comes within
+ * 2 |v| SD_PIPE_NEAR_STEPS Δt + SD_PIPE_NEAR_MARGIN of a pipe's box, which holds every body that
+ * can touch it before the next remake unless one more than doubles its speed on the way. */
+#define SD_PIPE_NEAR_STEPS 100
+#define SD_PIPE_NEAR_MARGIN 0.005 /* m */
 
 /* The resultant of force f and torque t (about the pipe's centre) on a pipe with unit axis a:
  * the position s of its line of action along the axis from the centre, m, and the force
@@ -95,11 +111,14 @@ int sd_pipe_loads_resume(sd_pipe_loads *L, const sd_scenario *s, const sd_build_
 /* Every step: the forces of the last step, and the impact events (an event that ends writes its
  * row). Returns the sum of |F| over the pipes. */
 double sd_pipe_loads_step(sd_pipe_loads *L, const sd_world *w, double t, double dt);
-/* The power of force f (on a fixed pipe) on the moving bodies of w touching the pipe, W: f · u,
- * u the velocity at the contact point at the middle of the last step (v - (F/m + g) Δt / 2 from
- * the velocity after it; a log's spin as it is), of the one body touching it, or the mean of
- * several weighted by their overlaps (their share of the normal springs). 0 when none touches. */
-double sd_pipe_impact_power(const sd_body_state *pipe, sd_vec3 f, const sd_world *w, sd_vec3 gravity, double dt);
+/* The power of force f (on a fixed pipe) on the bodies touching the pipe among the n near ones
+ * (by ascending gid, so that the sum's order does not depend on the store's), W: f · u, u the
+ * velocity at the contact point at the middle of the last step (v - (F/m + g) Δt / 2 from the
+ * velocity after it; a log's spin as it is), of the one body touching it, or the mean of several
+ * weighted by their overlaps (their share of the normal springs); 0 when none touches. -1 in
+ * *stale (and 0) when an entry's index no longer holds its gid: the list must be made anew. */
+double sd_pipe_impact_power(const sd_body_state *pipe, sd_vec3 f, const sd_body_view *b, const sd_pipe_near *near,
+                            int n, sd_vec3 gravity, double dt, int *stale);
 /* At each log interval: a row per pipe in pipes.csv; 0, or -1 when the write failed. */
 int sd_pipe_loads_sample(sd_pipe_loads *L, const sd_world *w, double t);
 /* At the end: the sustained load (the mean force over the last window of samples) and the
