@@ -91,6 +91,7 @@ expect restart-junk 2 "junk.ckpt: not a sabodem checkpoint" run "$src_dir/exampl
 [ ! -e "$tmp/rs-out" ] && pass=$((pass + 1)) || { echo "FAIL bad restart left an output directory"; fail=$((fail + 1)); }
 expect restart-check 2 "unknown or incomplete option '--restart'" check "$src_dir/examples/flume_small.yaml" --restart "$tmp/junk.ckpt"
 # the paper's Table 2 matrix: 60 runs from 15 shared flows, listed without running
+expect designer-debris 0 "logs: [0-9]+, solid volume .* sizes drawn per log" check "$src_dir/examples/debris_designer.yaml"
 expect table2-dry-run 0 "branching on dam.l_v: 15 shared flows" sweep "$src_dir/examples/shibuya2009-table2.yaml" --dry-run -o "$tmp/t2"
 [ "$(grep -c '^run case' "$tmp/out")" -eq 60 ] && [ ! -e "$tmp/t2" ] && pass=$((pass + 1)) || { echo "FAIL table2 dry run"; fail=$((fail + 1)); }
 expect sweep-parallel-bad 2 "--parallel: expected a positive integer" sweep "$src_dir/examples/shibuya2009-table2.yaml" --parallel 0
