@@ -323,6 +323,7 @@ int sd_pipe_loads_sample(sd_pipe_loads *L, const sd_world *w, double t)
         p->interval_peak = 0.0;
     }
     if (L->csv && ferror(L->csv)) bad = 1;
+    if (L->ev_csv_bad || (L->ev_csv && ferror(L->ev_csv))) bad = 1; /* (the events' rows since the last sample) */
     return bad ? -1 : 0;
 }
 

@@ -119,7 +119,8 @@ double sd_pipe_loads_step(sd_pipe_loads *L, const sd_world *w, double t, double 
  * *stale (and 0) when an entry's index no longer holds its gid: the list must be made anew. */
 double sd_pipe_impact_power(const sd_body_state *pipe, sd_vec3 f, const sd_body_view *b, const sd_pipe_near *near,
                             int n, sd_vec3 gravity, double dt, int *stale);
-/* At each log interval: a row per pipe in pipes.csv; 0, or -1 when the write failed. */
+/* At each log interval: a row per pipe in pipes.csv; 0, or -1 when the write failed (or that of
+ * an event's row in events.csv since). */
 int sd_pipe_loads_sample(sd_pipe_loads *L, const sd_world *w, double t);
 /* At the end: the sustained load (the mean force over the last window of samples) and the
  * rising flag: the capture ended at its time limit (cut_by_limit, not settled) and the mean

@@ -373,7 +373,9 @@ int sd_run_step_once(sd_run *r)
     if (step % r->log_every == 0) {
         sd_output_series_row(c);
         if (c->loads.n && sd_pipe_loads_sample(&c->loads, c->w, sd_world_time(c->w)))
-            sd_output_note_failure(c, "pipes.csv", errno);
+            sd_output_note_failure(c, c->loads.ev_csv_bad || (c->loads.ev_csv && ferror(c->loads.ev_csv)) ? "events.csv"
+                                                                                                      : "pipes.csv",
+                                   errno);
     }
     if (c->traj && step % r->traj_every == 0) sd_output_traj(c);
     if (r->snap_every && step % r->snap_every == 0) {
