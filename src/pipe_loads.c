@@ -190,7 +190,8 @@ static int near_lists(sd_pipe_loads *L, const sd_body_view *b, double dt)
         }
     }
     for (int k = 0; k < L->n; k++)
-        qsort(L->p[k].near, (size_t)L->p[k].n_near, sizeof(sd_pipe_near), cmp_near);
+        if (L->p[k].n_near > 1) /* (an empty list has no array: qsort may not be given NULL) */
+            qsort(L->p[k].near, (size_t)L->p[k].n_near, sizeof(sd_pipe_near), cmp_near);
     return 0;
 }
 
