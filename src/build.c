@@ -331,9 +331,81 @@ double sd_build_segment_distance(sd_vec3 p0, sd_vec3 p1, sd_vec3 q0, sd_vec3 q1)
     return best;
 }
 
+int sd_build_log_sizes_vary(const sd_scenario *s)
+{
+    return s->log_length_dist.type != SD_SIZE_FIXED || s->log_diam_dist.type != SD_SIZE_FIXED;
+}
+
+double sd_build_log_mean_volume(const sd_scenario *s, int paper)
+{
+    if (!sd_build_log_sizes_vary(s)) /* (the expression eq 54's count has always used) */
+        return paper ? s->log_diam * s->log_diam * s->log_length : M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
+    double l1, l2, d1, d2;
+    sd_debris_size_moments(&s->log_length_dist, s->log_length, &l1, &l2);
+    sd_debris_size_moments(&s->log_diam_dist, s->log_diam, &d1, &d2);
+    return (paper ? 1.0 : M_PI * 0.25) * d2 * l1; /* the length and diameter are drawn apart */
+}
+
+/* eq 54's V for the logs' count and whether each log counts as d^2 L (the paper's) */
+static double kw_volume(const sd_scenario *s, int *paper)
+{
+    *paper = s->log_kw_volume > 0.0;
+    if (*paper) return s->log_kw_volume;
+    double vs = 0.0;
+    for (int k = 0; k < s->n_classes; k++)
+        vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+    return vs;
+}
+
+/* The count from K_w when the sizes are drawn: the logs of the stream in order, as many as
+ * bring their volume nearest to V_t = K_w V / (1 - K_w) (a tie: the more) */
+static int drawn_log_count(const sd_scenario *s)
+{
+    int paper;
+    const double vt = s->log_kw * kw_volume(s, &paper) / (1.0 - s->log_kw);
+    sd_rng r = sd_debris_log_stream(s->seed);
+    double sum = 0.0;
+    for (int n = 0; n < SD_MAX_LOGS; n++) {
+        double len, d;
+        sd_debris_log_next(&r, &s->log_length_dist, s->log_length, &s->log_diam_dist, s->log_diam, &len, &d);
+        const double v = (paper ? 1.0 : M_PI * 0.25) * d * d * len;
+        if (sum + v >= vt) return sum + v - vt <= vt - sum ? n + 1 : n;
+        sum += v;
+    }
+    return SD_MAX_LOGS;
+}
+
+void sd_build_log_stats(const sd_scenario *s, sd_log_stats *st)
+{
+    memset(st, 0, sizeof *st);
+    st->n = sd_build_log_count(s);
+    sd_rng r = sd_debris_log_stream(s->seed);
+    double ml2 = 0.0, md2 = 0.0; /* Welford's sums of squared deviations: no cancellation */
+    for (int k = 0; k < st->n; k++) {
+        double len = s->log_length, d = s->log_diam;
+        if (sd_build_log_sizes_vary(s))
+            sd_debris_log_next(&r, &s->log_length_dist, s->log_length, &s->log_diam_dist, s->log_diam, &len, &d);
+        st->len_min = k ? fmin(st->len_min, len) : len;
+        st->len_max = k ? fmax(st->len_max, len) : len;
+        st->d_min = k ? fmin(st->d_min, d) : d;
+        st->d_max = k ? fmax(st->d_max, d) : d;
+        const double dl = len - st->len_mean, dd = d - st->d_mean;
+        st->len_mean += dl / (k + 1);
+        st->d_mean += dd / (k + 1);
+        ml2 += dl * (len - st->len_mean);
+        md2 += dd * (d - st->d_mean);
+        st->volume += M_PI * 0.25 * d * d * len;
+    }
+    if (st->n > 0) { /* the sample's own spread (divided by n): 0 for one log or fixed sizes */
+        st->len_sd = sqrt(ml2 / st->n);
+        st->d_sd = sqrt(md2 / st->n);
+    }
+}
+
 int sd_build_log_count(const sd_scenario *s)
 {
     if (s->log_count >= 0) return s->log_count;
+    if (s->log_kw > 0.0 && sd_build_log_sizes_vary(s)) return drawn_log_count(s);
     if (s->log_kw <= 0.0) return 0;
     double vs = 0.0, vlog;
     if (s->log_kw_volume > 0.0) {
@@ -441,9 +513,13 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
     if (!pl) return SD_ERR_NOMEM;
     info->first_moving_gid = -1;
     int nlogs = sd_build_log_count(s);
+    sd_rng sizes = sd_debris_log_stream(s->seed); /* (drawn only when a size varies) */
     for (int k = 0; k < nlogs; k++) {
         sd_vec3 pos, axis;
-        if (!sd_placer_try_cylinder(pl, rng, 0.5 * s->log_diam, 0.5 * s->log_length, 0.0005, 200000, &pos, &axis)) {
+        double len = s->log_length, d = s->log_diam;
+        if (sd_build_log_sizes_vary(s))
+            sd_debris_log_next(&sizes, &s->log_length_dist, s->log_length, &s->log_diam_dist, s->log_diam, &len, &d);
+        if (!sd_placer_try_cylinder(pl, rng, 0.5 * d, 0.5 * len, 0.0005, 200000, &pos, &axis)) {
             fprintf(err, "%s: no room for log %d of %d in the packing box; raise flume.pack_height\n", s->path, k + 1,
                     nlogs);
             sd_placer_destroy(pl);
@@ -452,8 +528,8 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
         sd_cylinder_def c = sd_cylinder_def_default();
         c.pos = pos;
         c.axis = axis;
-        c.radius = 0.5 * s->log_diam;
-        c.length = s->log_length;
+        c.radius = 0.5 * d;
+        c.length = len;
         c.density = s->log_density;
         c.tag = SD_TAG_LOG;
         int g = sd_world_add_cylinder(w, &c);

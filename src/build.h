@@ -3,6 +3,7 @@
 #define SD_BUILD_H
 
 #include "core/rng.h"
+#include "debris.h"
 #include "scenario.h"
 
 enum { SD_GROUP_BED = 0, SD_GROUP_WALLS = 1, SD_GROUP_END = 2, SD_GROUP_GATE = 3, SD_GROUP_BOX = 4 };
@@ -85,7 +86,23 @@ int sd_build_dam_pipes(const sd_scenario *s, const sd_dam_grid *g, sd_dam_pipe *
 const char *sd_build_pipe_kind_name(int kind);
 /* The least distance between the segments p0–p1 and q0–q1 (either may be a point), m. */
 double sd_build_segment_distance(sd_vec3 p0, sd_vec3 p1, sd_vec3 q0, sd_vec3 q1);
-/* Number of logs from logs.count or logs.k_w and the sphere volume (eq 54). */
+/* Number of logs from logs.count or logs.k_w and the sphere volume (eq 54). With sizes drawn
+ * (logs.length.type or logs.diameter.type not fixed), the count from K_w takes the logs of the
+ * logs' stream (debris.h) in order, as many as bring their volume nearest to eq 54's V_t. */
 int sd_build_log_count(const sd_scenario *s);
+/* 1 when a log size is drawn per log (logs.length.type or logs.diameter.type not fixed). */
+int sd_build_log_sizes_vary(const sd_scenario *s);
+/* A log's expected solid volume, π/4 E[d²] E[L] (paper = 1: E[d²] E[L], the paper's count of a
+ * log as d² L), m^3. */
+double sd_build_log_mean_volume(const sd_scenario *s, int paper);
+/* The logs a flume scenario releases, as the builder makes them: count, length and diameter
+ * (smallest, mean, standard deviation of the sample, largest; m) and solid volume (m^3). */
+typedef struct {
+    int n;
+    double len_min, len_mean, len_sd, len_max;
+    double d_min, d_mean, d_sd, d_max;
+    double volume;
+} sd_log_stats;
+void sd_build_log_stats(const sd_scenario *s, sd_log_stats *st);
 
 #endif

@@ -76,10 +76,11 @@ static sd_status capture_start(run_ctx *c)
     sd_status st = sd_build_dam(c->w, s, &c->info);
     if (st) return st;
     c->dam_built = 1;
-    char csv[1200];
+    char csv[1200], ev[1200];
     snprintf(csv, sizeof csv, "%s/pipes.csv", c->dir);
-    if (sd_pipe_loads_start(&c->loads, s, &c->info, c->w, c->series ? csv : NULL))
-        sd_output_note_failure(c, "pipes.csv", errno);
+    snprintf(ev, sizeof ev, "%s/events.csv", c->dir);
+    if (sd_pipe_loads_start(&c->loads, s, &c->info, c->w, c->series ? csv : NULL, c->series ? ev : NULL))
+        sd_output_note_failure(c, c->loads.csv ? "events.csv" : "pipes.csv", errno);
     c->phase = PH_CAPTURE;
     c->phase_t0 = sd_world_time(c->w);
     c->phase_w0 = sd_now();
@@ -195,8 +196,10 @@ int sd_run_begin(sd_run *r)
     }
     const int rs_kind = rs.kind;
     if (c->restarted_from && c->dam_built) { /* a restart in the capture: its pipe loads go on */
+        char ev[1200];
         snprintf(path, sizeof path, "%s/pipes.csv", c->dir);
-        if (sd_pipe_loads_resume(&c->loads, s, &c->info, c->w, path)) pvd_bad = 1;
+        snprintf(ev, sizeof ev, "%s/events.csv", c->dir);
+        if (sd_pipe_loads_resume(&c->loads, s, &c->info, c->w, path, ev)) pvd_bad = 1;
     }
     sd_run_state_free(&rs);
     if (!c->series || (s->n_traj > 0 && !c->traj) || (s->vtk_on && !c->pvd_on) || pvd_bad ||
@@ -370,7 +373,9 @@ int sd_run_step_once(sd_run *r)
     if (step % r->log_every == 0) {
         sd_output_series_row(c);
         if (c->loads.n && sd_pipe_loads_sample(&c->loads, c->w, sd_world_time(c->w)))
-            sd_output_note_failure(c, "pipes.csv", errno);
+            sd_output_note_failure(c, c->loads.ev_csv_bad || (c->loads.ev_csv && ferror(c->loads.ev_csv)) ? "events.csv"
+                                                                                                      : "pipes.csv",
+                                   errno);
     }
     if (c->traj && step % r->traj_every == 0) sd_output_traj(c);
     if (r->snap_every && step % r->snap_every == 0) {
@@ -417,7 +422,7 @@ void sd_run_end(sd_run *r)
         if (c->loads.n) {
             if (sd_pipe_loads_sample(&c->loads, c->w, sd_world_time(c->w))) sd_output_note_failure(c, "pipes.csv", errno);
             sd_pipe_loads_finish(&c->loads, c->capture_cut || c->phase == PH_CAPTURE);
-            if (sd_pipe_loads_close(&c->loads)) sd_output_note_failure(c, "pipes.csv", errno);
+            if (sd_pipe_loads_close(&c->loads)) sd_output_note_failure(c, "pipes.csv or events.csv", errno);
         }
         sd_output_snapshot(c, "final");
         if (s->flume_on && r->code == 0) sd_output_picture(c, "final", "side_final.png", s->x_dam - 1.0, s->x_end);

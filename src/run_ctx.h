@@ -99,7 +99,7 @@ void sd_run_end(sd_run *r);
 
 typedef struct {
     int kind; /* SD_CKPT_FLOW_END or SD_CKPT_PERIODIC */
-    long series_len, traj_len, pipes_len; /* the outputs' lengths at the checkpoint (-1: none) */
+    long series_len, traj_len, pipes_len, events_len; /* the outputs' lengths at the checkpoint (-1: none) */
     double wall_before;   /* wall time of the run(s) before the checkpoint, s */
     double phase_wall_in; /* of that, in the phase the checkpoint was taken in */
     int npvd;

@@ -295,7 +295,8 @@ static int summary_pipes(run_ctx *c, cJSON *o)
 {
     cJSON *pipes = cJSON_AddArrayToObject(o, "pipes");
     if (!pipes) return -1;
-    int bad = add_str(o, "pipe_support", c->s->dam_support ? "fixed ends" : "simply supported");
+    int bad = add_str(o, "pipe_support", c->s->dam_support ? "fixed ends" : "simply supported") |
+              add_num(o, "event_threshold_N", c->loads.ev_threshold) | add_num(o, "event_time_s", c->loads.ev_time);
     for (int k = 0; k < c->loads.n; k++) {
         const sd_pipe_load *L = &c->loads.p[k];
         cJSON *p = cJSON_CreateObject();
@@ -323,6 +324,10 @@ static int summary_pipes(run_ctx *c, cJSON *o)
                add_num(p, "peak_moment_Nm", L->m_peak) | add_num(p, "peak_moment_time_s", L->t_m_peak) |
                add_num(p, "peak_moment_at_m", L->s_at_m_peak) |
                (cJSON_AddBoolToObject(p, "rising_at_end", L->rising) ? 0 : -1);
+        cJSON *ev = add_obj(p, "events");
+        if (!ev) return -1;
+        bad |= add_num(ev, "count", L->n_events) | add_num(ev, "largest_peak_N", L->ev_peak) |
+               add_num(ev, "largest_impulse_Ns", L->ev_impulse) | add_num(ev, "largest_energy_J", L->ev_energy);
     }
     return bad;
 }
@@ -346,12 +351,57 @@ static int summary_debris(run_ctx *c, cJSON *o, sd_run_result *res)
                                                                  : "settled");
 }
 
+static int add_range(cJSON *o, const char *key, double lo, double mean, double sd, double hi)
+{
+    cJSON *r = add_obj(o, key);
+    return r ? add_num(r, "min", lo) | add_num(r, "mean", mean) | add_num(r, "sd", sd) | add_num(r, "max", hi) : -1;
+}
+
+/* the debris a flume run releases (docs/scenario.md "Debris as designers give it"): the sphere
+ * classes with their counts, and the mass fractions asked and got when a grading made them; the
+ * logs' count and sizes */
+static int summary_released(run_ctx *c, cJSON *o)
+{
+    const sd_scenario *s = c->s;
+    cJSON *d = add_obj(o, "debris_released");
+    if (!d) return -1;
+    static const char *const source[] = {"spheres.counts", "spheres.grading", "spheres.distribution"};
+    int bad = add_str(d, "classes_from", source[s->class_source]);
+    if (s->class_source != SD_CLASSES_COUNTS) bad |= add_num(d, "volume_asked_m3", s->sphere_volume);
+    double vs = 0.0;
+    for (int k = 0; k < s->n_classes; k++)
+        vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+    cJSON *cls = cJSON_AddArrayToObject(d, "spheres");
+    if (!cls) return -1;
+    for (int k = 0; k < s->n_classes; k++) {
+        cJSON *e = cJSON_CreateObject();
+        if (!e || !cJSON_AddItemToArray(cls, e)) {
+            cJSON_Delete(e);
+            return -1;
+        }
+        const double v = s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+        bad |= add_num(e, "diameter_m", s->class_diam[k]) | add_num(e, "count", s->class_count[k]) |
+               add_num(e, "volume_m3", v) | add_num(e, "mass_fraction", vs > 0 ? v / vs : 0.0);
+        if (s->class_source != SD_CLASSES_COUNTS) bad |= add_num(e, "mass_fraction_asked", s->class_target[k]);
+    }
+    sd_log_stats ls;
+    sd_build_log_stats(s, &ls);
+    cJSON *lg = add_obj(d, "logs");
+    if (!lg) return -1;
+    bad |= add_num(lg, "count", ls.n) | add_num(lg, "volume_m3", ls.volume) |
+           (cJSON_AddBoolToObject(lg, "sizes_drawn", sd_build_log_sizes_vary(s)) ? 0 : -1) |
+           add_range(lg, "length_m", ls.len_min, ls.len_mean, ls.len_sd, ls.len_max) |
+           add_range(lg, "diameter_m", ls.d_min, ls.d_mean, ls.d_sd, ls.d_max);
+    return bad;
+}
+
 char *sd_output_summary_text(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg)
 {
     cJSON *o = cJSON_CreateObject();
     if (!o) return NULL;
     int bad = summary_run(c, o, status_code, status_msg) | summary_engine(c, o) | summary_elements(c, o);
-    if (c->s->flume_on) bad |= summary_trap(c, o, res) | summary_debris(c, o, res) | summary_pipes(c, o);
+    if (c->s->flume_on)
+        bad |= summary_released(c, o) | summary_trap(c, o, res) | summary_debris(c, o, res) | summary_pipes(c, o);
     cJSON *par = sd_scenario_params_json(c->s);
     if (!par || !cJSON_AddItemToObject(o, "parameters", par)) {
         cJSON_Delete(par);

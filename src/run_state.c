@@ -18,7 +18,7 @@
  * length, the time series' lengths and the VTK series so far. The output timers are the world's
  * step count (saved with the world). The build's random numbers are spent before the first
  * step; the driver draws none later, so there is no rng state to carry. */
-#define BLOB_MAGIC "SDRUNv3"
+#define BLOB_MAGIC "SDRUNv4"
 
 const char *sd_run_state_version(void) { return BLOB_MAGIC; }
 
@@ -28,7 +28,8 @@ static long file_len(FILE *f)
     return ftell(f);
 }
 
-static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series_len, long traj_len, long pipes_len)
+static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series_len, long traj_len, long pipes_len,
+                       long events_len)
 {
     const double now = sd_now();
     sd_bin_put(b, BLOB_MAGIC, 8);
@@ -81,6 +82,7 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series
     sd_bin_put_f64(b, now - c->wall0);
     sd_bin_put_f64(b, now - c->phase_w0);
     sd_bin_put_i64(b, pipes_len);
+    sd_bin_put_i64(b, events_len);
     sd_bin_put_i64(b, series_len);
     sd_bin_put_i64(b, traj_len);
     /* the VTK series so far (file names relative to the output directory) */
@@ -124,7 +126,8 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
                  "was written for other scenario parameters than %s (a restart may change only the capture-phase keys:"
                  " dam.l_h, dam.n_columns, dam.columns, dam.l_v, dam.beam_axes, dam.beam_gaps, dam.top_beam, dam.beams,"
                  " dam.members, dam.fixed_ends, phases.capture_limit, phases.quiet_time,"
-                 " phases.ke_fraction, water.probe, water.h_d_floating, water.capture_length, water.capture_end)",
+                 " phases.ke_fraction, water.probe, water.h_d_floating, water.capture_length, water.capture_end,"
+                 " dam.event_threshold, dam.event_time)",
                  c->s->path);
         return -1;
     }
@@ -196,6 +199,7 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     r->wall_before = sd_bin_get_f64(&b);
     r->phase_wall_in = sd_bin_get_f64(&b);
     r->pipes_len = (long)sd_bin_get_i64(&b);
+    r->events_len = (long)sd_bin_get_i64(&b);
     r->series_len = (long)sd_bin_get_i64(&b);
     r->traj_len = (long)sd_bin_get_i64(&b);
     int np = sd_bin_get_i32(&b);
@@ -234,7 +238,7 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
         sd_run_state_free(r);
         return -1;
     }
-    int ok = c->n_passed >= 0 && c->n_snap >= 0 && r->series_len >= 0 && r->traj_len >= -1 && r->pipes_len >= -1 && isfinite(c->phase_t0) &&
+    int ok = c->n_passed >= 0 && c->n_snap >= 0 && r->series_len >= 0 && r->traj_len >= -1 && r->pipes_len >= -1 && r->events_len >= -1 && isfinite(c->phase_t0) &&
              isfinite(c->h_d) && isfinite(r->wall_before) && isfinite(r->phase_wall_in) && isfinite(c->flow_wall);
     if (ok && r->kind == SD_CKPT_FLOW_END)
         ok = c->phase == PH_FLOW && c->flow_ended == 1 && c->dam_built == 0;
@@ -328,6 +332,11 @@ int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg
         snprintf(b, sizeof b, "%s/pipes.csv", c->dir);
         if (copy_prefix(a, b, r->pipes_len, msg, msglen)) return -1;
     }
+    if (r->events_len >= 0) {
+        snprintf(a, sizeof a, "%s/events.csv", src);
+        snprintf(b, sizeof b, "%s/events.csv", c->dir);
+        if (copy_prefix(a, b, r->events_len, msg, msglen)) return -1;
+    }
     if (c->s->n_traj > 0 && r->traj_len >= 0) {
         snprintf(a, sizeof a, "%s/trajectories.csv", src);
         snprintf(b, sizeof b, "%s/trajectories.csv", c->dir);
@@ -349,14 +358,16 @@ int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg
 static sd_status write_state(run_ctx *c, const char *path, int kind)
 {
     long sl = file_len(c->series), tl = c->traj ? file_len(c->traj) : -1, pl = c->loads.csv ? file_len(c->loads.csv) : -1;
-    if (sl < 0 || (c->traj && tl < 0) || (c->loads.csv && pl < 0)) return SD_ERR_IO;
+    long el = c->loads.ev_csv ? file_len(c->loads.ev_csv) : -1;
+    if (sl < 0 || (c->traj && tl < 0) || (c->loads.csv && pl < 0) || (c->loads.ev_csv && el < 0)) return SD_ERR_IO;
     /* the rows the checkpoint counts are on the disk before the checkpoint that counts them */
     if (kind == SD_CKPT_PERIODIC && (fsync(fileno(c->series)) || (c->traj && fsync(fileno(c->traj))) ||
-                                     (c->loads.csv && fsync(fileno(c->loads.csv)))))
+                                     (c->loads.csv && fsync(fileno(c->loads.csv))) ||
+                                     (c->loads.ev_csv && fsync(fileno(c->loads.ev_csv)))))
         return SD_ERR_IO;
     sd_bin_writer b;
     sd_bin_writer_init(&b);
-    state_pack(c, &b, kind, sl, tl, pl);
+    state_pack(c, &b, kind, sl, tl, pl, el);
     sd_status st = b.err ? SD_ERR_NOMEM : sd_checkpoint_write(path, c->w, b.p, b.n);
     sd_bin_writer_fini(&b);
     return st;

@@ -84,13 +84,54 @@ static const sd_param params[] = {
     {"spheres.counts", P_ILIST, OFF(class_count), OFF(n_class_counts), SD_MAX_CLASSES, "-", 0, 1e7, 0,
      "count per class (376, 891, 3010, 342)"},
     {"spheres.density", P_DOUBLE, OFF(sphere_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density (SG 1.9)"},
+    {"spheres.volume", P_DOUBLE, OFF(sphere_volume), 0, 0, "m^3", 0, 1e4, 0,
+     "solid volume of spheres to release, split by spheres.grading or spheres.distribution (0: spheres.counts "
+     "gives the counts; the mass is density × volume)"},
+    {"spheres.grading.diameters", P_DLIST, OFF(grading_diam), OFF(n_grading_diam), SD_MAX_CLASSES, "m", 0, 1, 1,
+     "size classes of a grading by mass (with spheres.grading.mass_fractions and spheres.volume, instead of "
+     "spheres.diameters and spheres.counts)"},
+    {"spheres.grading.mass_fractions", P_DLIST, OFF(grading_frac), OFF(n_grading_frac), SD_MAX_CLASSES, "-", 0, 1, 0,
+     "each class's share of the mass, summing to 1 (within 1e-6); counts by largest remainder in volume "
+     "(docs/scenario.md)"},
+    {"spheres.distribution.type", P_ENUM, OFF(curve.type), 0, 0, "-", 0, 0, 0,
+     "a continuous grading curve by mass, cut into spheres.distribution.classes classes (with spheres.volume): "
+     "lognormal (d50, sigma), rosin_rammler (d50, exponent), uniform (the mass spread evenly over d), fuller "
+     "((d/d_max)^exponent)"},
+    {"spheres.distribution.d50", P_DOUBLE, OFF(curve.d50), 0, 0, "m", 0, 1, 0,
+     "median diameter by mass (lognormal, rosin_rammler)"},
+    {"spheres.distribution.sigma", P_DOUBLE, OFF(curve.sigma), 0, 0, "-", 0, 5, 0,
+     "standard deviation of ln d (lognormal; the geometric standard deviation is exp(sigma))"},
+    {"spheres.distribution.exponent", P_DOUBLE, OFF(curve.exponent), 0, 0, "-", 0, 20, 0,
+     "uniformity exponent n (rosin_rammler; fuller: 0.5 is Fuller's curve)"},
+    {"spheres.distribution.d_min", P_DOUBLE, OFF(curve.d_min), 0, 0, "m", 0, 1, 0,
+     "smallest diameter: the curve is cut to [d_min, d_max]"},
+    {"spheres.distribution.d_max", P_DOUBLE, OFF(curve.d_max), 0, 0, "m", 0, 1, 0, "largest diameter"},
+    {"spheres.distribution.classes", P_INT, OFF(curve.classes), 0, 0, "-", 1, SD_MAX_CLASSES, 0,
+     "classes of equal width in ln d between d_min and d_max; each class's diameter the geometric mean of its edges"},
     {"logs.count", P_INT, OFF(log_count), 0, 0, "-", -1, SD_MAX_LOGS, 0, "number of logs (-1: from logs.k_w)"},
     {"logs.k_w", P_DOUBLE, OFF(log_kw), 0, 0, "-", 0, 0.95, 0, "woody volume ratio K_w (eq 54), used when count = -1"},
     {"logs.k_w_volume", P_DOUBLE, OFF(log_kw_volume), 0, 0, "m^3", 0, INF, 0,
      "eq 54's V for the count from K_w: 0: the spheres' solid volume, each log's π d²L/4; > 0: this V, each log "
      "counted as d²L (the paper: V = 0.006, its four 1.5-l measures, gives its 32, 67, 106, 150 logs)"},
-    {"logs.diameter", P_DOUBLE, OFF(log_diam), 0, 0, "m", 0, 1, 1, "log diameter"},
-    {"logs.length", P_DOUBLE, OFF(log_length), 0, 0, "m", 0, 10, 1, "log length"},
+    {"logs.diameter", P_DOUBLE, OFF(log_diam), 0, 0, "m", 0, 1, 1, "log diameter (logs.diameter.type fixed)"},
+    {"logs.diameter.type", P_ENUM, OFF(log_diam_dist.type), 0, 0, "-", 0, 0, 0,
+     "log diameters drawn per log from the logs' own random stream: fixed (logs.diameter), uniform over [min, max], "
+     "normal or lognormal (mean, sd) cut to [min, max]"},
+    {"logs.diameter.mean", P_DOUBLE, OFF(log_diam_dist.mean), 0, 0, "m", 0, 1, 0,
+     "mean of the normal or lognormal diameter before the cut"},
+    {"logs.diameter.sd", P_DOUBLE, OFF(log_diam_dist.sd), 0, 0, "m", 0, 1, 0,
+     "standard deviation of the normal or lognormal diameter before the cut"},
+    {"logs.diameter.min", P_DOUBLE, OFF(log_diam_dist.min), 0, 0, "m", 0, 1, 0, "smallest log diameter"},
+    {"logs.diameter.max", P_DOUBLE, OFF(log_diam_dist.max), 0, 0, "m", 0, 1, 0, "largest log diameter"},
+    {"logs.length", P_DOUBLE, OFF(log_length), 0, 0, "m", 0, 10, 1, "log length (logs.length.type fixed)"},
+    {"logs.length.type", P_ENUM, OFF(log_length_dist.type), 0, 0, "-", 0, 0, 0,
+     "log lengths drawn per log, as logs.diameter.type: fixed (logs.length), uniform, normal or lognormal"},
+    {"logs.length.mean", P_DOUBLE, OFF(log_length_dist.mean), 0, 0, "m", 0, 10, 0,
+     "mean of the normal or lognormal length before the cut"},
+    {"logs.length.sd", P_DOUBLE, OFF(log_length_dist.sd), 0, 0, "m", 0, 10, 0,
+     "standard deviation of the normal or lognormal length before the cut"},
+    {"logs.length.min", P_DOUBLE, OFF(log_length_dist.min), 0, 0, "m", 0, 10, 0, "shortest log"},
+    {"logs.length.max", P_DOUBLE, OFF(log_length_dist.max), 0, 0, "m", 0, 10, 0, "longest log"},
     {"logs.density", P_DOUBLE, OFF(log_density), 0, 0, "kg/m^3", 0, INF, 1, "log density (SG 0.8)"},
     {"dam.on", P_BOOL, OFF(dam_on), 0, 0, "-", 0, 1, 0, "build the dam"},
     {"dam.pipe_diameter", P_DOUBLE, OFF(pipe_diam), 0, 0, "m", 0, 1, 1, "diameter of the grid's pipes"},
@@ -124,6 +165,11 @@ static const sd_param params[] = {
      "walls, no nearer another pipe's axis than the two radii"},
     {"dam.fixed_ends", P_BOOL, OFF(dam_support), 0, 0, "-", 0, 1, 0,
      "pipe bending moments for spans with fixed ends (default: simply supported; docs/loads.md)"},
+    {"dam.event_threshold", P_DOUBLE, OFF(event_threshold), 0, 0, "N", 0, INF, 0,
+     "a pipe's impact event begins when |F| exceeds its baseline by this and ends below half of it (0: four times "
+     "the weight of the heaviest moving element; docs/loads.md)"},
+    {"dam.event_time", P_DOUBLE, OFF(event_time), 0, 0, "s", 0, INF, 1,
+     "time constant of a pipe's baseline (its quasi-static load) and the longest an event lasts"},
     {"water.on", P_BOOL, OFF(water_on), 0, 0, "-", 0, 1, 0, "fluid forces (SPEC §5)"},
     {"water.u", P_DOUBLE, OFF(water_u), 0, 0, "m/s", 0, INF, 0, "reference velocity U"},
     {"water.h", P_DOUBLE, OFF(water_h), 0, 0, "m", 0, INF, 1, "flow depth h"},
@@ -174,8 +220,11 @@ static const sd_param params[] = {
 /* The choices of the P_ENUM keys, in the order of their values (scenario.h's enums). */
 static const struct {
     const char *key;
-    const char *const names[5];
+    const char *const names[8];
 } enum_choices[] = {
+    {"spheres.distribution.type", {"none", "lognormal", "rosin_rammler", "uniform", "fuller", NULL}},
+    {"logs.diameter.type", {"fixed", "uniform", "normal", "lognormal", NULL}},
+    {"logs.length.type", {"fixed", "uniform", "normal", "lognormal", NULL}},
     {"water.buoyancy", {"vertical", "bed_normal", NULL}},
     {"water.capture_end", {"trap_plane", "dam_face", NULL}},
     {"water.scene", {"none", "flow", "uniform", "still", NULL}},
@@ -227,12 +276,14 @@ void sd_scenario_default(sd_scenario *s)
         s->class_count[i] = c[i];
     }
     s->sphere_density = 1900.0;
+    s->curve.classes = 8;
     s->log_count = -1;
     s->log_kw = 0.0;
     s->log_diam = 0.010;
     s->log_length = 0.100;
     s->log_density = 800.0;
     s->dam_on = 1;
+    s->event_time = 0.1;
     s->pipe_diam = 0.018;
     s->l_h = 0.050;
     s->l_v = 0.040;
@@ -746,7 +797,9 @@ static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefi
             continue;
         }
         const sd_param *p = find_param(key);
-        if (p) {
+        if (v->kind == SD_Y_MAP && is_section(key)) {
+            walk(e, s, v, key); /* logs.length: a number, or a mapping of logs.length.* */
+        } else if (p) {
             set_param(e, s, p, v, NULL, v->line, v->col);
         } else if (is_section(key)) {
             if (v->kind != SD_Y_MAP)
@@ -1036,12 +1089,177 @@ static void check_dam(ectx *e, const origin *at, const sd_scenario *s)
     check_members(e, at, s, pipe, n);
 }
 
+/* 1 when the key was set in the scenario or by --set (not holding its default) */
+static int given(const origin *at, const char *key)
+{
+    const sd_param *p = find_param(key);
+    return p && at[p - params].file != NULL;
+}
+
+/* A size drawn per log (logs.length.*, logs.diameter.*): its keys agree with its type, its range
+ * holds the distribution. */
+static void check_log_size(ectx *e, const origin *at, const char *name, const sd_size_dist *d)
+{
+    static const char *const sub[4] = {"mean", "sd", "min", "max"};
+    char key[4][48], tkey[48], m[600];
+    snprintf(tkey, sizeof tkey, "%s.type", name);
+    for (int k = 0; k < 4; k++)
+        snprintf(key[k], sizeof key[k], "%s.%s", name, sub[k]);
+    if (d->type == SD_SIZE_FIXED) {
+        for (int k = 0; k < 4; k++)
+            if (given(at, key[k])) {
+                snprintf(m, sizeof m, "%s is set but %s is fixed (%s gives the size): set %s to uniform, normal or "
+                         "lognormal", key[k], tkey, name, tkey);
+                report_keys(e, at, key[k], NULL, "%s%s", m, "");
+            }
+        return;
+    }
+    if (given(at, name)) {
+        snprintf(m, sizeof m, "%s conflicts with %s: give one size (%s) or a distribution (%s.*), not both", name, tkey,
+                 name, name);
+        report_keys(e, at, name, tkey, "%s%s", m, "");
+    }
+    if (!(d->min > 0.0 && d->max > d->min)) {
+        snprintf(m, sizeof m, "%s needs 0 < %s < %s (got %g and %g m)", tkey, key[2], key[3], d->min, d->max);
+        report_keys(e, at, key[2], key[3], "%s%s", m, "");
+    } else if (d->type != SD_SIZE_UNIFORM) {
+        if (!(d->sd > 0.0)) {
+            snprintf(m, sizeof m, "%s needs %s > 0 (the spread of the sizes)", tkey, key[1]);
+            report_keys(e, at, key[1], tkey, "%s%s", m, "");
+        }
+        if (!(d->mean >= d->min && d->mean <= d->max)) {
+            snprintf(m, sizeof m, "%s = %g m must lie in [%s, %s] = [%g, %g] m", key[0], d->mean, key[2], key[3],
+                     d->min, d->max);
+            report_keys(e, at, key[0], tkey, "%s%s", m, "");
+        }
+    }
+}
+
+/* The sphere classes as designers give them (debris.h): a grading by mass fractions or a
+ * continuous curve, with spheres.volume, resolved here into class_diam and class_count. Their
+ * keys agree with each other and not with spheres.diameters or spheres.counts. */
+static void check_debris(ectx *e, const origin *at, sd_scenario *s)
+{
+    static const char *const curve_keys[] = {"spheres.distribution.d50",      "spheres.distribution.sigma",
+                                             "spheres.distribution.exponent", "spheres.distribution.d_min",
+                                             "spheres.distribution.d_max",    "spheres.distribution.classes"};
+    char m[300], a[32];
+    const int errs = e->errors;
+    const int grading = given(at, "spheres.grading.diameters") || given(at, "spheres.grading.mass_fractions");
+    const sd_grading_curve *g = &s->curve;
+    const int curve = g->type != SD_GRADING_NONE;
+    check_log_size(e, at, "logs.length", &s->log_length_dist);
+    check_log_size(e, at, "logs.diameter", &s->log_diam_dist);
+    s->class_source = SD_CLASSES_COUNTS;
+    for (int i = 0; i < SD_MAX_CLASSES; i++)
+        s->class_target[i] = 0.0;
+    for (size_t k = 0; !curve && k < sizeof curve_keys / sizeof curve_keys[0]; k++)
+        if (given(at, curve_keys[k])) {
+            snprintf(m, sizeof m, "%s is set but spheres.distribution.type is none", curve_keys[k]);
+            report_keys(e, at, curve_keys[k], NULL, "%s%s", m, "");
+        }
+    if (grading && curve)
+        report_keys(e, at, "spheres.distribution.type", "spheres.grading.diameters",
+                    "give spheres.grading or spheres.distribution, not both%s%s", "", "");
+    const char *src = grading ? "spheres.grading" : "spheres.distribution";
+    const char *src_key = grading ? (given(at, "spheres.grading.diameters") ? "spheres.grading.diameters"
+                                                                            : "spheres.grading.mass_fractions")
+                                  : "spheres.distribution.type";
+    if (grading || curve) {
+        static const char *const mine[2] = {"spheres.diameters", "spheres.counts"};
+        for (int k = 0; k < 2; k++)
+            if (given(at, mine[k])) {
+                snprintf(m, sizeof m, "%s conflicts with %s: give the classes one way (%s and spheres.volume make "
+                         "spheres.diameters and spheres.counts)", mine[k], src, src);
+                report_keys(e, at, mine[k], NULL, "%s%s", m, "");
+            }
+        if (!(s->sphere_volume > 0.0))
+            report_keys(e, at, src_key, NULL, "%s needs spheres.volume, the solid volume of spheres to release%s", src,
+                        "");
+    } else if (s->sphere_volume > 0.0)
+        report_keys(e, at, "spheres.volume", NULL,
+                    "spheres.volume is used only with spheres.grading or spheres.distribution (spheres.counts gives "
+                    "the counts)%s%s", "", "");
+    if (e->errors != errs || !(grading || curve)) return;
+    double diam[SD_MAX_CLASSES], frac[SD_MAX_CLASSES];
+    int n = 0;
+    if (grading) {
+        n = s->n_grading_diam;
+        if (s->n_grading_frac != n) {
+            snprintf(m, sizeof m, "spheres.grading.mass_fractions has %d values and spheres.grading.diameters has %d: "
+                     "give one fraction per diameter", s->n_grading_frac, n);
+            report_keys(e, at, "spheres.grading.mass_fractions", "spheres.grading.diameters", "%s%s", m, "");
+            return;
+        }
+        if (n == 0) {
+            report_keys(e, at, "spheres.grading.diameters", "spheres.grading.mass_fractions",
+                        "spheres.grading needs at least one class (spheres.grading.diameters is empty)%s%s", "", "");
+            return;
+        }
+        double sum = 0.0;
+        for (int k = 0; k < n; k++)
+            sum += s->grading_frac[k];
+        /* fractions read from a table rarely sum to 1 exactly: within 1e-6 they are taken as
+         * given, scaled to sum to 1 */
+        if (!(fabs(sum - 1.0) <= 1e-6)) {
+            snprintf(m, sizeof m, "spheres.grading.mass_fractions sum to %.9g, not 1 (within 1e-6)", sum);
+            report_keys(e, at, "spheres.grading.mass_fractions", NULL, "%s%s", m, "");
+            return;
+        }
+        for (int k = 0; k < n; k++) {
+            diam[k] = s->grading_diam[k];
+            frac[k] = s->grading_frac[k] / sum;
+        }
+    } else {
+        static const char *const tname[] = {"none", "lognormal", "rosin_rammler", "uniform", "fuller"};
+        const char *need = NULL;
+        if (!(g->d_min > 0.0))
+            need = "spheres.distribution.d_min";
+        else if (!(g->d_max > g->d_min))
+            need = "spheres.distribution.d_max";
+        else if ((g->type == SD_GRADING_LOGNORMAL || g->type == SD_GRADING_ROSIN_RAMMLER) && !(g->d50 > 0.0))
+            need = "spheres.distribution.d50";
+        else if (g->type == SD_GRADING_LOGNORMAL && !(g->sigma > 0.0))
+            need = "spheres.distribution.sigma";
+        else if ((g->type == SD_GRADING_ROSIN_RAMMLER || g->type == SD_GRADING_FULLER) && !(g->exponent > 0.0))
+            need = "spheres.distribution.exponent";
+        if (need) {
+            snprintf(m, sizeof m, "spheres.distribution.type = %s needs %s %s", tname[g->type], need,
+                     !strcmp(need, "spheres.distribution.d_max") ? "above spheres.distribution.d_min" : "> 0");
+            report_keys(e, at, need, "spheres.distribution.type", "%s%s", m, "");
+            return;
+        }
+        n = sd_debris_discretise(g, diam, frac);
+        if (n < 0) {
+            snprintf(m, sizeof m, "the %s curve holds no mass between d_min = %g m and d_max = %g m", tname[g->type],
+                     g->d_min, g->d_max);
+            report_keys(e, at, "spheres.distribution.d_min", "spheres.distribution.type", "%s%s", m, "");
+            return;
+        }
+    }
+    int count[SD_MAX_CLASSES];
+    if (sd_debris_counts(n, diam, frac, s->sphere_volume, count)) {
+        report_keys(e, at, "spheres.volume", NULL, "spheres.volume = %s m^3 asks for more than 1e7 spheres in a class%s",
+                    num(a, s->sphere_volume), "");
+        return;
+    }
+    s->class_source = grading ? SD_CLASSES_GRADING : SD_CLASSES_CURVE;
+    s->n_classes = s->n_class_counts = n;
+    for (int k = 0; k < n; k++) {
+        s->class_diam[k] = diam[k];
+        s->class_count[k] = count[k];
+        s->class_target[k] = frac[k];
+    }
+}
+
 /* Cross-field checks: geometry that contradicts itself, sizes that do not fit, an unstable time
  * step. Everything a builder allocates from is checked here first. */
 static void validate(ectx *e, sd_scenario *s, origin *at)
 {
     char a[32], b[300];
     resolve_dam_keys(e, s, at);
+    check_debris(e, at, s);
+    if (e->errors) return;
     check_lengths(e, at, "pile.diameters", s->pile_n_classes, "pile.counts", s->pile_n_counts);
     check_lengths(e, at, "spheres.diameters", s->n_classes, "spheres.counts", s->n_class_counts);
     if (e->errors) return;
@@ -1109,7 +1327,7 @@ static void validate(ectx *e, sd_scenario *s, origin *at)
             double vs = 0.0;
             for (int k = 0; k < s->n_classes; k++)
                 vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
-            const double n = s->log_kw * vs / (1.0 - s->log_kw) / (M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length);
+            const double n = s->log_kw * vs / (1.0 - s->log_kw) / sd_build_log_mean_volume(s, 0);
             if (!(n <= SD_MAX_LOGS)) {
                 snprintf(b, sizeof b, "%.3g logs, more than %d", n, SD_MAX_LOGS);
                 report_keys(e, at, "logs.k_w", "logs.diameter", "logs.k_w = %s asks for %s", num(a, s->log_kw), b);
@@ -1131,8 +1349,11 @@ static void validate(ectx *e, sd_scenario *s, origin *at)
     if (s->flume_on) {
         for (int k = 0; k < s->n_classes; k++)
             if (s->class_count[k] > 0) mmin = fmin(mmin, sphere_mass(s->class_diam[k], s->sphere_density));
-        if (s->log_count != 0)
-            mmin = fmin(mmin, s->log_density * M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length);
+        if (s->log_count != 0) { /* the smallest log the distributions can draw */
+            const double d = s->log_diam_dist.type ? s->log_diam_dist.min : s->log_diam;
+            const double l = s->log_length_dist.type ? s->log_length_dist.min : s->log_length;
+            mmin = fmin(mmin, s->log_density * M_PI * 0.25 * d * d * l);
+        }
     }
     if (s->world.check_dt && isfinite(mmin)) {
         double dt_max = sd_stable_dt_max(s->world.contact.k_n, s->world.contact.k_s, mmin);
@@ -1338,7 +1559,7 @@ void sd_scenario_print_params(FILE *f, int format)
         if (md)
             fprintf(f, "| `%s` | %s | %s | `", p->key, type_name(p->type), p->unit);
         else
-            fprintf(f, "%-28s %-16s %-8s ", p->key, type_name(p->type), p->unit);
+            fprintf(f, "%-31s %-16s %-8s ", p->key, type_name(p->type), p->unit);
         print_value(f, &d, p, 0);
         if (p->type == P_ENUM) {
             char list[128];
@@ -1435,6 +1656,7 @@ cJSON *sd_scenario_params_json(const sd_scenario *s)
 static const char *const capture_keys[] = {
     "dam.l_h",          "dam.l_v",        "dam.top_beam",       "dam.columns",          "dam.beams",
     "dam.n_columns",    "dam.beam_axes",  "dam.beam_gaps",      "dam.members",          "dam.fixed_ends",
+    "dam.event_threshold", "dam.event_time",
     "phases.capture_limit", "phases.quiet_time", "phases.ke_fraction", "water.probe", "water.h_d_floating",
     "water.capture_length", "water.capture_end"};
 

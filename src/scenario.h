@@ -6,10 +6,11 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "debris.h"
 #include "sabodem.h"
 #include "sabodem_run.h"
 
-#define SD_MAX_CLASSES 8
+#define SD_MAX_CLASSES 16
 #define SD_MAX_IDS 64
 #define SD_MAX_PIPES 32
 /* The most arbitrary dam members (dam.members). */
@@ -20,6 +21,7 @@
 /* The choices of the scenario's enumerated keys (their index is the stored value). */
 enum { SD_BUOYANCY_VERTICAL = 0, SD_BUOYANCY_BED_NORMAL = 1 };
 enum { SD_CAPTURE_END_TRAP_PLANE = 0, SD_CAPTURE_END_DAM_FACE = 1 };
+enum { SD_CLASSES_COUNTS = 0, SD_CLASSES_GRADING = 1, SD_CLASSES_CURVE = 2 };
 enum { SD_SCENE_WATER_NONE = 0, SD_SCENE_WATER_FLOW = 1, SD_SCENE_WATER_UNIFORM = 2, SD_SCENE_WATER_STILL = 3 };
 
 typedef struct {
@@ -64,6 +66,16 @@ typedef struct sd_scenario {
     double class_diam[SD_MAX_CLASSES];
     int class_count[SD_MAX_CLASSES];
     double sphere_density;
+    /* the classes as designers give them (debris.h), resolved by the loader into class_diam and
+     * class_count above: a grading by mass fractions, or a continuous curve cut into classes,
+     * with the solid volume to release */
+    int n_grading_diam, n_grading_frac; /* the two lists' lengths */
+    double grading_diam[SD_MAX_CLASSES], grading_frac[SD_MAX_CLASSES];
+    sd_grading_curve curve;             /* curve.type SD_GRADING_NONE: none */
+    double sphere_volume;               /* spheres.volume, m^3 (0: the counts are given) */
+    int class_source;                   /* derived: SD_CLASSES_COUNTS, _GRADING or _CURVE */
+    double class_target[SD_MAX_CLASSES]; /* derived: each class's mass fraction asked for */
+    sd_size_dist log_length_dist, log_diam_dist; /* type SD_SIZE_FIXED: log_length, log_diam */
     int log_count;
     double log_kw; /* woody volume ratio; used when >= 0 and log_count < 0 */
     double log_diam, log_length, log_density;
@@ -78,6 +90,8 @@ typedef struct sd_scenario {
     int n_columns, n_beams;
     int column_count; /* dam.n_columns: -1 not given */
     int dam_support; /* bending moments: 0 simple supports, 1 fixed ends (pipe_loads.h) */
+    double event_threshold; /* a pipe's impact event: |F| this far above its baseline, N (0: auto) */
+    double event_time;      /* the baseline's time constant and the longest event, s */
     double column_y[SD_MAX_PIPES];
     double beam_z[SD_MAX_PIPES]; /* underside heights */
     int n_beam_axes, n_beam_gaps;

@@ -34,7 +34,7 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c)
         if (s->log_count >= 0)
             bodies += s->log_count;
         else if (s->log_kw > 0.0)
-            bodies += s->log_kw * vs / (1.0 - s->log_kw) / (M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length);
+            bodies += s->log_kw * vs / (1.0 - s->log_kw) / sd_build_log_mean_volume(s, 0);
         const double L = s->x_end, W = s->width;
         if (s->roughness_on) {
             const double r = 0.5 * s->rough_dmin;

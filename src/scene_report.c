@@ -42,7 +42,13 @@ double sd_scene_k_w(const sd_scenario *s)
     double vs = 0.0;
     for (int k = 0; k < s->n_classes; k++)
         vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
-    const double vlog = sd_build_log_count(s) * M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
+    double vlog;
+    if (sd_build_log_sizes_vary(s)) {
+        sd_log_stats ls;
+        sd_build_log_stats(s, &ls);
+        vlog = ls.volume;
+    } else
+        vlog = sd_build_log_count(s) * M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
     return vs + vlog > 0.0 ? vlog / (vs + vlog) : 0.0;
 }
 
@@ -63,16 +69,37 @@ void sd_scene_report(FILE *f, const sd_scenario *s, const sd_build_info *info, i
     fprintf(f, "  bed roughness: %d fixed spheres\n", info->n_rough);
     double vs = 0.0;
     fprintf(f, "debris released at the gate:\n");
+    for (int k = 0; k < s->n_classes; k++)
+        vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+    if (s->class_source == SD_CLASSES_GRADING)
+        fprintf(f, "  spheres from spheres.grading and spheres.volume = %.3f L (counts by largest remainder):\n",
+                1e3 * s->sphere_volume);
+    else if (s->class_source == SD_CLASSES_CURVE)
+        fprintf(f, "  spheres from spheres.distribution (%d classes of equal width in ln d from %.1f to %.1f mm) and "
+                   "spheres.volume = %.3f L (counts by largest remainder):\n",
+                s->n_classes, 1e3 * s->curve.d_min, 1e3 * s->curve.d_max, 1e3 * s->sphere_volume);
     for (int k = 0; k < s->n_classes; k++) {
         const double v = s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
-        vs += v;
-        fprintf(f, "  spheres class %d: d = %.1f mm, %d, solid volume %.3f L\n", k, 1e3 * s->class_diam[k],
+        fprintf(f, "  spheres class %d: d = %.1f mm, %d, solid volume %.3f L", k, 1e3 * s->class_diam[k],
                 s->class_count[k], 1e3 * v);
+        if (s->class_source != SD_CLASSES_COUNTS)
+            fprintf(f, ", mass fraction %.4f (asked %.4f)", vs > 0 ? v / vs : 0.0, s->class_target[k]);
+        fputc('\n', f);
     }
-    const int n_logs = sd_build_log_count(s);
-    const double vlog = n_logs * M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
-    fprintf(f, "  logs: %d, d = %.1f mm, L = %.1f mm, solid volume %.3f L\n", n_logs, 1e3 * s->log_diam,
-            1e3 * s->log_length, 1e3 * vlog);
+    sd_log_stats ls;
+    sd_build_log_stats(s, &ls);
+    const int n_logs = ls.n;
+    const double vlog = ls.volume;
+    if (!sd_build_log_sizes_vary(s))
+        fprintf(f, "  logs: %d, d = %.1f mm, L = %.1f mm, solid volume %.3f L\n", n_logs, 1e3 * s->log_diam,
+                1e3 * s->log_length, 1e3 * vlog);
+    else {
+        fprintf(f, "  logs: %d, solid volume %.3f L, sizes drawn per log\n", n_logs, 1e3 * vlog);
+        if (n_logs > 0)
+            fprintf(f, "    L = %.1f to %.1f mm, mean %.1f mm, sd %.1f mm; d = %.1f to %.1f mm, mean %.1f mm, sd %.1f mm\n",
+                    1e3 * ls.len_min, 1e3 * ls.len_max, 1e3 * ls.len_mean, 1e3 * ls.len_sd, 1e3 * ls.d_min,
+                    1e3 * ls.d_max, 1e3 * ls.d_mean, 1e3 * ls.d_sd);
+    }
     fprintf(f, "  solid volume %.3f L (spheres %.3f L); K_w = V_logs / (V_spheres + V_logs) = %.2f %%\n",
             1e3 * (vs + vlog), 1e3 * vs, vs + vlog > 0 ? 100.0 * vlog / (vs + vlog) : 0.0);
     sd_dam_report d;
@@ -118,7 +145,9 @@ void sd_scene_report(FILE *f, const sd_scenario *s, const sd_build_info *info, i
             fprintf(f, "  l_H = %.1f mm: l_H/d_max = %.2f", 1e3 * wide, wide / d.d_max);
         else
             fprintf(f, "  l_H = %.1f mm", 1e3 * wide);
-        if (n_logs > 0) fprintf(f, ", l_H/L_log = %.2f", wide / s->log_length);
+        if (n_logs > 0 && !sd_build_log_sizes_vary(s)) fprintf(f, ", l_H/L_log = %.2f", wide / s->log_length);
+        if (n_logs > 0 && sd_build_log_sizes_vary(s))
+            fprintf(f, ", l_H/L_log = %.2f (longest log) to %.2f (shortest)", wide / ls.len_max, wide / ls.len_min);
         fputc('\n', f);
     }
     if (d.n_beam > 1 || (d.n_beam == 1 && !d.top_beam)) {
@@ -162,13 +191,16 @@ int sd_scene_write_design(const char *dir, const sd_scenario *s, const sd_world 
     char path[1200];
     sd_dam_report d;
     sd_dam_report_make(s, &d);
+    sd_log_stats dm; /* (the logs' mean size when drawn) */
+    sd_build_log_stats(s, &dm);
     FILE *f = open_in(dir, "design.csv", path, sizeof path, err);
     if (!f) return -1;
     fprintf(f, "key,value\nflume,%d\nwidth,%.17g\nwall_height,%.17g\nslope_deg,%.17g\nx_gate,%.17g\n"
                "x_dam,%.17g\nx_end,%.17g\npipe_diameter,%.17g\nd_max,%.17g\nlog_diameter,%.17g\n"
                "log_length,%.17g\nlogs,%d\n",
             s->flume_on, s->width, s->wall_height, s->slope_deg, s->x_gate, s->x_dam, s->x_end, s->pipe_diam, d.d_max,
-            s->log_diam, s->log_length, sd_build_log_count(s));
+            sd_build_log_sizes_vary(s) ? dm.d_mean : s->log_diam, sd_build_log_sizes_vary(s) ? dm.len_mean : s->log_length,
+            dm.n);
     if (close_checked(f, path, err)) return -1;
     if (!(f = open_in(dir, "members.csv", path, sizeof path, err))) return -1;
     fprintf(f, "kind,axis_m,x0,y0,z0,x1,y1,z1,diameter_m\n");

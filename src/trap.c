@@ -231,7 +231,7 @@ void sd_trap_split(const run_ctx *c, double *held, double *channel, double *pass
     double dmax = 0.0;
     for (int k = 0; k < s->n_classes; k++)
         if (s->class_count[k] > 0) dmax = fmax(dmax, s->class_diam[k]);
-    if (dmax <= 0.0) dmax = s->log_diam;
+    if (dmax <= 0.0) dmax = s->log_diam_dist.type != SD_SIZE_FIXED ? s->log_diam_dist.max : s->log_diam;
     const double xt = sd_trap_plane_x(c), bin = 2.0 * dmax, x0 = 0.0; /* the upstream end of the flume */
     const int nb = (int)ceil((xt - x0) / bin) + 1;
     double *vol = calloc((size_t)nb, sizeof *vol);

@@ -91,6 +91,7 @@ expect restart-junk 2 "junk.ckpt: not a sabodem checkpoint" run "$src_dir/exampl
 [ ! -e "$tmp/rs-out" ] && pass=$((pass + 1)) || { echo "FAIL bad restart left an output directory"; fail=$((fail + 1)); }
 expect restart-check 2 "unknown or incomplete option '--restart'" check "$src_dir/examples/flume_small.yaml" --restart "$tmp/junk.ckpt"
 # the paper's Table 2 matrix: 60 runs from 15 shared flows, listed without running
+expect designer-debris 0 "logs: [0-9]+, solid volume .* sizes drawn per log" check "$src_dir/examples/debris_designer.yaml"
 expect table2-dry-run 0 "branching on dam.l_v: 15 shared flows" sweep "$src_dir/examples/shibuya2009-table2.yaml" --dry-run -o "$tmp/t2"
 [ "$(grep -c '^run case' "$tmp/out")" -eq 60 ] && [ ! -e "$tmp/t2" ] && pass=$((pass + 1)) || { echo "FAIL table2 dry run"; fail=$((fail + 1)); }
 expect sweep-parallel-bad 2 "--parallel: expected a positive integer" sweep "$src_dir/examples/shibuya2009-table2.yaml" --parallel 0
@@ -233,7 +234,7 @@ complete_words() { # words of the command line being completed (the last one is 
     _ "$tmp/sabodem.bash" "$@" | sort
 }
 comp_ok=1
-[ "$(complete_words sabodem run x.yaml --set '' | sed 's/=$//')" = "$(sort "$tmp/keys")" ] || { echo "completion: --set keys"; comp_ok=0; }
+[ "$(complete_words sabodem run x.yaml --set '' | sed 's/=$//' | sort)" = "$(sort "$tmp/keys")" ] || { echo "completion: --set keys"; comp_ok=0; }
 [ "$(complete_words sabodem run x.yaml --set solver.d | tr '\n' ' ')" = "solver.dt= solver.duration= " ] || { echo "completion: solver.d"; comp_ok=0; }
 [ "$(complete_words sabodem sweep x.yaml --d)" = "--dry-run" ] || { echo "completion: sweep --d"; comp_ok=0; }
 [ "$(complete_words sabodem ch)" = "check" ] || { echo "completion: ch"; comp_ok=0; }
@@ -269,8 +270,26 @@ for r in rows:
 # every step's force goes into some sample's interval peak: the largest is the run's peak
 pk, ipk = max(p["peak_force_N"] for p in s["pipes"]), max(float(r["f_peak_interval_N"]) for r in rows)
 assert pk > 0 and abs(pk - ipk) <= 1e-6 * pk, (pk, ipk)
+# impact events: events.csv has a row per event of summary.json's counts, their largest peaks,
+# impulses and energies, each peak at least the threshold and at most the pipe's peak
+ev = list(csv.DictReader(open(d + "/events.csv")))
+T = s["event_threshold_N"]
+assert T > 0 and sum(p["events"]["count"] for p in s["pipes"]) == len(ev) > 0, (T, len(ev))
+for k, p in enumerate(s["pipes"]):
+    mine = [r for r in ev if int(r["pipe"]) == k]
+    assert len(mine) == p["events"]["count"], (k, len(mine))
+    for key, col in (("largest_peak_N", "peak_N"), ("largest_impulse_Ns", "impulse_Ns"), ("largest_energy_J", "energy_J")):
+        got = max((float(r[col]) for r in mine), default=0.0)
+        assert abs(got - p["events"][key]) <= 1e-6 * max(got, 1e-12), (k, key, got, p["events"][key])
+    for r in mine:
+        assert T < float(r["peak_N"]) <= p["peak_force_N"] * (1 + 1e-6) and float(r["duration_s"]) > 0, r
+        assert r["end"] in ("fell", "sustained", "run_end") and float(r["energy_J"]) >= 0, r
+# the debris released: the classes' counts as spheres.counts, the logs' count as the run's
+rel = s["debris_released"]
+assert [c["count"] for c in rel["spheres"]] == s["parameters"]["spheres.counts"], rel
+assert rel["classes_from"] == "spheres.counts" and rel["logs"]["count"] == s["elements"]["logs"], rel
 PY
-then pass=$((pass + 1)); else echo "FAIL debris account / pipe loads in summary.json, pipes.csv"; fail=$((fail + 1)); fi
+then pass=$((pass + 1)); else echo "FAIL debris account / pipe loads / events in summary.json, pipes.csv, events.csv"; fail=$((fail + 1)); fi
 
 # docs/scenario.md carries the same table the loader checks
 "$bin" params --markdown > "$tmp/params.md"

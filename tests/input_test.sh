@@ -130,6 +130,24 @@ expect member-no-diameter 2 "mem6.yaml:5:7: dam.members: member 1 has no 'diamet
 expect member-not-map 2 "mem6.yaml:6:7: dam.members: each member is a mapping" check "$tmp/mem6.yaml"
 expect member-set 2 "--set:1:[0-9]+: dam.members: member 0 has no length" check "$tmp/cols.yaml" --set "dam.members=[{from: [4.1, 0.1, 0.1], to: [4.1, 0.1, 0.1], diameter: 0.01}]"
 
+# debris as designers give it: fractions that sum to 1, one way to give the classes, drawn log
+# sizes with a range (docs/scenario.md)
+y grading 'flume: {on: true}
+spheres:
+  grading: {diameters: [0.02, 0.01], mass_fractions: [0.6, 0.5]}
+  volume: 0.002'
+expect grading-sum 2 "grading.yaml:3:[0-9]+: spheres.grading.mass_fractions sum to 1.1, not 1 \(within 1e-6\)" run "$tmp/grading.yaml" -o "$tmp/gr-out"
+[ ! -e "$tmp/gr-out" ] && pass=$((pass + 1)) || { echo "FAIL grading-sum left an output directory"; fail=$((fail + 1)); }
+y grading2 'flume: {on: true}
+spheres:
+  diameters: [0.02, 0.01]
+  grading: {diameters: [0.02, 0.01], mass_fractions: [0.5, 0.5]}
+  volume: 0.002'
+expect grading-and-diameters 2 "grading2.yaml:3:[0-9]+: spheres.diameters conflicts with spheres.grading" check "$tmp/grading2.yaml"
+y loglen 'flume: {on: true}
+logs: {k_w: 0.1, length: {type: lognormal, mean: 0.1, sd: 0.02, min: 0.12, max: 0.2}}'
+expect log-mean-outside 2 "loglen.yaml:2:[0-9]+: logs.length.mean = 0.1 m must lie in \[logs.length.min, logs.length.max\]" check "$tmp/loglen.yaml"
+
 # list lengths: one count per diameter
 y lists 'flume: {on: true}
 spheres: {diameters: [0.02, 0.01, 0.005], counts: [10, 20, 30, 40]}'

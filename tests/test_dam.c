@@ -461,7 +461,7 @@ static void member_loads(void)
     CHECK(st == SD_OK);
     sd_world_body(w, ball, &b);
     sd_pipe_loads L_;
-    CHECK(sd_pipe_loads_start(&L_, &s, &info, w, NULL) == 0);
+    CHECK(sd_pipe_loads_start(&L_, &s, &info, w, NULL, NULL) == 0);
     CHECK(L_.n == 1 && L_.p[0].kind == SD_PIPE_MEMBER);
     CHECK_NEAR(L_.p[0].span, L, 1e-15);
     sd_pipe_loads_step(&L_, w, sd_world_time(w), s.world.dt);
