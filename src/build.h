@@ -5,7 +5,9 @@
 #include "core/rng.h"
 #include "scenario.h"
 
-enum { SD_GROUP_BED = 0, SD_GROUP_WALLS = 1, SD_GROUP_END = 2, SD_GROUP_GATE = 3, SD_GROUP_BOX = 4 };
+/* The builders' wall groups. A mesh (scenario meshes:) joins the group of its role: bed, walls,
+ * or SD_GROUP_DAM, the dam body whose load the run reports (series.csv, summary.json). */
+enum { SD_GROUP_BED = 0, SD_GROUP_WALLS = 1, SD_GROUP_END = 2, SD_GROUP_GATE = 3, SD_GROUP_BOX = 4, SD_GROUP_DAM = 5 };
 /* The placement grid's cell (the pile and the flume's packing box), m. */
 #define SD_PLACER_CELL 0.025
 /* The most logs a scene holds (logs.count's range; logs.k_w may not ask for more). */

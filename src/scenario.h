@@ -29,6 +29,24 @@ typedef struct {
     int line;
 } sd_elem_def;
 
+/* A mesh's role: the wall group its triangles join (build.h: SD_GROUP_BED, _WALLS, _DAM). */
+enum { SD_MESH_BED = 0, SD_MESH_WALL = 1, SD_MESH_DAM = 2 };
+/* The most entries of meshes: */
+#define SD_MAX_MESHES 64
+
+/* One entry of meshes: (docs/meshes.md): an STL file's triangles, read and transformed when the
+ * scenario is loaded (corner' = R (scale corner) + translate, R = Rz Ry Rx of rotate_deg). */
+typedef struct {
+    char file[1024]; /* the path read: relative paths are taken from the scenario file's directory */
+    int role;        /* SD_MESH_* */
+    double scale;
+    sd_vec3 translate, rotate_deg;
+    sd_vec3 (*tri)[3]; /* the triangles, transformed, m */
+    int n_tri;
+    int binary; /* the file was binary STL */
+    int line;   /* the entry's line in the scenario */
+} sd_mesh_def;
+
 typedef struct sd_scenario {
     char path[1024];
     sd_world_def world;
@@ -37,6 +55,9 @@ typedef struct sd_scenario {
     /* explicit elements */
     sd_elem_def *elems;
     int n_elems;
+    /* STL meshes as fixed walls */
+    sd_mesh_def *meshes;
+    int n_meshes;
     /* box of triangles (open top) */
     int box_on;
     sd_vec3 box_min, box_max;
@@ -48,6 +69,7 @@ typedef struct sd_scenario {
     sd_vec3 pile_min, pile_max;
     /* flume (SPEC §8); on when flume.on */
     int flume_on;
+    int flume_bed; /* the flume's flat bed (0: a mesh with role bed replaces it) */
     double slope_deg, width, wall_height, x_gate, x_dam, x_end;
     int roughness_on;
     double rough_dmin, rough_dmax, rough_coverage;
