@@ -374,6 +374,18 @@ int sd_stl_read(const char *path, int max_triangles, sd_stl_mesh *m, char *msg, 
         return -1;
     }
     const size_t len = (size_t)st.st_size;
+    /* a binary file's count against the limit before its bytes are read */
+    unsigned char head[84];
+    if (len >= 84 && fread(head, 1, 84, f) == 84) {
+        const uint64_t count = get_u32(head + 80);
+        if (84 + 50 * count == len && count > (uint64_t)max_triangles) {
+            snprintf(msg, msglen, "%s: binary STL of %llu triangles, more than the limit of %d", path,
+                     (unsigned long long)count, max_triangles);
+            fclose(f);
+            return -1;
+        }
+    }
+    rewind(f);
     unsigned char *buf = malloc(len ? len : 1);
     if (!buf) {
         snprintf(msg, msglen, "%s: out of memory for its %zu bytes", path, len);
