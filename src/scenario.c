@@ -81,6 +81,10 @@ static const sd_param params[] = {
      "bed area fraction covered by roughness spheres (random placement stops there or when jammed)"},
     {"flume.pack_height", P_DOUBLE, OFF(pack_height), 0, 0, "m", 0, 100, 1,
      "top of the packing box above the bed (at most flume.wall_height)"},
+    {"flume.volume_factor", P_DOUBLE, OFF(volume_factor), 0, 0, "-", 0, 100, 1,
+     "scales the debris released at the gate: each spheres.counts entry and logs.count (when >= 0) is multiplied by "
+     "it and rounded when the scenario is loaded (logs from logs.k_w follow the spheres); the packing box must hold "
+     "the result"},
     {"spheres.diameters", P_DLIST, OFF(class_diam), OFF(n_classes), SD_MAX_CLASSES, "m", 0, 1, 1,
      "size classes (SPEC §8: 20, 15, 10, 5 mm)"},
     {"spheres.counts", P_ILIST, OFF(class_count), OFF(n_class_counts), SD_MAX_CLASSES, "-", 0, 1e7, 0,
@@ -201,6 +205,7 @@ void sd_scenario_default(sd_scenario *s)
     s->rough_dmax = 0.020;
     s->rough_coverage = 0.5;
     s->pack_height = 0.45;
+    s->volume_factor = 1.0;
     s->n_classes = 4;
     s->n_class_counts = 4;
     double d[4] = {0.020, 0.015, 0.010, 0.005};
@@ -1045,6 +1050,32 @@ static void validate(ectx *e, sd_scenario *s, const origin *at)
     }
 }
 
+/* flume.volume_factor: the counts of the debris released at the gate scaled, within their range */
+static void scale_volume(ectx *e, sd_scenario *s, const origin *at)
+{
+    const double f = s->volume_factor;
+    if (f == 1.0) return;
+    char a[32], b[200];
+    for (int k = 0; k < s->n_classes; k++) {
+        const double n = round(s->class_count[k] * f);
+        if (n > 1e7) {
+            snprintf(b, sizeof b, "makes spheres.counts[%d] = %.4g, more than 1e7", k, n);
+            report_keys(e, at, "flume.volume_factor", NULL, "flume.volume_factor = %s %s", num(a, f), b);
+            return;
+        }
+        s->class_count[k] = (int)n;
+    }
+    if (s->log_count > 0) {
+        const double n = round(s->log_count * f);
+        if (n > SD_MAX_LOGS) {
+            snprintf(b, sizeof b, "makes logs.count = %.4g, more than %d", n, SD_MAX_LOGS);
+            report_keys(e, at, "flume.volume_factor", NULL, "flume.volume_factor = %s %s", num(a, f), b);
+            return;
+        }
+        s->log_count = (int)n;
+    }
+}
+
 /* the scenario from its YAML text (text != NULL) or file */
 static int load(sd_scenario *s, const char *path, const char *text, const char *const *overrides, int n_overrides,
                 FILE *err)
@@ -1093,6 +1124,7 @@ static int load(sd_scenario *s, const char *path, const char *text, const char *
             s->world.gravity = v3(9.81 * sin(th), 0.0, -9.81 * cos(th));
         }
     }
+    if (!e.errors && !eo.errors) scale_volume(&e, s, at);
     if (!e.errors && !eo.errors) validate(&e, s, at);
     sd_yaml_free(root);
     int total = e.errors + eo.errors;

@@ -81,6 +81,7 @@ typedef struct sd_scenario {
     double log_kw; /* woody volume ratio; used when >= 0 and log_count < 0 */
     double log_diam, log_length, log_density;
     double pack_x0, pack_height; /* packing box: x from pack_x0 to x_gate, up to pack_height */
+    double volume_factor;        /* the counts above as loaded are the file's times this factor */
     /* grid dam */
     int dam_on;
     double pipe_diam, l_h, l_v, top_beam;
