@@ -241,6 +241,20 @@ int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double 
     return over ? -1 : 0;
 }
 
+double sd_build_placer_cell(const sd_scenario *s, int pile)
+{
+    double d = SD_PLACER_CELL;
+    if (pile) {
+        for (int k = 0; k < s->pile_n_classes && k < s->pile_n_counts; k++)
+            if (s->pile_count[k] > 0) d = fmax(d, s->pile_diam[k]);
+        return d;
+    }
+    for (int k = 0; k < s->n_classes && k < s->n_class_counts; k++)
+        if (s->class_count[k] > 0) d = fmax(d, s->class_diam[k]);
+    if (s->log_count != 0 && (s->log_count > 0 || s->log_kw > 0.0)) d = fmax(d, s->log_diam);
+    return d;
+}
+
 int sd_build_log_count(const sd_scenario *s)
 {
     if (s->log_count >= 0) return s->log_count;
@@ -422,7 +436,7 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
                         s->path, s->meshes[k].line, s->meshes[k].file, t, lo.x, hi.x, lo.y, hi.y, lo.z, hi.z);
                 return SD_ERR_ARG;
             }
-    sd_placer *pl = sd_placer_create(lo, hi, SD_PLACER_CELL);
+    sd_placer *pl = sd_placer_create(lo, hi, sd_build_placer_cell(s, 0));
     if (!pl) return SD_ERR_NOMEM;
     info->first_moving_gid = -1;
     int nlogs = sd_build_log_count(s);
@@ -522,7 +536,7 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
     sd_status st;
     if (s->box_on && (st = sd_build_box(w, s->box_min, s->box_max, SD_GROUP_BOX))) return st;
     if (s->pile_n_classes > 0) {
-        sd_placer *pl = sd_placer_create(s->pile_min, s->pile_max, SD_PLACER_CELL);
+        sd_placer *pl = sd_placer_create(s->pile_min, s->pile_max, sd_build_placer_cell(s, 1));
         if (!pl) return SD_ERR_NOMEM;
         for (int cl = 0; cl < s->pile_n_classes; cl++)
             for (int k = 0; k < s->pile_count[cl]; k++) {

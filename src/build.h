@@ -8,7 +8,7 @@
 /* The builders' wall groups. A mesh (scenario meshes:) joins the group of its role: bed, walls,
  * or SD_GROUP_DAM, the dam body whose load the run reports (series.csv, summary.json). */
 enum { SD_GROUP_BED = 0, SD_GROUP_WALLS = 1, SD_GROUP_END = 2, SD_GROUP_GATE = 3, SD_GROUP_BOX = 4, SD_GROUP_DAM = 5 };
-/* The placement grid's cell (the pile and the flume's packing box), m. */
+/* The placement grid's smallest cell (the pile and the flume's packing box), m. */
 #define SD_PLACER_CELL 0.025
 /* The most logs a scene holds (logs.count's range; logs.k_w may not ask for more). */
 #define SD_MAX_LOGS 1000000
@@ -53,6 +53,11 @@ sd_status sd_build_dam(sd_world *w, const sd_scenario *s, sd_build_info *info);
  * when l_h across the width needs more than SD_MAX_PIPES columns (the first SD_MAX_PIPES are
  * given). */
 int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double *beam_z, int *n_beam);
+/* The placement grid's cell for the flume's packing box (pile = 0) or the pile (pile = 1):
+ * SD_PLACER_CELL, or the largest diameter placed there when larger (at field scale, cells of
+ * 25 mm would number 1e8 in the reservoir and a 1 m boulder would cover 64,000 of them). The
+ * cell changes no placement: it only sorts the candidates of the exact overlap test. */
+double sd_build_placer_cell(const sd_scenario *s, int pile);
 /* Number of logs from logs.count or logs.k_w and the sphere volume (eq 54). */
 int sd_build_log_count(const sd_scenario *s);
 

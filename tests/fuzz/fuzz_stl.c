@@ -10,7 +10,7 @@
 #include "io_stl.h"
 
 #define SMALL_TRIANGLES 64
-#define SMALL_EXTENT 100.0 /* m */
+#define SMALL_EXTENT 10.0 /* m */
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -46,9 +46,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 ok = sd_world_add_triangle(w, m.tri[t][0], m.tri[t][1], m.tri[t][2], 0) >= 0;
             /* (the world refuses only what the reader drops: exact zero area) */
             if (!ok) abort();
+            /* a sphere on the first triangle, half its radius deep, of a size that keeps the
+             * grids to some thousands of cells (they grow with the extent over the sphere) */
             sd_sphere_def sp = sd_sphere_def_default();
-            sp.radius = 0.01;
-            sp.pos = v3_add(v3_scale(v3_add(v3_add(m.tri[0][0], m.tri[0][1]), m.tri[0][2]), 1.0 / 3.0), v3(0, 0, 0.005));
+            sp.radius = fmax(0.01, extent / 20.0);
+            const sd_vec3 c = v3_scale(v3_add(v3_add(m.tri[0][0], m.tri[0][1]), m.tri[0][2]), 1.0 / 3.0);
+            const sd_vec3 n = v3_cross(v3_sub(m.tri[0][1], m.tri[0][0]), v3_sub(m.tri[0][2], m.tri[0][0]));
+            sp.pos = v3_madd(c, n, 0.5 * sp.radius / v3_norm(n));
             if (sd_world_add_sphere(w, &sp) >= 0 && sd_world_check(w) == SD_OK)
                 for (int k = 0; k < 2 && sd_world_step(w) == SD_OK; k++) {
                 }
