@@ -228,6 +228,8 @@ int sd_run_begin(sd_run *r)
     c->n_dam_tri = 0;
     for (int k = 0; k < s->n_meshes; k++)
         if (s->meshes[k].role == SD_MESH_DAM) c->n_dam_tri += s->meshes[k].n_tri;
+    for (int k = 0; k < s->n_elems; k++) /* (explicit triangles may join the dam body) */
+        c->n_dam_tri += s->elems[k].type == 2 && s->elems[k].group == SD_GROUP_DAM;
     if (!c->restarted_from) {
         for (int i = 0; i < b->n; i++) {
             if (b->fixed[i]) continue;

@@ -47,6 +47,8 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c)
         bytes += 4.0 * (ceil(L / 0.25) + 2) * 512.0; /* the walls' triangles */
         duration = s->packing_time + s->flow_limit + s->capture_limit;
     }
+    for (int k = 0; k < s->n_meshes; k++) /* the meshes' triangles, as the flume's walls' */
+        bytes += s->meshes[k].n_tri * 512.0;
     bytes += bodies * SD_BYTES_PER_ELEMENT;
     c->bodies = bodies;
     c->bytes = bytes;
