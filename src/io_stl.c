@@ -293,6 +293,7 @@ int sd_stl_parse(const void *data, size_t len, const char *name, int max_triangl
     memset(m, 0, sizeof *m);
     const unsigned char *p = data;
     if (max_triangles > SD_STL_MAX_TRIANGLES) max_triangles = SD_STL_MAX_TRIANGLES;
+    if (max_triangles < 0) max_triangles = 0;
     if (len == 0) {
         snprintf(msg, msglen, "%s: empty file", name);
         return -1;
@@ -356,6 +357,8 @@ int sd_stl_parse(const void *data, size_t len, const char *name, int max_triangl
 int sd_stl_read(const char *path, int max_triangles, sd_stl_mesh *m, char *msg, size_t msglen)
 {
     memset(m, 0, sizeof *m);
+    if (max_triangles > SD_STL_MAX_TRIANGLES) max_triangles = SD_STL_MAX_TRIANGLES;
+    if (max_triangles < 0) max_triangles = 0;
     FILE *f = fopen(path, "rb");
     if (!f) {
         snprintf(msg, msglen, "%s: cannot open: %s", path, strerror(errno));
