@@ -11,7 +11,9 @@
  *     (a sphere on a slope rolls whatever the friction angle, tests/test_slope.c).
  *  5. A sphere thrown at a dam mesh (role dam) without gravity: the dam's impulse in summary.json
  *     equals the sphere's loss of momentum, m (v_in − v_out), and its peak force is that of the
- *     largest overlap. */
+ *     largest overlap.
+ *  6. A flume whose flat bed is replaced by a bed mesh (flume.bed: false) carries its debris on
+ *     it as on its own bed. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -350,11 +352,70 @@ static void test_dam_mesh(void)
     CHECK(system(cmd) == 0);
 }
 
+/* The flume with flume.bed: false and the plane of tests/data/plane.stl as its bed (role bed,
+ * group 0), against the same flume on its own flat bed (no roughness either way): 40 spheres
+ * dropped behind the gate come to rest on the mesh as on the flat bed (kinetic energy below
+ * 1e-6 J after 1 s), none below it, and the bed group carries their weight across the bed,
+ * Σ m g cos θ, in both to 3 % (the walls and the gate take a little by friction; the flat bed
+ * is 8 triangles, the mesh 2, so the bits differ). */
+static double flume_bed_load(int mesh, double *lowest)
+{
+    char yaml[1024];
+    snprintf(yaml, sizeof yaml,
+             "solver: {dt: 1.0e-5}\n"
+             "flume: {on: true, bed: %s, roughness: false, slope_deg: 15, width: 0.12, wall_height: 0.2,\n"
+             "        x_gate: 0.15, x_dam: 0.8, x_end: 0.9, pack_height: 0.16}\n"
+             "spheres: {diameters: [0.02, 0.01], counts: [10, 30], density: 1900}\n"
+             "logs: {count: 0}\n"
+             "dam: {on: false}\n"
+             "water: {on: false}\n"
+             "%s",
+             mesh ? "false" : "true", mesh ? "meshes:\n  - {file: plane.stl, role: bed, translate: [0.5, 0.25, 0]}\n" : "");
+    sd_scenario s;
+    CHECK(sd_scenario_load_string(&s, yaml, "tests/data/flume_bed.yaml", NULL, 0, stderr) == 0);
+    sd_world *w;
+    CHECK(sd_world_create(&s.world, &w) == SD_OK);
+    sd_build_info info;
+    CHECK(sd_build_scene(w, &s, &info, stderr) == SD_OK);
+    /* the bed (2 or 8 triangles), the side walls (4 quads each), the end wall, the gate */
+    CHECK(sd_world_triangle_count(w) == (mesh ? 2 : 8) + 16 + 2 + 2);
+    for (int k = 0; k < 100000; k++)
+        if (sd_world_step(w) != SD_OK) {
+            CHECK(0);
+            break;
+        }
+    CHECK(sd_world_kinetic_energy(w) < 1e-6);
+    const sd_body_view b = sd_world_bodies(w);
+    double weight = 0.0;
+    *lowest = 1.0;
+    for (int i = 0; i < b.n; i++) {
+        weight += b.mass[i] * G * cos(15.0 * M_PI / 180.0);
+        *lowest = fmin(*lowest, b.pos[i].z - b.radius[i]);
+    }
+    CHECK(b.n == 40);
+    const double f = -sd_world_group_force(w, SD_GROUP_BED).z;
+    printf("flume on %s: lowest point %.3g m, bed force z %.5g N, weight across the bed %.5g N\n",
+           mesh ? "a bed mesh" : "its flat bed", *lowest, f, weight);
+    CHECK_REL(f, weight, 0.03);
+    sd_world_destroy(w);
+    sd_scenario_free(&s);
+    return f;
+}
+
+static void test_flume_bed(void)
+{
+    double low_flat, low_mesh;
+    const double flat = flume_bed_load(0, &low_flat), mesh = flume_bed_load(1, &low_mesh);
+    CHECK(low_mesh > -1e-3 && low_flat > -1e-3); /* resting on the bed (µm in), not fallen through */
+    CHECK_REL(mesh, flat, 0.03);
+}
+
 int main(void)
 {
     test_reader();
     test_transform();
     test_incline();
     test_dam_mesh();
+    test_flume_bed();
     return check_report("test_meshes");
 }
