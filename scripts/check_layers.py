@@ -14,7 +14,7 @@ import subprocess
 import sys
 
 LAYERS = ["core", "geom", "engine", "driver", "app"]
-DRIVER = {"scenario", "scene_report", "pipe_loads", "debris", "yaml_tree", "build", "run", "run_ctx", "run_output", "run_state", "run_dir", "run_api", "trap", "water", "fluid",
+DRIVER = {"scenario", "io_stl", "scene_report", "pipe_loads", "debris", "yaml_tree", "build", "run", "run_ctx", "run_output", "run_state", "run_dir", "run_api", "trap", "water", "fluid",
           "io_vtk", "sweep", "sweep_file", "sweep_identity", "scenario_cost", "slabs"}
 
 

@@ -402,6 +402,21 @@ void sd_build_log_stats(const sd_scenario *s, sd_log_stats *st)
     }
 }
 
+double sd_build_placer_cell(const sd_scenario *s, int pile)
+{
+    double d = SD_PLACER_CELL;
+    if (pile) {
+        for (int k = 0; k < s->pile_n_classes && k < s->pile_n_counts; k++)
+            if (s->pile_count[k] > 0) d = fmax(d, s->pile_diam[k]);
+        return d;
+    }
+    for (int k = 0; k < s->n_classes && k < s->n_class_counts; k++)
+        if (s->class_count[k] > 0) d = fmax(d, s->class_diam[k]);
+    if (s->log_count != 0 && (s->log_count > 0 || s->log_kw > 0.0))
+        d = fmax(d, s->log_diam_dist.type != SD_SIZE_FIXED ? s->log_diam_dist.max : s->log_diam);
+    return d;
+}
+
 int sd_build_log_count(const sd_scenario *s)
 {
     if (s->log_count >= 0) return s->log_count;
@@ -448,13 +463,61 @@ sd_status sd_build_dam(sd_world *w, const sd_scenario *s, sd_build_info *info)
     return SD_OK;
 }
 
+/* Does the triangle meet the box [lo, hi]? The separating-axis test: the box's three axes, the
+ * triangle's normal, and the nine cross products of their edges. */
+static int tri_meets_box(const sd_vec3 tri[3], sd_vec3 lo, sd_vec3 hi)
+{
+    const sd_vec3 c = v3_scale(v3_add(lo, hi), 0.5), h = v3_scale(v3_sub(hi, lo), 0.5);
+    const sd_vec3 v[3] = {v3_sub(tri[0], c), v3_sub(tri[1], c), v3_sub(tri[2], c)};
+    const sd_vec3 e[3] = {v3_sub(v[1], v[0]), v3_sub(v[2], v[1]), v3_sub(v[0], v[2])};
+    const sd_vec3 box_axis[3] = {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)};
+    sd_vec3 axes[13];
+    int na = 0;
+    for (int i = 0; i < 3; i++)
+        axes[na++] = box_axis[i];
+    axes[na++] = v3_cross(e[0], e[1]);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            axes[na++] = v3_cross(box_axis[i], e[j]);
+    for (int k = 0; k < na; k++) {
+        const sd_vec3 a = axes[k];
+        if (!(v3_norm2(a) > 0.0)) continue; /* an edge along a box axis: covered by the others */
+        double pmin = v3_dot(v[0], a), pmax = pmin;
+        for (int i = 1; i < 3; i++) {
+            const double p = v3_dot(v[i], a);
+            pmin = fmin(pmin, p);
+            pmax = fmax(pmax, p);
+        }
+        const double r = h.x * fabs(a.x) + h.y * fabs(a.y) + h.z * fabs(a.z);
+        if (pmin > r || pmax < -r) return 0;
+    }
+    return 1;
+}
+
+/* The scenario's meshes as fixed walls, each in its role's group. */
+static sd_status build_meshes(sd_world *w, const sd_scenario *s, FILE *err)
+{
+    static const int group[3] = {SD_GROUP_BED, SD_GROUP_WALLS, SD_GROUP_DAM};
+    for (int k = 0; k < s->n_meshes; k++) {
+        const sd_mesh_def *m = &s->meshes[k];
+        for (int t = 0; t < m->n_tri; t++)
+            if (sd_world_add_triangle(w, m->tri[t][0], m->tri[t][1], m->tri[t][2], group[m->role]) < 0) {
+                fprintf(err, "%s:%d: meshes: %s: triangle %d rejected\n", s->path, m->line, m->file, t);
+                return SD_ERR_ARG;
+            }
+    }
+    return SD_OK;
+}
+
 static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *info, sd_rng *rng, FILE *err,
                              int with_dam)
 {
     double W = s->width, H = s->wall_height, L = s->x_end;
     sd_status st;
-    /* bed, side walls and end wall; triangles of at most 0.25 m along x */
-    if ((st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, W, 0), v3(0, W, 0), SD_GROUP_BED, 0.25))) return st;
+    /* bed (unless a mesh stands in for it), side walls and end wall; triangles of at most 0.25 m
+     * along x */
+    if (s->flume_bed && (st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, W, 0), v3(0, W, 0), SD_GROUP_BED, 0.25)))
+        return st;
     if ((st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, 0, H), v3(0, 0, H), SD_GROUP_WALLS, 0.25))) return st;
     if ((st = add_quad(w, v3(0, W, 0), v3(L, W, 0), v3(L, W, H), v3(0, W, H), SD_GROUP_WALLS, 0.25))) return st;
     if ((st = add_quad(w, v3(0, 0, 0), v3(0, W, 0), v3(0, W, H), v3(0, 0, H), SD_GROUP_END, 0))) return st;
@@ -509,7 +572,17 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
     /* packing box above the reservoir: logs first (hardest to place), then spheres large to small */
     double gap = 0.002;
     sd_vec3 lo = v3(gap, gap, s->rough_dmax * 0.5 + gap), hi = v3(s->x_gate - gap, W - gap, s->pack_height);
-    sd_placer *pl = sd_placer_create(lo, hi, SD_PLACER_CELL);
+    /* the placer knows nothing of the meshes: none may reach into the box */
+    for (int k = 0; k < s->n_meshes; k++)
+        for (int t = 0; t < s->meshes[k].n_tri; t++)
+            if (tri_meets_box(s->meshes[k].tri[t], lo, hi)) {
+                fprintf(err,
+                        "%s:%d: meshes: %s: its triangle %d reaches into the flume's packing box (x %g to %g, y %g to "
+                        "%g, z %g to %g m): move the mesh, or the gate (flume.x_gate) and flume.pack_height\n",
+                        s->path, s->meshes[k].line, s->meshes[k].file, t, lo.x, hi.x, lo.y, hi.y, lo.z, hi.z);
+                return SD_ERR_ARG;
+            }
+    sd_placer *pl = sd_placer_create(lo, hi, sd_build_placer_cell(s, 0));
     if (!pl) return SD_ERR_NOMEM;
     info->first_moving_gid = -1;
     int nlogs = sd_build_log_count(s);
@@ -613,7 +686,7 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
     sd_status st;
     if (s->box_on && (st = sd_build_box(w, s->box_min, s->box_max, SD_GROUP_BOX))) return st;
     if (s->pile_n_classes > 0) {
-        sd_placer *pl = sd_placer_create(s->pile_min, s->pile_max, SD_PLACER_CELL);
+        sd_placer *pl = sd_placer_create(s->pile_min, s->pile_max, sd_build_placer_cell(s, 1));
         if (!pl) return SD_ERR_NOMEM;
         for (int cl = 0; cl < s->pile_n_classes; cl++)
             for (int k = 0; k < s->pile_count[cl]; k++) {
@@ -639,5 +712,7 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
         sd_placer_destroy(pl);
     }
     if (s->flume_on && (st = build_flume(w, s, info, &rng, err, with_dam))) return st;
+    /* after everything else, so that a scene's other walls and bodies keep their order */
+    if ((st = build_meshes(w, s, err))) return st;
     return SD_OK;
 }

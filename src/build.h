@@ -6,8 +6,10 @@
 #include "debris.h"
 #include "scenario.h"
 
-enum { SD_GROUP_BED = 0, SD_GROUP_WALLS = 1, SD_GROUP_END = 2, SD_GROUP_GATE = 3, SD_GROUP_BOX = 4 };
-/* The placement grid's cell (the pile and the flume's packing box), m. */
+/* The builders' wall groups. A mesh (scenario meshes:) joins the group of its role: bed, walls,
+ * or SD_GROUP_DAM, the dam body whose load the run reports (series.csv, summary.json). */
+enum { SD_GROUP_BED = 0, SD_GROUP_WALLS = 1, SD_GROUP_END = 2, SD_GROUP_GATE = 3, SD_GROUP_BOX = 4, SD_GROUP_DAM = 5 };
+/* The placement grid's smallest cell (the pile and the flume's packing box), m. */
 #define SD_PLACER_CELL 0.025
 /* The most logs a scene holds (logs.count's range; logs.k_w may not ask for more). */
 #define SD_MAX_LOGS 1000000
@@ -86,6 +88,11 @@ int sd_build_dam_pipes(const sd_scenario *s, const sd_dam_grid *g, sd_dam_pipe *
 const char *sd_build_pipe_kind_name(int kind);
 /* The least distance between the segments p0–p1 and q0–q1 (either may be a point), m. */
 double sd_build_segment_distance(sd_vec3 p0, sd_vec3 p1, sd_vec3 q0, sd_vec3 q1);
+/* The placement grid's cell for the flume's packing box (pile = 0) or the pile (pile = 1):
+ * SD_PLACER_CELL, or the largest diameter placed there when larger (at field scale, cells of
+ * 25 mm would number 1e8 in the reservoir and a 1 m boulder would cover 64,000 of them). The
+ * cell changes no placement: it only sorts the candidates of the exact overlap test. */
+double sd_build_placer_cell(const sd_scenario *s, int pile);
 /* Number of logs from logs.count or logs.k_w and the sphere volume (eq 54). With sizes drawn
  * (logs.length.type or logs.diameter.type not fixed), the count from K_w takes the logs of the
  * logs' stream (debris.h) in order, as many as bring their volume nearest to eq 54's V_t. */

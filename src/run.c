@@ -91,6 +91,21 @@ static sd_status capture_start(run_ctx *c)
     return SD_OK;
 }
 
+/* The dam body of meshes after a step: its peak and impulses, every step as the pipes' (an impact
+ * lasts a few milliseconds, less than a log interval). This gathers the walls' loads every step,
+ * which only scenes with a dam mesh pay for (contact.c, sd_contact_gather). */
+static void dam_mesh_step(run_ctx *c, double interval)
+{
+    const sd_vec3 f = sd_world_group_force(c->w, SD_GROUP_DAM);
+    const double a = v3_norm(f);
+    if (a > c->mesh_dam_peak) {
+        c->mesh_dam_peak = a;
+        c->mesh_dam_t_peak = sd_world_time(c->w);
+    }
+    c->mesh_dam_impulse += a * interval;
+    c->mesh_dam_impulse_vec = v3_madd(c->mesh_dam_impulse_vec, f, interval);
+}
+
 /* ---------------------------------------------------------------- the run ---- */
 
 /* Build (or restart) the run's world and open its outputs; 0, or the exit code (1, 2) of a run
@@ -181,7 +196,8 @@ int sd_run_begin(sd_run *r)
     if (c->series && !c->restarted_from)
         fprintf(c->series,
                 "t,phase,front_x,volume_upstream_m3,kinetic_energy_J,contacts,dam_force_N,p_v,h_d,elements,passed,"
-                "roughness_force_x_N,roughness_force_z_N,bed_force_x_N,bed_force_z_N\n");
+                "roughness_force_x_N,roughness_force_z_N,bed_force_x_N,bed_force_z_N,dam_mesh_force_x_N,"
+                "dam_mesh_force_y_N,dam_mesh_force_z_N\n");
     if (s->n_traj > 0) {
         snprintf(path, sizeof path, "%s/trajectories.csv", c->dir);
         c->traj = fopen(path, mode);
@@ -212,6 +228,11 @@ int sd_run_begin(sd_run *r)
     }
     const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
     const double dt = s->world.dt;
+    c->n_dam_tri = 0;
+    for (int k = 0; k < s->n_meshes; k++)
+        if (s->meshes[k].role == SD_MESH_DAM) c->n_dam_tri += s->meshes[k].n_tri;
+    for (int k = 0; k < s->n_elems; k++) /* (explicit triangles may join the dam body) */
+        c->n_dam_tri += s->elems[k].type == 2 && s->elems[k].group == SD_GROUP_DAM;
     if (!c->restarted_from) {
         for (int i = 0; i < b->n; i++) {
             if (b->fixed[i]) continue;
@@ -315,6 +336,7 @@ int sd_run_step_once(sd_run *r)
     }
     long step = sd_world_step_count(c->w);
     if (c->loads.n) c->dam_force_now = sd_pipe_loads_step(&c->loads, c->w, sd_world_time(c->w), dt);
+    if (c->n_dam_tri) dam_mesh_step(c, dt);
     int next = c->phase;
     if (s->flume_on && step % 100 == 0) {
         int before = c->n_passed;

@@ -40,6 +40,11 @@ typedef struct {
     double progress_wall; /* when the last progress line was written (sd_now) */
     long progress_lines;  /* how many */
     double dam_force_now;
+    /* the dam body of meshes (role dam, group SD_GROUP_DAM): its triangles, the largest |F| of
+     * a step and when, and the impulses ∫|F| dt and ∫F dt */
+    int n_dam_tri;
+    double mesh_dam_peak, mesh_dam_t_peak, mesh_dam_impulse;
+    sd_vec3 mesh_dam_impulse_vec;
     double phase_end[4];
     int pack_at_rest;      /* the packing ended at rest (else at phases.packing_time) */
     double pack_speed[3];  /* the moving elements' speeds at the packing end: max, p99, mean, m/s */

@@ -38,10 +38,13 @@ void sd_output_series_row(run_ctx *c)
      * the bed's triangles */
     sd_vec3 rough, tri_bed;
     sd_trap_fixed_loads(c, &rough, &tri_bed);
-    fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d,%.6e,%.6e,%.6e,%.6e\n", sd_world_time(c->w),
-            sd_run_phase_name(c->phase), sd_world_body_count(c->w) ? sd_trap_front_x(c) : 0.0, up,
+    /* and on the dam body of meshes (role dam) */
+    const sd_vec3 mesh_dam = c->n_dam_tri ? sd_world_group_force(c->w, SD_GROUP_DAM) : v3(0.0, 0.0, 0.0);
+    fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e\n",
+            sd_world_time(c->w), sd_run_phase_name(c->phase), sd_world_body_count(c->w) ? sd_trap_front_x(c) : 0.0, up,
             sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w), c->dam_force_now, pv, c->h_d,
-            sd_world_body_count(c->w), c->n_passed, rough.x, rough.z, tri_bed.x, tri_bed.z);
+            sd_world_body_count(c->w), c->n_passed, rough.x, rough.z, tri_bed.x, tri_bed.z, mesh_dam.x, mesh_dam.y,
+            mesh_dam.z);
     if (ferror(c->series)) out_failed(c, "series.csv", errno);
 }
 
@@ -332,6 +335,24 @@ static int summary_pipes(run_ctx *c, cJSON *o)
     return bad;
 }
 
+/* the dam body of meshes (docs/meshes.md): its triangles, the peak of its load and when, the
+ * impulses, the load at the end */
+static int summary_dam_mesh(run_ctx *c, cJSON *o)
+{
+    cJSON *d = add_obj(o, "dam_mesh");
+    if (!d) return -1;
+    const sd_vec3 f = sd_world_group_force(c->w, SD_GROUP_DAM);
+    const double fe[3] = {f.x, f.y, f.z};
+    cJSON *fv = cJSON_CreateDoubleArray(fe, 3);
+    if (!fv || !cJSON_AddItemToObject(d, "final_force_N", fv)) {
+        cJSON_Delete(fv);
+        return -1;
+    }
+    return add_num(d, "triangles", c->n_dam_tri) | add_num(d, "peak_force_N", c->mesh_dam_peak) | add_num(d, "peak_time_s", c->mesh_dam_t_peak) |
+           add_num(d, "impulse_Ns", c->mesh_dam_impulse) | add_num(d, "impulse_x_Ns", c->mesh_dam_impulse_vec.x) |
+           add_num(d, "impulse_z_Ns", c->mesh_dam_impulse_vec.z);
+}
+
 /* where the debris ended (docs/loads.md): held at the dam, in the channel, passed; how the
  * capture ended */
 static int summary_debris(run_ctx *c, cJSON *o, sd_run_result *res)
@@ -402,6 +423,7 @@ char *sd_output_summary_text(run_ctx *c, sd_run_result *res, int status_code, co
     int bad = summary_run(c, o, status_code, status_msg) | summary_engine(c, o) | summary_elements(c, o);
     if (c->s->flume_on)
         bad |= summary_released(c, o) | summary_trap(c, o, res) | summary_debris(c, o, res) | summary_pipes(c, o);
+    if (c->n_dam_tri) bad |= summary_dam_mesh(c, o);
     cJSON *par = sd_scenario_params_json(c->s);
     if (!par || !cJSON_AddItemToObject(o, "parameters", par)) {
         cJSON_Delete(par);

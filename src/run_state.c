@@ -18,7 +18,7 @@
  * length, the time series' lengths and the VTK series so far. The output timers are the world's
  * step count (saved with the world). The build's random numbers are spent before the first
  * step; the driver draws none later, so there is no rng state to carry. */
-#define BLOB_MAGIC "SDRUNv4"
+#define BLOB_MAGIC "SDRUNv5"
 
 const char *sd_run_state_version(void) { return BLOB_MAGIC; }
 
@@ -65,6 +65,12 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series
     sd_bin_put_f64(b, c->last_cross_time);
     sd_bin_put_f64(b, c->ke_peak);
     sd_bin_put_f64(b, c->dam_force_now);
+    sd_bin_put_f64(b, c->mesh_dam_peak);
+    sd_bin_put_f64(b, c->mesh_dam_t_peak);
+    sd_bin_put_f64(b, c->mesh_dam_impulse);
+    sd_bin_put_f64(b, c->mesh_dam_impulse_vec.x);
+    sd_bin_put_f64(b, c->mesh_dam_impulse_vec.y);
+    sd_bin_put_f64(b, c->mesh_dam_impulse_vec.z);
     for (int k = 0; k < 4; k++)
         sd_bin_put_f64(b, c->phase_end[k]);
     for (int k = 0; k < 4; k++)
@@ -182,6 +188,12 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     c->last_cross_time = sd_bin_get_f64(&b);
     c->ke_peak = sd_bin_get_f64(&b);
     c->dam_force_now = sd_bin_get_f64(&b);
+    c->mesh_dam_peak = sd_bin_get_f64(&b);
+    c->mesh_dam_t_peak = sd_bin_get_f64(&b);
+    c->mesh_dam_impulse = sd_bin_get_f64(&b);
+    c->mesh_dam_impulse_vec.x = sd_bin_get_f64(&b);
+    c->mesh_dam_impulse_vec.y = sd_bin_get_f64(&b);
+    c->mesh_dam_impulse_vec.z = sd_bin_get_f64(&b);
     for (int k = 0; k < 4; k++)
         c->phase_end[k] = sd_bin_get_f64(&b);
     for (int k = 0; k < 4; k++)

@@ -14,6 +14,7 @@
 #include "core/nearest.h"
 #include "core/roff.h"
 #include "core/vmath.h"
+#include "io_stl.h"
 #include "yaml_tree.h"
 
 /* P_NUM_OR_OFF: a number, or false (its int flag at count_off: 1 for a number, 0 for false);
@@ -66,6 +67,9 @@ static const sd_param params[] = {
     {"pile.min", P_VEC3, OFF(pile_min), 0, 0, "m", -EXT, EXT, 0, "placement region lower corner"},
     {"pile.max", P_VEC3, OFF(pile_max), 0, 0, "m", -EXT, EXT, 0, "placement region upper corner"},
     {"flume.on", P_BOOL, OFF(flume_on), 0, 0, "-", 0, 1, 0, "build the paper's flume (SPEC §8)"},
+    {"flume.bed", P_BOOL, OFF(flume_bed), 0, 0, "-", 0, 1, 0,
+     "build the flume's flat bed (false: a mesh with role bed stands in for it; needs flume.roughness false; "
+     "docs/meshes.md)"},
     {"flume.slope_deg", P_DOUBLE, OFF(slope_deg), 0, 0, "deg", 0, 90, 0, "bed slope θ"},
     {"flume.width", P_DOUBLE, OFF(width), 0, 0, "m", 0, 100, 1, "flume width"},
     {"flume.wall_height", P_DOUBLE, OFF(wall_height), 0, 0, "m", 0, 100, 1, "side wall height"},
@@ -79,6 +83,10 @@ static const sd_param params[] = {
      "bed area fraction covered by roughness spheres (random placement stops there or when jammed)"},
     {"flume.pack_height", P_DOUBLE, OFF(pack_height), 0, 0, "m", 0, 100, 1,
      "top of the packing box above the bed (at most flume.wall_height)"},
+    {"flume.volume_factor", P_DOUBLE, OFF(volume_factor), 0, 0, "-", 0, 100, 1,
+     "scales the debris released at the gate: each spheres.counts entry and logs.count (when >= 0) is multiplied by "
+     "it and rounded when the scenario is loaded (logs from logs.k_w follow the spheres); the packing box must hold "
+     "the result"},
     {"spheres.diameters", P_DLIST, OFF(class_diam), OFF(n_classes), SD_MAX_CLASSES, "m", 0, 1, 1,
      "size classes (SPEC §8: 20, 15, 10, 5 mm)"},
     {"spheres.counts", P_ILIST, OFF(class_count), OFF(n_class_counts), SD_MAX_CLASSES, "-", 0, 1e7, 0,
@@ -256,6 +264,7 @@ void sd_scenario_default(sd_scenario *s)
     s->duration = 1.0;
     s->seed = 1;
     s->pile_density = 1900.0;
+    s->flume_bed = 1;
     s->slope_deg = 15.0;
     s->width = 0.3;
     s->wall_height = 0.5;
@@ -267,6 +276,7 @@ void sd_scenario_default(sd_scenario *s)
     s->rough_dmax = 0.020;
     s->rough_coverage = 0.5;
     s->pack_height = 0.45;
+    s->volume_factor = 1.0;
     s->n_classes = 4;
     s->n_class_counts = 4;
     double d[4] = {0.020, 0.015, 0.010, 0.005};
@@ -315,6 +325,11 @@ void sd_scenario_free(sd_scenario *s)
     free(s->elems);
     s->elems = NULL;
     s->n_elems = 0;
+    for (int k = 0; k < s->n_meshes; k++)
+        free(s->meshes[k].tri);
+    free(s->meshes);
+    s->meshes = NULL;
+    s->n_meshes = 0;
 }
 
 /* Where a parameter was last set: the file (or "--set") and the value's line and column; file
@@ -637,7 +652,7 @@ static int is_section(const char *prefix)
  * "elements"), else "" */
 static const char *did_you_mean(const char *key, char *buf, size_t n)
 {
-    const char *cand[2 * N_PARAMS + 1];
+    const char *cand[2 * N_PARAMS + 2];
     char sections[N_PARAMS][32];
     size_t nc = 0;
     for (int i = 0; i < N_PARAMS; i++) {
@@ -649,6 +664,7 @@ static const char *did_you_mean(const char *key, char *buf, size_t n)
         }
     }
     cand[nc++] = "elements";
+    cand[nc++] = "meshes";
     const char *best = sd_nearest_word(key, cand, nc);
     if (best)
         snprintf(buf, n, " (did you mean '%s'?)", best);
@@ -778,6 +794,168 @@ static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
     s->elems[s->n_elems++] = d;
 }
 
+/* meshes: entry keys */
+static const char *mesh_keys[] = {"file", "role", "scale", "translate", "rotate_deg", NULL};
+
+/* corner' = R (scale corner) + translate, R = Rz Ry Rx (degrees, about the origin) */
+static sd_vec3 mesh_transform(const sd_mesh_def *d, sd_vec3 p)
+{
+    const double deg = M_PI / 180.0;
+    const double cx = cos(d->rotate_deg.x * deg), sx = sin(d->rotate_deg.x * deg);
+    const double cy = cos(d->rotate_deg.y * deg), sy = sin(d->rotate_deg.y * deg);
+    const double cz = cos(d->rotate_deg.z * deg), sz = sin(d->rotate_deg.z * deg);
+    sd_vec3 q = v3_scale(p, d->scale);
+    q = v3(q.x, cx * q.y - sx * q.z, sx * q.y + cx * q.z);
+    q = v3(cy * q.x + sy * q.z, q.y, -sy * q.x + cy * q.z);
+    q = v3(cz * q.x - sz * q.y, sz * q.x + cz * q.y, q.z);
+    return v3_add(q, d->translate);
+}
+
+/* the scenario's meshes' triangles so far */
+static int mesh_triangles(const sd_scenario *s)
+{
+    int n = 0;
+    for (int k = 0; k < s->n_meshes; k++)
+        n += s->meshes[k].n_tri;
+    return n;
+}
+
+static void parse_mesh(ectx *e, sd_scenario *s, const sd_ynode *n)
+{
+    sd_mesh_def d;
+    memset(&d, 0, sizeof d);
+    d.line = n->line;
+    d.role = -1;
+    d.scale = 1.0;
+    if (n->kind != SD_Y_MAP) {
+        report(e, n->line, n->col, "meshes: each mesh is a mapping with a file and a role%s%s", "", "");
+        return;
+    }
+    if (s->n_meshes >= SD_MAX_MESHES) {
+        report(e, n->line, n->col, "meshes: more than %s meshes%s", "64", "");
+        return;
+    }
+    const int errs = e->errors;
+    const sd_ynode *file = NULL;
+    for (int i = 0; i < n->n; i++) {
+        const char *k = n->keys[i];
+        const sd_ynode *v = n->items[i];
+        int known = 0;
+        for (int j = 0; mesh_keys[j]; j++)
+            known |= !strcmp(mesh_keys[j], k);
+        if (!known) {
+            const char *near = sd_nearest_word(k, mesh_keys, sizeof mesh_keys / sizeof mesh_keys[0] - 1);
+            char hint[80] = "";
+            if (near) snprintf(hint, sizeof hint, " (did you mean '%s'?)", near);
+            report(e, n->key_line[i], n->key_col[i], "meshes: unknown key '%s'%s", k, hint);
+        } else if (!strcmp(k, "file")) {
+            if (v->kind != SD_Y_SCALAR || !v->value[0])
+                report(e, v->line, v->col, "meshes.file: expected a file name%s%s", "", "");
+            else
+                file = v;
+        } else if (!strcmp(k, "role")) {
+            static const char *const roles[] = {"bed", "wall", "dam"};
+            for (int r = 0; r < 3 && v->kind == SD_Y_SCALAR; r++)
+                if (!strcmp(v->value, roles[r])) d.role = r;
+            if (d.role < 0) report(e, v->line, v->col, "meshes.role: expected one of: %s%s", "bed, wall, dam", "");
+        } else if (!strcmp(k, "scale")) {
+            if (v->kind != SD_Y_SCALAR || parse_double(v->value, &d.scale) || !(d.scale > 0) || d.scale > 1e4)
+                report(e, v->line, v->col, "meshes.scale: expected a number > 0 and <= 1e4%s%s", "", "");
+        } else {
+            sd_vec3 vv = v3(0, 0, 0);
+            const double lim = k[0] == 't' ? EXT : 360.0; /* translate, m; rotate_deg */
+            if (parse_vec3_node(v, &vv) || !(fmax(fmax(fabs(vv.x), fabs(vv.y)), fabs(vv.z)) <= lim))
+                report(e, v->line, v->col, "meshes.%s: expected [x, y, z], each within %s", k,
+                       k[0] == 't' ? "1e4 m" : "360 degrees");
+            else if (k[0] == 't')
+                d.translate = vv;
+            else
+                d.rotate_deg = vv;
+        }
+    }
+    if (e->errors != errs) return;
+    if (!file || d.role < 0) {
+        report(e, n->line, n->col, "meshes: each mesh needs %s%s", !file ? "a file" : "a role (bed, wall or dam)", "");
+        return;
+    }
+    /* relative to the scenario file's directory */
+    const char *slash = strrchr(s->path, '/');
+    int len;
+    if (file->value[0] == '/' || !slash)
+        len = snprintf(d.file, sizeof d.file, "%s", file->value);
+    else
+        len = snprintf(d.file, sizeof d.file, "%.*s/%s", (int)(slash - s->path), s->path, file->value);
+    if (len < 0 || (size_t)len >= sizeof d.file) {
+        report(e, file->line, file->col, "meshes.file: the path is too long%s%s", "", "");
+        return;
+    }
+    char msg[1536];
+    sd_stl_mesh m;
+    if (sd_stl_read(d.file, SD_STL_MAX_TRIANGLES - mesh_triangles(s), &m, msg, sizeof msg)) {
+        report(e, file->line, file->col, "meshes.file: %s%s", msg, "");
+        return;
+    }
+    d.binary = m.binary;
+    /* transformed; a corner beyond the scene's extent is an error, a triangle that the scale
+     * made too small to weld (an edge under 1 µm, walls.c) is dropped with the file's own */
+    int small = 0, first_small = 0;
+    for (int k = 0; k < m.n; k++) {
+        sd_vec3 t[3];
+        for (int v = 0; v < 3; v++) {
+            t[v] = mesh_transform(&d, m.tri[k][v]);
+            if (!(fmax(fmax(fabs(t[v].x), fabs(t[v].y)), fabs(t[v].z)) <= EXT)) {
+                char where[64], a[1400];
+                snprintf(a, sizeof a, "%s, %s: a corner at (%g, %g, %g) m, beyond the 1e4 m a scene may span", d.file,
+                         sd_stl_where(&m, k, where, sizeof where), t[v].x, t[v].y, t[v].z);
+                report(e, file->line, file->col, "meshes: %s%s", a, " (see meshes.scale and translate)");
+                sd_stl_free(&m);
+                free(d.tri);
+                return;
+            }
+        }
+        const double l2 =
+            fmin(fmin(v3_norm2(v3_sub(t[1], t[0])), v3_norm2(v3_sub(t[2], t[0]))), v3_norm2(v3_sub(t[2], t[1])));
+        if (!(l2 >= 1e-12) || !(v3_norm(v3_cross(v3_sub(t[1], t[0]), v3_sub(t[2], t[0]))) > 0.0)) {
+            if (!small++) first_small = k;
+            continue;
+        }
+        if (!d.tri) {
+            d.tri = malloc((size_t)m.n * sizeof *d.tri);
+            if (!d.tri) {
+                report(e, file->line, file->col, "meshes.file: %s: out of memory%s", d.file, "");
+                sd_stl_free(&m);
+                return;
+            }
+        }
+        memcpy(d.tri[d.n_tri++], t, sizeof t);
+    }
+    char where[64], a[1400];
+    if (m.dropped) {
+        snprintf(a, sizeof a, "%s: %d triangles of zero area dropped (the first at %s %d)", d.file, m.dropped,
+                 m.binary ? "triangle index" : "line", m.first_dropped);
+        fprintf(e->err, "%s:%d:%d: meshes.file: warning: %s\n", e->file, file->line, file->col, a);
+    }
+    if (small) {
+        snprintf(a, sizeof a, "%s: %d triangles with an edge under 1 micrometre after the scale dropped (the first at %s)",
+                 d.file, small, sd_stl_where(&m, first_small, where, sizeof where));
+        fprintf(e->err, "%s:%d:%d: meshes.file: warning: %s\n", e->file, file->line, file->col, a);
+    }
+    sd_stl_free(&m);
+    if (d.n_tri == 0) {
+        report(e, file->line, file->col, "meshes.file: %s: no triangle is left%s", d.file, "");
+        free(d.tri);
+        return;
+    }
+    sd_mesh_def *nm = realloc(s->meshes, (size_t)(s->n_meshes + 1) * sizeof *nm);
+    if (!nm) {
+        report(e, n->line, n->col, "out of memory%s%s", "", "");
+        free(d.tri);
+        return;
+    }
+    s->meshes = nm;
+    s->meshes[s->n_meshes++] = d;
+}
+
 static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefix)
 {
     for (int i = 0; i < map->n; i++) {
@@ -787,6 +965,15 @@ static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefi
         else
             snprintf(key, sizeof key, "%s", map->keys[i]);
         const sd_ynode *v = map->items[i];
+        if (!*prefix && !strcmp(key, "meshes")) {
+            if (v->kind != SD_Y_SEQ) {
+                report(e, v->line, v->col, "meshes: expected a list%s%s", "", "");
+                continue;
+            }
+            for (int k = 0; k < v->n; k++)
+                parse_mesh(e, s, v->items[k]);
+            continue;
+        }
         if (!*prefix && !strcmp(key, "elements")) {
             if (v->kind != SD_Y_SEQ) {
                 report(e, v->line, v->col, "elements: expected a list%s%s", "", "");
@@ -1334,6 +1521,18 @@ static void validate(ectx *e, sd_scenario *s, origin *at)
             }
         }
         if (s->dam_on && e->errors == 0) check_dam(e, at, s);
+        if (!s->flume_bed) {
+            int bed_mesh = 0;
+            for (int k = 0; k < s->n_meshes; k++)
+                bed_mesh |= s->meshes[k].role == SD_MESH_BED;
+            if (s->roughness_on)
+                report_keys(e, at, "flume.bed", NULL,
+                            "flume.bed = false leaves the bed roughness without its bed: set flume.roughness: false%s%s",
+                            "", "");
+            else if (!bed_mesh)
+                report_keys(e, at, "flume.bed", NULL,
+                            "flume.bed = false needs a mesh with role: bed in its place (meshes:)%s%s", "", "");
+        }
     }
     /* smallest moving mass → stability of Δt */
     double mmin = INFINITY;
@@ -1364,6 +1563,32 @@ static void validate(ectx *e, sd_scenario *s, origin *at)
                      dt_max, s->world.contact.k_n, s->world.contact.k_s, mmin);
             report_keys(e, at, "solver.dt", NULL, "solver.dt = %s is unstable: it must be at most %s", a, b);
         }
+    }
+}
+
+/* flume.volume_factor: the counts of the debris released at the gate scaled, within their range */
+static void scale_volume(ectx *e, sd_scenario *s, const origin *at)
+{
+    const double f = s->volume_factor;
+    if (f == 1.0) return;
+    char a[32], b[200];
+    for (int k = 0; k < s->n_classes; k++) {
+        const double n = round(s->class_count[k] * f);
+        if (n > 1e7) {
+            snprintf(b, sizeof b, "makes spheres.counts[%d] = %.4g, more than 1e7", k, n);
+            report_keys(e, at, "flume.volume_factor", NULL, "flume.volume_factor = %s %s", num(a, f), b);
+            return;
+        }
+        s->class_count[k] = (int)n;
+    }
+    if (s->log_count > 0) {
+        const double n = round(s->log_count * f);
+        if (n > SD_MAX_LOGS) {
+            snprintf(b, sizeof b, "makes logs.count = %.4g, more than %d", n, SD_MAX_LOGS);
+            report_keys(e, at, "flume.volume_factor", NULL, "flume.volume_factor = %s %s", num(a, f), b);
+            return;
+        }
+        s->log_count = (int)n;
     }
 }
 
@@ -1415,6 +1640,7 @@ static int load(sd_scenario *s, const char *path, const char *text, const char *
             s->world.gravity = v3(9.81 * sin(th), 0.0, -9.81 * cos(th));
         }
     }
+    if (!e.errors && !eo.errors) scale_volume(&e, s, at);
     if (!e.errors && !eo.errors) validate(&e, s, at);
     sd_yaml_free(root);
     int total = e.errors + eo.errors;
@@ -1744,6 +1970,14 @@ static uint64_t scenario_hash(const sd_scenario *s, int with_capture)
         h = sd_hash_bytes(h, &d->tag, sizeof d->tag);
         h = sd_hash_bytes(h, &d->group, sizeof d->group);
         h = sd_hash_bytes(h, d->v, sizeof d->v);
+    }
+    /* the meshes as read and transformed */
+    h = sd_hash_bytes(h, &s->n_meshes, sizeof s->n_meshes);
+    for (int k = 0; k < s->n_meshes; k++) {
+        const sd_mesh_def *m = &s->meshes[k];
+        h = sd_hash_bytes(h, &m->role, sizeof m->role);
+        h = sd_hash_bytes(h, &m->n_tri, sizeof m->n_tri);
+        h = sd_hash_bytes(h, m->tri, (size_t)m->n_tri * sizeof *m->tri);
     }
     /* fields outside the table that the scene uses */
     h = sd_hash_bytes(h, &s->world.parallel_min, sizeof s->world.parallel_min);

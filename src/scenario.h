@@ -39,6 +39,23 @@ typedef struct {
     double diameter;  /* m */
     int line, col;    /* where it was given (the file's, or the --set's) */
 } sd_dam_member;
+/* A mesh's role: the wall group its triangles join (build.h: SD_GROUP_BED, _WALLS, _DAM). */
+enum { SD_MESH_BED = 0, SD_MESH_WALL = 1, SD_MESH_DAM = 2 };
+/* The most entries of meshes: */
+#define SD_MAX_MESHES 64
+
+/* One entry of meshes: (docs/meshes.md): an STL file's triangles, read and transformed when the
+ * scenario is loaded (corner' = R (scale corner) + translate, R = Rz Ry Rx of rotate_deg). */
+typedef struct {
+    char file[1024]; /* the path read: relative paths are taken from the scenario file's directory */
+    int role;        /* SD_MESH_* */
+    double scale;
+    sd_vec3 translate, rotate_deg;
+    sd_vec3 (*tri)[3]; /* the triangles, transformed, m */
+    int n_tri;
+    int binary; /* the file was binary STL */
+    int line;   /* the entry's line in the scenario */
+} sd_mesh_def;
 
 typedef struct sd_scenario {
     char path[1024];
@@ -48,6 +65,9 @@ typedef struct sd_scenario {
     /* explicit elements */
     sd_elem_def *elems;
     int n_elems;
+    /* STL meshes as fixed walls */
+    sd_mesh_def *meshes;
+    int n_meshes;
     /* box of triangles (open top) */
     int box_on;
     sd_vec3 box_min, box_max;
@@ -59,6 +79,7 @@ typedef struct sd_scenario {
     sd_vec3 pile_min, pile_max;
     /* flume (SPEC §8); on when flume.on */
     int flume_on;
+    int flume_bed; /* the flume's flat bed (0: a mesh with role bed replaces it) */
     double slope_deg, width, wall_height, x_gate, x_dam, x_end;
     int roughness_on;
     double rough_dmin, rough_dmax, rough_coverage;
@@ -80,6 +101,7 @@ typedef struct sd_scenario {
     double log_kw; /* woody volume ratio; used when >= 0 and log_count < 0 */
     double log_diam, log_length, log_density;
     double pack_x0, pack_height; /* packing box: x from pack_x0 to x_gate, up to pack_height */
+    double volume_factor;        /* the counts above as loaded are the file's times this factor */
     /* grid dam: the columns from one of dam.columns, dam.n_columns, dam.l_h (in that order of
      * precedence; the loader lets only one be given); the beams from one of dam.beams (every
      * beam), dam.beam_axes, dam.beam_gaps, dam.l_v (each with the top beam unless

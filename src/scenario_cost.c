@@ -22,7 +22,7 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c)
     if (s->pile_n_classes > 0) {
         for (int k = 0; k < s->pile_n_classes && k < s->pile_n_counts; k++)
             bodies += s->pile_count[k];
-        bytes += placer_bytes(s->pile_min, s->pile_max, SD_PLACER_CELL);
+        bytes += placer_bytes(s->pile_min, s->pile_max, sd_build_placer_cell(s, 1));
     }
     double duration = s->duration, flow_duration = 0.0;
     if (s->flume_on) {
@@ -43,11 +43,13 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c)
             bytes += placer_bytes(v3(0, 0, -dm), v3(L, W, dm), dm);
         }
         if (s->dam_on) bodies += 2 * SD_MAX_PIPES + s->n_members;
-        bytes += placer_bytes(v3(0, 0, 0), v3(s->x_gate, W, s->pack_height), SD_PLACER_CELL);
+        bytes += placer_bytes(v3(0, 0, 0), v3(s->x_gate, W, s->pack_height), sd_build_placer_cell(s, 0));
         bytes += 4.0 * (ceil(L / 0.25) + 2) * 512.0; /* the walls' triangles */
         flow_duration = s->packing_time + s->flow_limit;
         duration = flow_duration + s->capture_limit;
     }
+    for (int k = 0; k < s->n_meshes; k++) /* the meshes' triangles, as the flume's walls' */
+        bytes += s->meshes[k].n_tri * 512.0;
     bytes += bodies * SD_BYTES_PER_ELEMENT;
     c->bodies = bodies;
     c->bytes = bytes;

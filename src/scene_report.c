@@ -62,6 +62,18 @@ void sd_scene_report(FILE *f, const sd_scenario *s, const sd_build_info *info, i
 {
     fprintf(f, "scene: %d elements (%d moving), %d triangles\n", n_bodies, n_bodies - info->n_rough - info->n_pipes,
             n_triangles);
+    static const char *const role[3] = {"bed", "wall", "dam"};
+    for (int k = 0; k < s->n_meshes; k++) {
+        const sd_mesh_def *m = &s->meshes[k];
+        sd_vec3 lo = m->tri[0][0], hi = lo;
+        for (int t = 0; t < m->n_tri; t++)
+            for (int v = 0; v < 3; v++) {
+                lo = v3(fmin(lo.x, m->tri[t][v].x), fmin(lo.y, m->tri[t][v].y), fmin(lo.z, m->tri[t][v].z));
+                hi = v3(fmax(hi.x, m->tri[t][v].x), fmax(hi.y, m->tri[t][v].y), fmax(hi.z, m->tri[t][v].z));
+            }
+        fprintf(f, "mesh %s (%s STL), role %s: %d triangles, x %.4g to %.4g, y %.4g to %.4g, z %.4g to %.4g m\n",
+                m->file, m->binary ? "binary" : "ASCII", role[m->role], m->n_tri, lo.x, hi.x, lo.y, hi.y, lo.z, hi.z);
+    }
     if (!s->flume_on) return;
     fprintf(f, "flume: %.3f m to the end of the bed, %.3f m wide, walls %.3f m high, slope %.1f deg; gate at x = %.3f m, "
                "dam face at x = %.3f m\n",

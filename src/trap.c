@@ -137,7 +137,7 @@ void sd_trap_fixed_loads(const run_ctx *c, sd_vec3 *roughness, sd_vec3 *bed)
         if (!b->fixed[i]) r = v3_sub(r, b->force[i]);
         else if (b->shape[i] == SD_SHAPE_CYLINDER)
             r = v3_sub(r, b->force[i]);
-    int top = SD_GROUP_BOX; /* the builders' groups, and the scenario's triangles' */
+    int top = SD_GROUP_DAM; /* the builders' groups (the meshes' too), and the scenario's triangles' */
     for (int k = 0; k < c->s->n_elems; k++)
         if (c->s->elems[k].type == 2 && c->s->elems[k].group > top) top = c->s->elems[k].group;
     for (int g = 0; g <= top; g++)
