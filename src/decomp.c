@@ -230,6 +230,36 @@ sd_status sd_world_set_clock(sd_world *w, double time, long step)
     return SD_OK;
 }
 
+sd_status sd_world_set_next_gid(sd_world *w, int next_gid)
+{
+    if (!w || next_gid < 0 || next_gid == INT32_MAX) return SD_ERR_ARG;
+    for (int i = 0; i < w->b.n; i++)
+        if (w->b.gid[i] >= next_gid) return SD_ERR_ARG;
+    if (next_gid > w->next_gid) {
+        if (sd_grow((void **)&w->gid_map, &w->gid_cap, next_gid + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+        for (int g = w->next_gid; g < next_gid; g++)
+            w->gid_map[g] = -1;
+    }
+    w->next_gid = next_gid;
+    return SD_OK;
+}
+
+int sd_world_next_gid(const sd_world *w) { return w ? w->next_gid : 0; }
+
+sd_status sd_world_body_wall_forces(const sd_world *w, int group, sd_vec3 *out)
+{
+    if (!w || (w->b.n > 0 && !out)) return SD_ERR_ARG;
+    for (int i = 0; i < w->b.n; i++)
+        out[i] = v3(0.0, 0.0, 0.0);
+    if (w->keys_collected) return SD_OK; /* (no pairs since the store changed: no loads either) */
+    for (int k = 0; k < w->bt.n; k++) {
+        const int t = w->bt.p[k].b;
+        if (!w->bt.active[k] || !w->w.active[t] || (group >= 0 && w->w.group[t] != group)) continue;
+        out[w->bt.p[k].a] = v3_add(out[w->bt.p[k].a], w->bt.out[k]);
+    }
+    return SD_OK;
+}
+
 /* ---- the canonical hash ---- */
 
 typedef struct {

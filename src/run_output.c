@@ -40,7 +40,7 @@ void sd_output_series_row(run_ctx *c)
     sd_trap_fixed_loads(c, &rough, &tri_bed);
     fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d,%.6e,%.6e,%.6e,%.6e\n", sd_world_time(c->w),
             sd_run_phase_name(c->phase), sd_world_body_count(c->w) ? sd_trap_front_x(c) : 0.0, up,
-            sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w), c->dam_force_now, pv, c->h_d,
+            sd_world_kinetic_energy(c->w), c->sys ? c->sys_contacts : sd_world_contact_count(c->w), c->dam_force_now, pv, c->h_d,
             sd_world_body_count(c->w), c->n_passed, rough.x, rough.z, tri_bed.x, tri_bed.z);
     if (ferror(c->series)) out_failed(c, "series.csv", errno);
 }
@@ -61,7 +61,7 @@ void sd_output_traj(run_ctx *c)
 
 int sd_output_snapshot(run_ctx *c, const char *name)
 {
-    if (!c->s->vtk_on) return 0;
+    if (!c->s->vtk_on || c->rank != 0) return 0; /* (a decomposed run's rank 0 writes the whole copy) */
     const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
     size_t cap = (size_t)(b->n + 1);
     sd_vec3 *pos = malloc(cap * sizeof(sd_vec3)), *vel = malloc(cap * sizeof(sd_vec3)),
@@ -115,7 +115,7 @@ int sd_output_snapshot(run_ctx *c, const char *name)
 
 int sd_output_walls(run_ctx *c)
 {
-    if (!c->s->vtk_on) return 0;
+    if (!c->s->vtk_on || c->rank != 0) return 0;
     const int nt = sd_world_triangle_count(c->w);
     char f[1200];
     snprintf(f, sizeof f, "%s/walls.vtp", c->dir);
@@ -180,7 +180,7 @@ static cJSON *add_obj(cJSON *o, const char *key) { return cJSON_AddObjectToObjec
 static int summary_run(run_ctx *c, cJSON *o, int status_code, const char *status_msg)
 {
     char hash[32];
-    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)sd_world_state_hash(c->w));
+    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)(c->sys ? c->sys_hash : sd_world_state_hash(c->w)));
     int bad = add_str(o, "scenario", c->s->path) | add_str(o, "status", status_msg) |
               add_num(o, "exit_code", status_code) | add_num(o, "simulated_time_s", sd_world_time(c->w)) |
               add_num(o, "steps", (double)sd_world_step_count(c->w)) | add_num(o, "wall_time_s", sd_now() - c->wall0) |
@@ -358,6 +358,10 @@ int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const cha
     if (!text) {
         errno = ENOMEM;
         return -1;
+    }
+    if (c->rank != 0) { /* (a decomposed run's rank 0 writes it) */
+        cJSON_free(text);
+        return 0;
     }
     FILE *f = fopen(tmp, "w");
     if (!f) {
