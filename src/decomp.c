@@ -83,7 +83,22 @@ sd_status sd_world_body_put(sd_world *w, const void *rec, int ghost)
     if (gid < w->next_gid && w->gid_map[gid] >= 0) {
         const int i = w->gid_map[gid];
         const uint8_t shape = b->shape[i], fixed = b->fixed[i];
+        const sd_vec3 p0 = b->pos[i];
+        const sd_quat q0 = b->quat[i];
         sd_bodies_set_record(b, i, rec);
+        if (ghost) {
+            /* how far its surface moved: the centre's move, and for a log the attitude's
+             * (|R' - R| <= 2 |q' - q| for unit quaternions) times its bounding radius; the
+             * near pairs of this world are remade once its drift passes half their skin, as
+             * after a move of its own bodies (a near list left as it was would miss a contact
+             * this ghost closed: another world's own body would miss its force) */
+            const sd_quat dq = {b->quat[i].w - q0.w, b->quat[i].x - q0.x, b->quat[i].y - q0.y, b->quat[i].z - q0.z};
+            double d = v3_norm(v3_sub(b->pos[i], p0));
+            if (shape != SD_SHAPE_SPHERE)
+                d += 2.0 * sqrt(dq.w * dq.w + dq.x * dq.x + dq.y * dq.y + dq.z * dq.z) * b->bound_r[i];
+            d *= 1.0 + 1e-9;
+            if (!(d <= w->ghost_drift)) w->ghost_drift = isfinite(d) ? d : INFINITY;
+        }
         if (b->shape[i] != shape || b->fixed[i] != fixed) {
             b->shape[i] = shape, b->fixed[i] = fixed;
             return SD_ERR_ARG;

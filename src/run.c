@@ -461,6 +461,7 @@ void sd_run_end(sd_run *r)
             r->msg = sd_status_message(st);
         }
         c->sys_hash = sd_run_slabs_hash(c);
+        sd_run_slabs_stats(c);
     }
     if (res->stopped_at_flow_end) {
         /* a shared flow: its outputs end at the checkpoint, which the branches continue */

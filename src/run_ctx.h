@@ -21,6 +21,16 @@ static inline const char *sd_run_phase_name(int phase)
     return names[phase];
 }
 
+/* a decomposed run's numbers at its end, summed over the ranks */
+typedef struct {
+    int ranks;
+    double ghost_width;                 /* m */
+    long redistributions, migrations;   /* the pairs remade (each with the bodies' new owners), owners changed */
+    long boundary_moves;                /* inner boundaries moved (by the counted work) */
+    double bytes;                       /* records and springs sent between the ranks */
+    double bounds[65];                  /* the inner boundaries at the end, x, m: bounds[1 .. ranks-1] */
+} sd_run_slabs_report;
+
 typedef struct {
     const sd_scenario *s;
     const sd_run_opts *o;
@@ -79,6 +89,7 @@ typedef struct {
     int sys_front_stale;    /* bodies removed since: the front is the copy's */
     uint64_t sys_hash;      /* the state hash at the end */
     int sys_flags;          /* SD_AGREE_* as agreed after the last step */
+    sd_run_slabs_report sys_report; /* at the end, for summary.json */
 } run_ctx;
 
 /* what a checkpoint's driver state holds beside run_ctx's fields */
@@ -215,6 +226,8 @@ int sd_run_slabs_agree(run_ctx *c, int v);
 sd_status sd_run_slabs_whole(run_ctx *c, sd_world **out);
 /* sd_world_state_hash_canonical of the whole system (on every rank) */
 uint64_t sd_run_slabs_hash(run_ctx *c);
+/* c->sys_report filled */
+void sd_run_slabs_stats(run_ctx *c);
 
 /* run_dir.c: a run's output directory */
 /* Create dir and make it this run's. A directory holding files already is refused (-1, why in

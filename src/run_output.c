@@ -194,22 +194,34 @@ static int summary_run(run_ctx *c, cJSON *o, int status_code, const char *status
 static int summary_engine(run_ctx *c, cJSON *o)
 {
     static const char *const simd_names[] = {"auto", "scalar", "avx2", "avx512"};
-    int bad = add_str(o, "simd_kernels", simd_names[sd_world_simd_level(c->w)]);
+    const sd_world *sw = sd_run_slabs_world(c); /* (a decomposed run: rank 0's slab) */
+    int bad = add_str(o, "simd_kernels", simd_names[sd_world_simd_level(sw)]);
     /* the front prefetch and, in auto mode, the last trial's verdict and its time on over off */
     double pf_ratio = 0.0;
     int pf_trial = -1;
-    const int pf_on = sd_world_prefetch(c->w, &pf_trial, &pf_ratio) == SD_PREFETCH_ON;
+    const int pf_on = sd_world_prefetch(sw, &pf_trial, &pf_ratio) == SD_PREFETCH_ON;
     char pf[64];
-    if (sd_world_definition(c->w)->tuning.prefetch != SD_PREFETCH_AUTO)
+    if (sd_world_definition(sw)->tuning.prefetch != SD_PREFETCH_AUTO)
         snprintf(pf, sizeof pf, "%s (set)", pf_on ? "on" : "off");
     else if (pf_trial < 0)
         snprintf(pf, sizeof pf, "%s (no trial)", pf_on ? "on" : "off");
     else
         snprintf(pf, sizeof pf, "%s (trial: on/off %.3f)", pf_trial ? "on" : "off", pf_ratio);
     bad |= add_str(o, "front_prefetch", pf);
-    const sd_world_timers tm = sd_world_get_timers(c->w);
+    const sd_world_timers tm = sd_world_get_timers(sw);
     cJSON *t = add_obj(o, "timers_s");
     if (!t) return -1;
+    if (c->sys) { /* the slabs (docs/decomposition.md); the timers are rank 0's */
+        const sd_run_slabs_report *r = &c->sys_report;
+        cJSON *d = add_obj(o, "decomposition");
+        cJSON *xb = cJSON_AddArrayToObject(d, "bounds_m");
+        if (!d || !xb) return -1;
+        for (int k = 1; k < r->ranks; k++)
+            if (!cJSON_AddItemToArray(xb, cJSON_CreateNumber(r->bounds[k]))) bad = 1;
+        bad |= add_num(d, "ranks", r->ranks) | add_num(d, "ghost_width_m", r->ghost_width) |
+               add_num(d, "redistributions", (double)r->redistributions) | add_num(d, "migrations", (double)r->migrations) |
+               add_num(d, "boundary_moves", (double)r->boundary_moves) | add_num(d, "bytes_sent", r->bytes);
+    }
     return bad | add_num(t, "rebuild", tm.rebuild) | add_num(t, "contacts", tm.contacts) | add_num(t, "moves", tm.moves) |
            add_num(t, "checks", tm.checks) | add_num(t, "rebuilds", (double)tm.rebuilds);
 }

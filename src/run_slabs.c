@@ -465,3 +465,28 @@ uint64_t sd_run_slabs_hash(run_ctx *c)
     free(sp);
     return h;
 }
+
+void sd_run_slabs_stats(run_ctx *c)
+{
+    struct sd_run_slabs *x = c->sys;
+    const sd_run_comm *cm = x->cm;
+    const sd_slabs_stats *t = sd_slab_stats(x->slab);
+    double mine[4] = {(double)t->migrations, (double)t->boundary_moves, t->bytes, (double)t->rebuilds};
+    double *all = malloc((size_t)cm->size * sizeof mine);
+    sd_run_slabs_report *r = &c->sys_report;
+    memset(r, 0, sizeof *r);
+    r->ranks = cm->size;
+    r->ghost_width = sd_slab_ghost_width(x->slab);
+    sd_slab_bounds(x->slab, r->bounds);
+    if (!all || cm->allgather(cm->ctx, mine, sizeof mine, all)) {
+        free(all);
+        return;
+    }
+    for (int k = 0; k < cm->size; k++) {
+        r->migrations += (long)all[4 * k];
+        r->bytes += all[4 * k + 2];
+    }
+    r->boundary_moves = (long)mine[1]; /* (the same on every rank) */
+    r->redistributions = (long)mine[3];
+    free(all);
+}
