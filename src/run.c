@@ -350,8 +350,7 @@ int sd_run_step_once(sd_run *r)
     if (c->loads.n) c->dam_force_now = sd_pipe_loads_step(&c->loads, c->w, sd_world_time(c->w), dt);
     /* a decomposed run's copy of the system, refreshed where the driver reads it */
     if (c->sys && ((s->flume_on && step % 100 == 0) || step % r->log_every == 0 ||
-                   (s->n_traj > 0 && step % r->traj_every == 0) || (r->snap_every && step % r->snap_every == 0) ||
-                   (r->ckpt_every && step % r->ckpt_every == 0)) &&
+                   (s->n_traj > 0 && step % r->traj_every == 0) || (r->snap_every && step % r->snap_every == 0)) &&
         (st = sd_run_slabs_sync(c))) {
         r->code = 1;
         r->msg = sd_status_message(st);
@@ -432,8 +431,15 @@ int sd_run_step_once(sd_run *r)
     if (step % r->progress_every == 0) sd_output_progress(c, r->t_end_est);
     /* after this step's outputs: a restart from it goes on at the top of the loop, as this run
      * does */
-    if (r->ckpt_every && step % r->ckpt_every == 0 && c->phase != PH_DONE && !sd_output_failed(c)) {
-        st = sd_run_state_periodic(c);
+    if (r->ckpt_every && step % r->ckpt_every == 0) c->ckpt_pending = 1;
+    /* a decomposed run's checkpoint waits for a step after which the pairs are remade (one comes
+     * within t_reset): a restart remakes them at its first step, so it goes on as this run does */
+    const int ckpt_now = c->ckpt_pending && (!c->sys || sd_run_slabs_rebuilds_next(c));
+    const int out_failed = c->sys ? (c->sys_flags & SD_AGREE_OUTPUT) != 0 : sd_output_failed(c) != 0;
+    if (ckpt_now && c->phase != PH_DONE && !out_failed) {
+        c->ckpt_pending = 0;
+        st = c->sys && c->sys_synced_step != step ? sd_run_slabs_sync(c) : SD_OK;
+        if (!st) st = sd_run_state_periodic(c);
         if (c->sys) st = (sd_status)sd_run_slabs_agree(c, st);
         if (st) {
             fprintf(o->err, "%s/checkpoint_%010ld.ckpt: cannot write: %s; the checkpoints written before are kept\n",

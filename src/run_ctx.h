@@ -89,6 +89,8 @@ typedef struct {
     int sys_front_stale;    /* bodies removed since: the front is the copy's */
     uint64_t sys_hash;      /* the state hash at the end */
     int sys_flags;          /* SD_AGREE_* as agreed after the last step */
+    long sys_synced_step;   /* the step of the last refresh */
+    int ckpt_pending;       /* a periodic checkpoint is due (a decomposed run's waits for a rebuild) */
     sd_run_slabs_report sys_report; /* at the end, for summary.json */
 } run_ctx;
 
@@ -219,6 +221,8 @@ sd_status sd_run_slabs_remove(run_ctx *c, int gid);
 sd_status sd_run_slabs_add(run_ctx *c, int gid);
 sd_status sd_run_slabs_group_active(run_ctx *c, int group, int active);
 void sd_run_slabs_request_rebuild(run_ctx *c);
+/* whether the next step remakes the pairs (the same answer on every rank) */
+int sd_run_slabs_rebuilds_next(const run_ctx *c);
 /* the largest v over the ranks */
 int sd_run_slabs_agree(run_ctx *c, int v);
 /* the whole system as one world with its springs, for a checkpoint (on rank 0; NULL elsewhere,

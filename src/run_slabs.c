@@ -342,6 +342,7 @@ sd_status sd_run_slabs_sync(run_ctx *c)
     free(wg);
     free(seen);
     free(all);
+    c->sys_synced_step = sd_world_step_count(c->w);
     c->sys_contacts = total;
     c->sys_wall = ws;
     c->sys_bed = bs;
@@ -374,6 +375,8 @@ sd_status sd_run_slabs_group_active(run_ctx *c, int group, int active)
 }
 
 void sd_run_slabs_request_rebuild(run_ctx *c) { c->sys->force_any = 1; }
+
+int sd_run_slabs_rebuilds_next(const run_ctx *c) { return c->sys->any || c->sys->force_any; }
 
 /* every rank's owned records and springs, on every rank */
 static sd_status gather_state(struct sd_run_slabs *x, int with_recs, char **recs, int *nb, sd_spring **sp, int *ns)

@@ -339,12 +339,12 @@ static sd_status write_world(run_ctx *c, const sd_world *w, const char *path, in
 
 static sd_status write_state(run_ctx *c, const char *path, int kind)
 {
-    /* a decomposed run: the whole system gathered into one world (rank 0 writes it); the pairs
-     * are remade at the next step, as a restart from the file remakes them at its first */
+    /* a decomposed run: the whole system gathered into one world (rank 0 writes it), taken
+     * where the pairs are remade at the next step (run.c), as a restart from it remakes them at
+     * its first */
     sd_world *whole = NULL;
     if (c->sys) {
         sd_status st = sd_run_slabs_whole(c, &whole);
-        sd_run_slabs_request_rebuild(c);
         if (st || c->rank != 0) {
             sd_world_destroy(whole);
             return st;
@@ -374,6 +374,7 @@ static sd_status write_world(run_ctx *c, const sd_world *w, const char *path, in
 sd_status sd_run_state_checkpoint(run_ctx *c, const char *path)
 {
     c->flow_ckpt_written = 1; /* (a restart from it does not write it again) */
+    if (c->sys) sd_run_slabs_request_rebuild(c); /* (the dam's pipes go in next anyway, if any) */
     return write_state(c, path, SD_CKPT_FLOW_END);
 }
 
