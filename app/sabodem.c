@@ -397,6 +397,7 @@ int main(int argc, char **argv)
         }
         printf("%s: ok (%d elements, %d triangles; estimate: %.3g MB, %.4g steps, about %.3g s on one core)\n", file,
                n, t, cost.bytes / 1e6, cost.steps, cost.seconds);
+        sd_scenario_print_time(stdout, &s, &cost);
         sd_scene_report(stdout, &s, &info, n, t);
         int code = 0;
         if (png) code = draw_design(&s, w, png);

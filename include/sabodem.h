@@ -307,6 +307,9 @@ sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *e
  * names the file and what is wrong. */
 sd_status sd_checkpoint_read(const char *path, sd_world **out, void **extra, size_t *extra_len, char *msg,
                              size_t msglen);
+/* The format version of the checkpoints this library writes and reads (a file of another is
+ * refused). */
+uint32_t sd_checkpoint_version(void);
 
 /* Wall time of the step's stages (seconds, summed over the steps). */
 typedef struct {

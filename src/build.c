@@ -210,35 +210,125 @@ int sd_placer_try_cylinder(sd_placer *p, sd_rng *rng, double r, double hl, doubl
     return 0;
 }
 
-int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double *beam_z, int *n_beam)
+/* ascending, in place (a handful of values) */
+static void sort_up(double *v, int n)
 {
-    double d = s->pipe_diam, r = 0.5 * d;
+    for (int i = 1; i < n; i++)
+        for (int j = i; j > 0 && v[j - 1] > v[j]; j--) {
+            const double t = v[j];
+            v[j] = v[j - 1];
+            v[j - 1] = t;
+        }
+}
+
+int sd_build_dam_grid(const sd_scenario *s, sd_dam_grid *g)
+{
+    memset(g, 0, sizeof *g);
+    const double d = s->pipe_diam, r = 0.5 * d;
     int over = 0;
     if (s->n_columns > 0) {
-        *n_col = s->n_columns;
+        g->n_col = s->n_columns;
         for (int k = 0; k < s->n_columns; k++)
-            col_y[k] = s->column_y[k];
+            g->col_y[k] = s->column_y[k];
+        sort_up(g->col_y, g->n_col);
+    } else if (s->column_count >= 0) {
+        /* n columns centred, every clear gap the same, the two at the walls too: the pitch is
+         * (W + d)/(n + 1), each gap (W - n d)/(n + 1) */
+        const int n = s->column_count < SD_MAX_PIPES ? s->column_count : SD_MAX_PIPES;
+        const double pitch = (s->width + d) / (n + 1);
+        g->n_col = n;
+        for (int k = 0; k < n; k++)
+            g->col_y[k] = 0.5 * s->width + (k - 0.5 * (n - 1)) * pitch;
     } else {
         /* columns centred across the width, clear spacing l_h, wall gaps no wider than l_h */
         double pitch = s->l_h + d;
         const double nd = ceil((s->width - s->l_h) / pitch - 1e-9);
         int n = nd < 1 ? 1 : nd > SD_MAX_PIPES ? SD_MAX_PIPES : (int)nd;
         if (nd > SD_MAX_PIPES) over = 1;
-        *n_col = n;
+        g->n_col = n;
         for (int k = 0; k < n; k++)
-            col_y[k] = 0.5 * s->width + (k - 0.5 * (n - 1)) * pitch;
+            g->col_y[k] = 0.5 * s->width + (k - 0.5 * (n - 1)) * pitch;
     }
+    int n = 0;
     if (s->n_beams > 0) {
-        *n_beam = s->n_beams;
+        /* every beam, the top one among them, by its underside */
         for (int k = 0; k < s->n_beams; k++)
-            beam_z[k] = s->beam_z[k] + r;
+            g->beam_z[n++] = s->beam_z[k] + r;
     } else {
-        int n = 0;
-        if (s->l_v > 0.0 && s->l_v + d < s->top_beam) beam_z[n++] = s->l_v + r;
-        beam_z[n++] = s->top_beam + r;
-        *n_beam = n;
+        if (s->n_beam_axes > 0) {
+            for (int k = 0; k < s->n_beam_axes; k++)
+                g->beam_z[n++] = s->beam_axis_z[k];
+        } else if (s->n_beam_gaps > 0) {
+            double below = 0.0; /* the bed, then each beam's top */
+            for (int k = 0; k < s->n_beam_gaps; k++) {
+                g->beam_z[n++] = below + s->beam_gap[k] + r;
+                below = g->beam_z[n - 1] + r;
+            }
+        } else if (s->l_v > 0.0)
+            g->beam_z[n++] = s->l_v + r;
+        sort_up(g->beam_z, n);
+        if (s->top_beam_on) {
+            g->beam_z[n++] = s->top_beam + r;
+            g->top_beam = 1;
+        }
     }
+    if (s->n_beams > 0) sort_up(g->beam_z, n);
+    g->n_beam = n;
+    double top = -INFINITY;
+    for (int k = 0; k < n; k++)
+        top = fmax(top, g->beam_z[k] + r);
+    g->col_top = n > 0 ? top : s->wall_height;
     return over ? -1 : 0;
+}
+
+int sd_build_dam_pipes(const sd_scenario *s, const sd_dam_grid *g, sd_dam_pipe *out)
+{
+    const double W = s->width, r = 0.5 * s->pipe_diam, xc = s->x_dam + r, top = g->col_top;
+    int n = 0;
+    for (int k = 0; k < g->n_col; k++)
+        out[n++] = (sd_dam_pipe){SD_PIPE_COLUMN, g->col_y[k],      v3(xc, g->col_y[k], 0.0), v3(xc, g->col_y[k], top),
+                                 v3(xc, g->col_y[k], 0.5 * top), v3(0, 0, 1),           top, r};
+    for (int k = 0; k < g->n_beam; k++)
+        out[n++] = (sd_dam_pipe){SD_PIPE_BEAM, g->beam_z[k],       v3(xc, 0.0, g->beam_z[k]), v3(xc, W, g->beam_z[k]),
+                                 v3(xc, 0.5 * W, g->beam_z[k]), v3(0, 1, 0),            W,   r};
+    for (int k = 0; k < s->n_members; k++) {
+        const sd_dam_member *m = &s->members[k];
+        const sd_vec3 ax = v3_sub(m->to, m->from);
+        out[n++] = (sd_dam_pipe){SD_PIPE_MEMBER, k, m->from, m->to, v3_scale(v3_add(m->from, m->to), 0.5), ax,
+                                 v3_norm(ax), 0.5 * m->diameter};
+    }
+    return n;
+}
+
+const char *sd_build_pipe_kind_name(int kind)
+{
+    return kind == SD_PIPE_COLUMN ? "column" : kind == SD_PIPE_BEAM ? "beam" : "member";
+}
+
+/* the point of segment a + t (b - a), t in [0, 1], nearest p, as its distance */
+static double point_segment_distance(sd_vec3 p, sd_vec3 a, sd_vec3 b)
+{
+    const sd_vec3 ab = v3_sub(b, a);
+    const double l2 = v3_dot(ab, ab);
+    const double t = l2 > 0.0 ? fmin(fmax(v3_dot(v3_sub(p, a), ab) / l2, 0.0), 1.0) : 0.0;
+    return v3_norm(v3_sub(p, v3_madd(a, ab, t)));
+}
+
+double sd_build_segment_distance(sd_vec3 p0, sd_vec3 p1, sd_vec3 q0, sd_vec3 q1)
+{
+    /* the least distance is at an end of one of them, or between two inner points where the
+     * common normal of the two lines meets both segments */
+    double best = fmin(fmin(point_segment_distance(p0, q0, q1), point_segment_distance(p1, q0, q1)),
+                       fmin(point_segment_distance(q0, p0, p1), point_segment_distance(q1, p0, p1)));
+    const sd_vec3 u = v3_sub(p1, p0), v = v3_sub(q1, q0), w0 = v3_sub(p0, q0);
+    const double a = v3_dot(u, u), b = v3_dot(u, v), c = v3_dot(v, v), dd = v3_dot(u, w0), e = v3_dot(v, w0);
+    const double den = a * c - b * b;
+    if (den > 1e-12 * a * c) { /* not parallel: the lines' closest points */
+        const double sp = (b * e - c * dd) / den, tq = (a * e - b * dd) / den;
+        if (sp > 0.0 && sp < 1.0 && tq > 0.0 && tq < 1.0)
+            best = fmin(best, v3_norm(v3_sub(v3_madd(p0, u, sp), v3_madd(q0, v, tq))));
+    }
+    return best;
 }
 
 int sd_build_log_count(const sd_scenario *s)
@@ -264,41 +354,24 @@ int sd_build_log_count(const sd_scenario *s)
 sd_status sd_build_dam(sd_world *w, const sd_scenario *s, sd_build_info *info)
 {
     if (!s->dam_on) return SD_OK;
-    double W = s->width;
-    double col_y[SD_MAX_PIPES], beam_z[SD_MAX_PIPES];
-    int nc, nb;
-    sd_build_dam_layout(s, col_y, &nc, beam_z, &nb);
-    double r = 0.5 * s->pipe_diam, xc = s->x_dam + r;
-    double top = beam_z[nb - 1] + r;
-    for (int k = 0; k < nc; k++) {
+    sd_dam_grid g;
+    sd_build_dam_grid(s, &g);
+    sd_dam_pipe pipe[SD_MAX_DAM_PIPES];
+    const int n = sd_build_dam_pipes(s, &g, pipe);
+    for (int k = 0; k < n && info->n_pipes < SD_MAX_DAM_PIPES; k++) {
         sd_cylinder_def c = sd_cylinder_def_default();
-        c.pos = v3(xc, col_y[k], 0.5 * top);
-        c.axis = v3(0, 0, 1);
-        c.radius = r;
-        c.length = top;
+        c.pos = pipe[k].centre;
+        c.axis = pipe[k].axis;
+        c.radius = pipe[k].radius;
+        c.length = pipe[k].length;
         c.density = 7850.0;
         c.fixed = 1;
         c.tag = SD_TAG_PIPE;
-        int g = sd_world_add_cylinder(w, &c);
-        if (g < 0) return (sd_status)-g;
-        info->pipe_gid[info->n_pipes] = g;
-        info->pipe_is_column[info->n_pipes] = 1;
-        info->pipe_coord[info->n_pipes++] = col_y[k];
-    }
-    for (int k = 0; k < nb; k++) {
-        sd_cylinder_def c = sd_cylinder_def_default();
-        c.pos = v3(xc, 0.5 * W, beam_z[k]);
-        c.axis = v3(0, 1, 0);
-        c.radius = r;
-        c.length = W;
-        c.density = 7850.0;
-        c.fixed = 1;
-        c.tag = SD_TAG_PIPE;
-        int g = sd_world_add_cylinder(w, &c);
-        if (g < 0) return (sd_status)-g;
-        info->pipe_gid[info->n_pipes] = g;
-        info->pipe_is_column[info->n_pipes] = 0;
-        info->pipe_coord[info->n_pipes++] = beam_z[k];
+        int gid = sd_world_add_cylinder(w, &c);
+        if (gid < 0) return (sd_status)-gid;
+        info->pipe_gid[info->n_pipes] = gid;
+        info->pipe_kind[info->n_pipes] = pipe[k].kind;
+        info->pipe_coord[info->n_pipes++] = pipe[k].coord;
     }
     return SD_OK;
 }

@@ -37,7 +37,7 @@ static int attach(sd_pipe_loads *L, const sd_scenario *s, const sd_build_info *i
     for (int k = 0; k < L->n; k++) {
         sd_pipe_load *p = &L->p[k];
         p->gid = info->pipe_gid[k];
-        p->is_column = info->pipe_is_column[k];
+        p->kind = info->pipe_kind[k];
         p->coord = info->pipe_coord[k];
         sd_body_state st;
         p->span = sd_world_body(w, p->gid, &st) ? 0.0 : st.length;
@@ -70,8 +70,9 @@ static double pipe_moment(const sd_pipe_loads *L, const sd_pipe_load *p, const s
     double fa;
     const double sc = sd_pipe_resultant_position(st->axis, st->force, st->torque, &fa);
     /* the pipe's start: the bed for a column, the wall at y = 0 for a beam (the axis may point
-     * either way along it) */
-    const double along = p->is_column ? st->axis.z : st->axis.y;
+     * either way along them), a member's first end (its axis was made from the first end to the
+     * second, build.c) */
+    const double along = p->kind == SD_PIPE_COLUMN ? st->axis.z : p->kind == SD_PIPE_BEAM ? st->axis.y : 1.0;
     const double x = 0.5 * p->span + (along >= 0.0 ? sc : -sc);
     *s_from_start = fmin(fmax(x, 0.0), p->span);
     return sd_pipe_bending_moment(L->support, p->span, *s_from_start, fa);
@@ -130,9 +131,13 @@ int sd_pipe_loads_sample(sd_pipe_loads *L, const sd_world *w, double t)
         const double f = v3_norm(st.force);
         if (f > 0.0) m = pipe_moment(L, p, &st, &s);
         if (push_sample(p, st.force)) bad = 1;
-        if (L->csv)
-            fprintf(L->csv, "%.6f,%d,%s,%.6f,%.6e,%.6e,%.6e,%.6e,%.6e,%.5f,%.6e\n", t, k, p->is_column ? "column" : "beam",
-                    p->coord, st.force.x, st.force.y, st.force.z, f, p->interval_peak, s, m);
+        if (L->csv) {
+            /* a member has no one axis coordinate: its ends are in summary.json */
+            fprintf(L->csv, "%.6f,%d,%s,", t, k, sd_build_pipe_kind_name(p->kind));
+            if (p->kind != SD_PIPE_MEMBER) fprintf(L->csv, "%.6f", p->coord);
+            fprintf(L->csv, ",%.6e,%.6e,%.6e,%.6e,%.6e,%.5f,%.6e\n", st.force.x, st.force.y, st.force.z, f,
+                    p->interval_peak, s, m);
+        }
         p->interval_peak = 0.0;
     }
     if (L->csv && ferror(L->csv)) bad = 1;
@@ -201,7 +206,7 @@ int sd_pipe_loads_unpack(sd_pipe_loads *L, sd_bin_reader *r)
 {
     memset(L, 0, sizeof *L);
     L->n = sd_bin_get_i32(r);
-    if (L->n < 0 || L->n > 2 * SD_MAX_PIPES) {
+    if (L->n < 0 || L->n > SD_MAX_DAM_PIPES) {
         L->n = 0;
         return -1;
     }

@@ -14,9 +14,10 @@
 enum { SD_SUPPORT_SIMPLE = 0, SD_SUPPORT_FIXED = 1 };
 
 typedef struct {
-    int gid, is_column;
-    double coord;  /* a column's axis y, a beam's axis z, m */
-    double span;   /* its length between supports, m: bed to top for a column, wall to wall for a beam */
+    int gid, kind; /* kind: SD_PIPE_* (build.h) */
+    double coord;  /* a column's axis y, a beam's axis z, m; a member's index in dam.members */
+    double span;   /* its length between supports, m: bed to top for a column, wall to wall for a beam, end to
+                      end for a member */
     /* over the capture */
     double peak, t_peak;          /* largest |F| of one step, N, and when, s */
     double impulse;               /* ∫|F| dt, N s */
@@ -34,7 +35,7 @@ typedef struct {
 
 typedef struct {
     int n;
-    sd_pipe_load p[2 * SD_MAX_PIPES];
+    sd_pipe_load p[SD_MAX_DAM_PIPES];
     int support;                  /* SD_SUPPORT_* */
     int window;                   /* the end window in samples: phases.quiet_time / output.log_interval */
     FILE *csv;                    /* pipes.csv, NULL when not written */

@@ -88,5 +88,8 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
  * checksum, driver state, scenario fingerprint); 0 if so, else -1 and msg names the file and
  * what is wrong. */
 int sd_run_check_restart(const sd_scenario *s, const char *path, char *msg, size_t msglen);
+/* The version of the driver's state that a run's checkpoints carry ("SDRUNv3"): a checkpoint
+ * of another is refused. */
+const char *sd_run_state_version(void);
 
 #endif

@@ -175,6 +175,14 @@ void sd_output_progress(run_ctx *c, double t_end_est)
 static int add_num(cJSON *o, const char *key, double v) { return cJSON_AddNumberToObject(o, key, v) ? 0 : -1; }
 static int add_str(cJSON *o, const char *key, const char *v) { return cJSON_AddStringToObject(o, key, v) ? 0 : -1; }
 static cJSON *add_obj(cJSON *o, const char *key) { return cJSON_AddObjectToObject(o, key); }
+static int add_xyz(cJSON *o, const char *key, sd_vec3 v)
+{
+    const double xyz[3] = {v.x, v.y, v.z};
+    cJSON *a = cJSON_CreateDoubleArray(xyz, 3);
+    if (a && cJSON_AddItemToObject(o, key, a)) return 0;
+    cJSON_Delete(a);
+    return -1;
+}
 
 /* what ran, how it ended, how long it took */
 static int summary_run(run_ctx *c, cJSON *o, int status_code, const char *status_msg)
@@ -313,8 +321,15 @@ static int summary_pipes(run_ctx *c, cJSON *o)
             cJSON_Delete(sv);
             return -1;
         }
-        bad |= add_num(p, "gid", L->gid) | add_str(p, "kind", L->is_column ? "column" : "beam") |
-               add_num(p, L->is_column ? "y_m" : "z_axis_m", L->coord) | add_num(p, "span_m", L->span) |
+        bad |= add_num(p, "gid", L->gid) | add_str(p, "kind", sd_build_pipe_kind_name(L->kind));
+        if (L->kind == SD_PIPE_MEMBER) {
+            /* (the run-driver state's reader made sure the index names a member) */
+            const sd_dam_member *m = &c->s->members[(int)L->coord];
+            bad |= add_num(p, "member", L->coord) | add_xyz(p, "from_m", m->from) | add_xyz(p, "to_m", m->to) |
+                   add_num(p, "diameter_m", m->diameter);
+        } else
+            bad |= add_num(p, L->kind == SD_PIPE_COLUMN ? "y_m" : "z_axis_m", L->coord);
+        bad |= add_num(p, "span_m", L->span) |
                add_num(p, "peak_force_N", L->peak) | add_num(p, "peak_time_s", L->t_peak) |
                add_num(p, "impulse_Ns", L->impulse) | add_num(p, "impulse_x_Ns", L->impulse_vec.x) |
                add_num(p, "peak_moment_Nm", L->m_peak) | add_num(p, "peak_moment_time_s", L->t_m_peak) |

@@ -20,6 +20,8 @@
  * step; the driver draws none later, so there is no rng state to carry. */
 #define BLOB_MAGIC "SDRUNv3"
 
+const char *sd_run_state_version(void) { return BLOB_MAGIC; }
+
 static long file_len(FILE *f)
 {
     if (!f || fflush(f)) return -1;
@@ -47,7 +49,7 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series
     sd_bin_put_i32(b, c->info.n_pipes);
     for (int k = 0; k < c->info.n_pipes; k++) {
         sd_bin_put_i32(b, c->info.pipe_gid[k]);
-        sd_bin_put_i32(b, c->info.pipe_is_column[k]);
+        sd_bin_put_i32(b, c->info.pipe_kind[k]);
         sd_bin_put_f64(b, c->info.pipe_coord[k]);
     }
     sd_pipe_loads_pack(&c->loads, b);
@@ -120,7 +122,8 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     if (r->kind == SD_CKPT_FLOW_END && branch != sd_scenario_branch_hash(c->s)) {
         snprintf(msg, msglen,
                  "was written for other scenario parameters than %s (a restart may change only the capture-phase keys:"
-                 " dam.l_h, dam.l_v, dam.top_beam, dam.columns, dam.beams, phases.capture_limit, phases.quiet_time,"
+                 " dam.l_h, dam.n_columns, dam.columns, dam.l_v, dam.beam_axes, dam.beam_gaps, dam.top_beam, dam.beams,"
+                 " dam.members, dam.fixed_ends, phases.capture_limit, phases.quiet_time,"
                  " phases.ke_fraction, water.probe, water.h_d_floating, water.capture_length, water.capture_end)",
                  c->s->path);
         return -1;
@@ -144,14 +147,22 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     c->info.n_logs = sd_bin_get_i32(&b);
     c->info.first_moving_gid = sd_bin_get_i32(&b);
     c->info.n_pipes = sd_bin_get_i32(&b);
-    if (b.bad || c->info.n_pipes < 0 || c->info.n_pipes > 2 * SD_MAX_PIPES) {
+    if (b.bad || c->info.n_pipes < 0 || c->info.n_pipes > SD_MAX_DAM_PIPES) {
         snprintf(msg, msglen, "run-driver state is truncated or malformed");
         return -1;
     }
     for (int k = 0; k < c->info.n_pipes; k++) {
         c->info.pipe_gid[k] = sd_bin_get_i32(&b);
-        c->info.pipe_is_column[k] = sd_bin_get_i32(&b);
+        c->info.pipe_kind[k] = sd_bin_get_i32(&b);
         c->info.pipe_coord[k] = sd_bin_get_f64(&b);
+        /* a member's coordinate is its index in dam.members (the outputs look it up) */
+        const int kind = c->info.pipe_kind[k];
+        const double co = c->info.pipe_coord[k];
+        if (kind < SD_PIPE_BEAM || kind > SD_PIPE_MEMBER ||
+            (kind == SD_PIPE_MEMBER && !(co >= 0 && co < c->s->n_members && co == (int)co))) {
+            snprintf(msg, msglen, "run-driver state: pipe %d is of an unknown kind, or names no member of dam.members", k);
+            return -1;
+        }
     }
     if (sd_pipe_loads_unpack(&c->loads, &b) || (c->loads.n != 0 && c->loads.n != c->info.n_pipes)) {
         snprintf(msg, msglen, "run-driver state: the pipe loads are malformed");

@@ -16,7 +16,9 @@
 #include "core/vmath.h"
 #include "yaml_tree.h"
 
-typedef enum { P_DOUBLE, P_INT, P_BOOL, P_VEC3, P_DLIST, P_ILIST, P_ENUM } ptype;
+/* P_NUM_OR_OFF: a number, or false (its int flag at count_off: 1 for a number, 0 for false);
+ * P_MEMBERS: dam.members, a list of {from, to, diameter} (min, max: the diameter's range) */
+typedef enum { P_DOUBLE, P_INT, P_BOOL, P_VEC3, P_DLIST, P_ILIST, P_ENUM, P_NUM_OR_OFF, P_MEMBERS } ptype;
 
 typedef struct {
     const char *key;
@@ -90,16 +92,36 @@ static const sd_param params[] = {
     {"logs.diameter", P_DOUBLE, OFF(log_diam), 0, 0, "m", 0, 1, 1, "log diameter"},
     {"logs.length", P_DOUBLE, OFF(log_length), 0, 0, "m", 0, 10, 1, "log length"},
     {"logs.density", P_DOUBLE, OFF(log_density), 0, 0, "kg/m^3", 0, INF, 1, "log density (SG 0.8)"},
-    {"dam.on", P_BOOL, OFF(dam_on), 0, 0, "-", 0, 1, 0, "build the grid dam"},
-    {"dam.pipe_diameter", P_DOUBLE, OFF(pipe_diam), 0, 0, "m", 0, 1, 1, "pipe diameter"},
-    {"dam.l_h", P_DOUBLE, OFF(l_h), 0, 0, "m", 0, 1, 1, "clear spacing of the columns ℓ_H"},
-    {"dam.l_v", P_DOUBLE, OFF(l_v), 0, 0, "m", 0, 1, 0,
-     "underside of the intermediate beam above the bed ℓ_V (0: none)"},
-    {"dam.top_beam", P_DOUBLE, OFF(top_beam), 0, 0, "m", 0, 1, 1, "underside of the top beam above the bed"},
+    {"dam.on", P_BOOL, OFF(dam_on), 0, 0, "-", 0, 1, 0, "build the dam"},
+    {"dam.pipe_diameter", P_DOUBLE, OFF(pipe_diam), 0, 0, "m", 0, 1, 1, "diameter of the grid's pipes"},
+    {"dam.l_h", P_DOUBLE, OFF(l_h), 0, 0, "m", 0, 1, 1,
+     "clear spacing of the columns ℓ_H: as few columns as leave no gap wider, centred (used when neither "
+     "dam.n_columns nor dam.columns is given)"},
+    {"dam.n_columns", P_INT, OFF(column_count), 0, 0, "-", -1, SD_MAX_PIPES, 0,
+     "number of columns, centred with every clear gap the same, the two at the walls too: (width − n d)/(n + 1) "
+     "(-1: from dam.l_h; 0: no columns)"},
     {"dam.columns", P_DLIST, OFF(column_y), OFF(n_columns), SD_MAX_PIPES, "m", 0, 100, 0,
-     "explicit column positions y (empty: from l_h); inside the walls, not overlapping"},
+     "explicit column axes y (empty: from dam.n_columns or dam.l_h); inside the walls, not overlapping"},
+    {"dam.l_v", P_DOUBLE, OFF(l_v), 0, 0, "m", 0, 1, 0,
+     "underside of the intermediate beam above the bed ℓ_V (0: none), below the top beam (used when no other beam "
+     "key is given)"},
+    {"dam.beam_axes", P_DLIST, OFF(beam_axis_z), OFF(n_beam_axes), SD_MAX_PIPES - 1, "m", 0, 100, 1,
+     "axis heights above the bed of the beams below the top beam (instead of dam.l_v)"},
+    {"dam.beam_gaps", P_DLIST, OFF(beam_gap), OFF(n_beam_gaps), SD_MAX_PIPES - 1, "m", 0, 100, 0,
+     "clear gaps of the beams below the top beam, from the bed up: bed to the lowest beam's underside, then each "
+     "beam's top to the next one's underside (instead of dam.l_v; a beam's axis is its gap + d/2 above what is "
+     "below)"},
+    {"dam.top_beam", P_NUM_OR_OFF, OFF(top_beam), OFF(top_beam_on), 0, "m", 0, 1, 1,
+     "underside of the top beam above the bed, or false: no top beam (the columns then reach the top of the "
+     "highest beam, or the wall top when there is none)"},
     {"dam.beams", P_DLIST, OFF(beam_z), OFF(n_beams), SD_MAX_PIPES, "m", 0, 100, 0,
-     "explicit beam undersides z (empty: from l_v, top_beam); below the wall top, not overlapping"},
+     "every beam's underside, the top beam's included (instead of all the beam keys above; empty: from them); below "
+     "the wall top, not overlapping"},
+    {"dam.members", P_MEMBERS, OFF(members), OFF(n_members), SD_MAX_MEMBERS, "m", 0, 1, 1,
+     "pipes at any orientation, besides the grid or instead of it (dam.n_columns: 0, dam.l_v: 0, dam.top_beam: "
+     "false): "
+     "[{from: [x, y, z], to: [x, y, z], diameter: d}, ...], fixed; between flume.x_dam and flume.x_end, inside the "
+     "walls, no nearer another pipe's axis than the two radii"},
     {"dam.fixed_ends", P_BOOL, OFF(dam_support), 0, 0, "-", 0, 1, 0,
      "pipe bending moments for spans with fixed ends (default: simply supported; docs/loads.md)"},
     {"water.on", P_BOOL, OFF(water_on), 0, 0, "-", 0, 1, 0, "fluid forces (SPEC §5)"},
@@ -215,6 +237,8 @@ void sd_scenario_default(sd_scenario *s)
     s->l_h = 0.050;
     s->l_v = 0.040;
     s->top_beam = 0.118;
+    s->top_beam_on = 1;
+    s->column_count = -1;
     s->water_on = 1;
     s->water_u = 1.2;
     s->water_h = 0.03;
@@ -325,6 +349,72 @@ static int parse_vec3_node(const sd_ynode *n, sd_vec3 *v)
     return 0;
 }
 
+/* One entry of dam.members into m: 0, or -1 after reporting what is wrong with it. line > 0:
+ * it came from --set, and every message goes to (line, col). */
+static int parse_member(ectx *e, const sd_param *p, const sd_ynode *n, int k, sd_dam_member *m, int line, int col)
+{
+    static const char *const keys[] = {"from", "to", "diameter"};
+    const int errs = e->errors;
+    char msg[200];
+    memset(m, 0, sizeof *m);
+    m->line = line > 0 ? line : n->line;
+    m->col = line > 0 ? col : n->col;
+    if (n->kind != SD_Y_MAP) {
+        report(e, m->line, m->col, "%s: each member is a mapping {from: [x, y, z], to: [x, y, z], diameter: d}%s",
+               p->key, "");
+        return -1;
+    }
+    int have[3] = {0, 0, 0};
+    for (int i = 0; i < n->n; i++) {
+        const sd_ynode *v = n->items[i];
+        const int l = line > 0 ? line : v->line, c = line > 0 ? col : v->col;
+        int which = -1;
+        for (int j = 0; j < 3; j++)
+            if (!strcmp(n->keys[i], keys[j])) which = j;
+        if (which < 0) {
+            const char *near = sd_nearest_word(n->keys[i], keys, 3);
+            char hint[80] = " (from, to, diameter)";
+            if (near) snprintf(hint, sizeof hint, " (did you mean '%s'?)", near);
+            snprintf(msg, sizeof msg, "unknown key '%s' in member %d%s", n->keys[i], k, hint);
+            report(e, line > 0 ? line : n->key_line[i], line > 0 ? col : n->key_col[i], "%s: %s", p->key, msg);
+            continue;
+        }
+        have[which] = 1;
+        if (which < 2) {
+            sd_vec3 x = v3(0, 0, 0);
+            if (parse_vec3_node(v, &x)) {
+                snprintf(msg, sizeof msg, "%s of member %d: expected [x, y, z]", keys[which], k);
+                report(e, l, c, "%s: %s", p->key, msg);
+            } else if (!(fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z)) <= SD_MAX_EXTENT)) {
+                snprintf(msg, sizeof msg, "%s of member %d: a coordinate beyond the %g m a scene may span", keys[which],
+                         k, SD_MAX_EXTENT);
+                report(e, l, c, "%s: %s", p->key, msg);
+            } else if (which == 0)
+                m->from = x;
+            else
+                m->to = x;
+        } else {
+            double d = 0.0;
+            if (v->kind != SD_Y_SCALAR || parse_double(v->value, &d) || !(d > p->min) || d > p->max) {
+                snprintf(msg, sizeof msg, "diameter of member %d: must be > %g and <= %g (m)", k, p->min, p->max);
+                report(e, l, c, "%s: %s", p->key, msg);
+            } else
+                m->diameter = d;
+        }
+    }
+    for (int j = 0; j < 3; j++)
+        if (!have[j]) {
+            snprintf(msg, sizeof msg, "member %d has no '%s' (give from: [x, y, z], to: [x, y, z], diameter: d)", k,
+                     keys[j]);
+            report(e, m->line, m->col, "%s: %s", p->key, msg);
+        }
+    if (e->errors == errs && !(v3_norm(v3_sub(m->to, m->from)) > 0.0)) {
+        snprintf(msg, sizeof msg, "member %d has no length: from and to are the same point", k);
+        report(e, m->line, m->col, "%s: %s", p->key, msg);
+    }
+    return e->errors == errs ? 0 : -1;
+}
+
 /* Set one parameter from a node (or from override text when node is NULL). */
 static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode *n, const char *text, int line,
                       int col)
@@ -401,6 +491,42 @@ static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode
             check_range(e, p, v.z, tmp ? line : n->line, tmp ? col : n->col))
             break;
         *(sd_vec3 *)(base + p->off) = v;
+        break;
+    }
+    case P_NUM_OR_OFF: {
+        double v = 0.0;
+        int on = 1;
+        const int l = tmp ? line : n->line, c = tmp ? col : n->col;
+        if (n->kind == SD_Y_SCALAR && !parse_bool(n->value, &on) && !on) {
+            *(int *)(base + p->count_off) = 0;
+            break;
+        }
+        if (n->kind != SD_Y_SCALAR || parse_double(n->value, &v)) {
+            report(e, l, c, "%s: expected a number or false%s", p->key, "");
+            break;
+        }
+        if (!check_range(e, p, v, l, c)) {
+            *(double *)(base + p->off) = v;
+            *(int *)(base + p->count_off) = 1;
+        }
+        break;
+    }
+    case P_MEMBERS: {
+        if (n->kind != SD_Y_SEQ || n->n > p->max_count) {
+            char m[160];
+            snprintf(m, sizeof m, "expected a list of at most %d members [{from: [x, y, z], to: [x, y, z], diameter: d}]",
+                     p->max_count);
+            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: %s", p->key, m);
+            break;
+        }
+        sd_dam_member got[SD_MAX_MEMBERS];
+        int ok = 1;
+        for (int k = 0; k < n->n; k++)
+            ok &= !parse_member(e, p, n->items[k], k, &got[k], tmp ? line : 0, col);
+        if (ok) {
+            memcpy(base + p->off, got, (size_t)n->n * sizeof got[0]);
+            *(int *)(base + p->count_off) = n->n;
+        }
         break;
     }
     case P_DLIST:
@@ -682,71 +808,240 @@ static void check_lengths(ectx *e, const origin *at, const char *kd, int nd, con
     report_keys(e, at, kc, kd, "%s%s", a, "");
 }
 
-static int cmp_double(const void *a, const void *b)
+/* The dam's keys that say one thing in different ways (docs/scenario.md, "The dam"): the
+ * columns (dam.columns, dam.n_columns, dam.l_h), the beams below the top beam (dam.beams,
+ * dam.beam_axes, dam.beam_gaps, dam.l_v) and the top beam (dam.beams lists it too, so
+ * dam.top_beam would go unused). At most one key of a group may be given. One given with --set
+ * overrides those of its group that the file gives (a sweep or a --set changes the layout of a
+ * scenario written with another key); two given in the same place are refused, rather than one
+ * silently ignored. */
+enum { K_COLUMNS, K_N_COLUMNS, K_L_H, K_BEAMS, K_BEAM_AXES, K_BEAM_GAPS, K_L_V, K_TOP_BEAM };
+static const char *const dam_key[] = {"dam.columns",   "dam.n_columns", "dam.l_h", "dam.beams",
+                                      "dam.beam_axes", "dam.beam_gaps", "dam.l_v", "dam.top_beam"};
+
+static origin *key_origin(origin *at, int k) { return &at[find_param(dam_key[k]) - params]; }
+
+/* 1 when key k was given and says something (a list with values, a count of columns) */
+static int dam_key_given(const sd_scenario *s, origin *at, int k)
 {
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
+    if (!key_origin(at, k)->file) return 0;
+    switch (k) {
+    case K_COLUMNS:
+        return s->n_columns > 0;
+    case K_N_COLUMNS:
+        return s->column_count >= 0;
+    case K_BEAMS:
+        return s->n_beams > 0;
+    case K_BEAM_AXES:
+        return s->n_beam_axes > 0;
+    case K_BEAM_GAPS:
+        return s->n_beam_gaps > 0;
+    default:
+        return 1;
+    }
 }
 
-/* The grid dam: every pipe inside the flume, below the wall top, none overlapping another. */
+/* key k as if not given (l_h, l_v and top_beam need nothing: the others take precedence over
+ * them, build.c) */
+static void dam_key_clear(sd_scenario *s, origin *at, int k)
+{
+    if (k == K_COLUMNS) s->n_columns = 0;
+    if (k == K_N_COLUMNS) s->column_count = -1;
+    if (k == K_BEAMS) s->n_beams = 0;
+    if (k == K_BEAM_AXES) s->n_beam_axes = 0;
+    if (k == K_BEAM_GAPS) s->n_beam_gaps = 0;
+    key_origin(at, k)->file = NULL;
+}
+
+static void resolve_dam_keys(ectx *e, sd_scenario *s, origin *at)
+{
+    static const int group[3][5] = {{K_COLUMNS, K_N_COLUMNS, K_L_H, -1},
+                                    {K_BEAMS, K_BEAM_AXES, K_BEAM_GAPS, K_L_V, -1},
+                                    {K_BEAMS, K_TOP_BEAM, -1}};
+    static const char *const what[3] = {"the columns: give one of dam.columns, dam.n_columns, dam.l_h",
+                                        "the beams: give one of dam.beams, dam.beam_axes, dam.beam_gaps, dam.l_v",
+                                        "the top beam: dam.beams lists every beam, the top one included; give the "
+                                        "lower beams with dam.beam_axes or dam.beam_gaps to keep dam.top_beam"};
+    for (int g = 0; g < 3; g++) {
+        int by_set = 0;
+        for (int i = 0; group[g][i] >= 0; i++)
+            by_set |= dam_key_given(s, at, group[g][i]) && !strcmp(key_origin(at, group[g][i])->file, "--set");
+        for (int i = 0; by_set && group[g][i] >= 0; i++)
+            if (dam_key_given(s, at, group[g][i]) && strcmp(key_origin(at, group[g][i])->file, "--set"))
+                dam_key_clear(s, at, group[g][i]);
+        int first = -1;
+        for (int i = 0; group[g][i] >= 0; i++) {
+            const int k = group[g][i];
+            if (!dam_key_given(s, at, k)) continue;
+            if (first < 0) {
+                first = k;
+                continue;
+            }
+            /* at the later of the two */
+            const origin *o1 = key_origin(at, first), *o2 = key_origin(at, k);
+            const int later = o2->line > o1->line || (o2->line == o1->line && o2->col > o1->col);
+            const origin *o = later ? o2 : o1;
+            char m[320];
+            snprintf(m, sizeof m, "%s and %s both give %s", dam_key[first], dam_key[k], what[g]);
+            ectx here = {e->err, o->file, e->errors, NULL};
+            report(&here, o->line, o->col, "%s%s", m, "");
+            e->errors = here.errors;
+            break;
+        }
+    }
+}
+
+/* A member's message, at the member (its line and column where dam.members was given). */
+static void report_member(ectx *e, const origin *at, const sd_dam_member *m, int k, const char *what)
+{
+    const origin *o = &at[find_param("dam.members") - params];
+    char msg[400];
+    snprintf(msg, sizeof msg, "member %d (from [%g, %g, %g] to [%g, %g, %g], diameter %g m) %s", k, m->from.x,
+             m->from.y, m->from.z, m->to.x, m->to.y, m->to.z, m->diameter, what);
+    ectx here = {e->err, o->file ? o->file : e->file, e->errors, NULL};
+    report(&here, o->file ? m->line : 1, o->file ? m->col : 1, "dam.members: %s%s", msg, "");
+    e->errors = here.errors;
+}
+
+/* The members: between the dam face and the end of the bed, the pipe whole (the pipes join the
+ * world when the capture begins, and none may appear inside the flow upstream of the dam:
+ * docs/physics.md "Flow end and branching"); the axis inside the walls and between the bed and
+ * the wall top, where a pipe's rim may reach into the bed or a wall as into a foundation (a
+ * fixed pipe has no contact with them); no nearer another pipe than the two radii. Along x a
+ * flat-ended cylinder with unit axis a and radius r reaches r sqrt(1 - a_x^2) beyond its axis. */
+static void check_members(ectx *e, const origin *at, const sd_scenario *s, const sd_dam_pipe *pipe, int n_pipe)
+{
+    char m[240];
+    const int n_grid = n_pipe - s->n_members;
+    for (int k = 0; k < s->n_members; k++) {
+        const sd_dam_pipe *p = &pipe[n_grid + k];
+        const double ax = p->axis.x / p->length, wx = p->radius * sqrt(fmax(0.0, 1.0 - ax * ax));
+        const double from[3] = {p->from.x, p->from.y, p->from.z}, to[3] = {p->to.x, p->to.y, p->to.z};
+        const double lo[3] = {s->x_dam, 0.0, 0.0}, hi[3] = {s->x_end, s->width, s->wall_height};
+        static const char *const side[3][2] = {{"upstream of the dam face flume.x_dam = %g m",
+                                                "past the end of the bed flume.x_end = %g m"},
+                                               {"through the wall at y = %g m", "through the wall at y = %g m"},
+                                               {"below the bed at z = %g m", "above the wall top at z = %g m"}};
+        int bad = 0;
+        for (int i = 0; i < 3 && !bad; i++) {
+            const double w = i == 0 ? wx : 0.0; /* the pipe along x, its axis across and up */
+            const double l = fmin(from[i], to[i]) - w, h = fmax(from[i], to[i]) + w;
+            char where[120];
+            if (l < lo[i] || h > hi[i]) {
+                snprintf(where, sizeof where, side[i][l < lo[i] ? 0 : 1], l < lo[i] ? lo[i] : hi[i]);
+                snprintf(m, sizeof m, "reaches %s (%s %c = %.6g m)", where, i == 0 ? "the pipe to" : "its axis to",
+                         "xyz"[i], l < lo[i] ? l : h);
+                bad = 1;
+            }
+        }
+        for (int j = 0; j < n_grid + k && !bad; j++) {
+            const double dist = sd_build_segment_distance(p->from, p->to, pipe[j].from, pipe[j].to);
+            if (dist < p->radius + pipe[j].radius) {
+                static const char *const kind[3] = {"beam at z = %g m", "column at y = %g m", "member %g"};
+                char other[64];
+                snprintf(other, sizeof other, kind[pipe[j].kind], pipe[j].coord);
+                snprintf(m, sizeof m, "overlaps the %s: their axes come %.6g m apart, less than the radii's sum %g m",
+                         other, dist, p->radius + pipe[j].radius);
+                bad = 1;
+            }
+        }
+        if (bad) report_member(e, at, &s->members[k], k, m);
+    }
+}
+
+static int beam_is_top(const sd_dam_grid *g, int k) { return g->top_beam && k == g->n_beam - 1; }
+
+/* The dam: every pipe inside the flume, below the wall top, none overlapping another. */
 static void check_dam(ectx *e, const origin *at, const sd_scenario *s)
 {
-    char a[32], b[32], m[240];
-    double y[SD_MAX_PIPES], z[SD_MAX_PIPES];
-    int nc, nb;
+    char a[32], b[32], m[300];
+    sd_dam_grid g;
     const double d = s->pipe_diam, r = 0.5 * d, W = s->width;
-    if (sd_build_dam_layout(s, y, &nc, z, &nb)) {
+    if (sd_build_dam_grid(s, &g)) {
         snprintf(m, sizeof m,
                  "flume.width = %g m with dam.l_h = %g m needs %.0f columns, more than %d: widen dam.l_h or give "
-                 "dam.columns",
+                 "dam.n_columns or dam.columns",
                  W, s->l_h, ceil((W - s->l_h) / (s->l_h + d) - 1e-9), SD_MAX_PIPES);
         report_keys(e, at, "flume.width", "dam.l_h", "%s%s", m, "");
         return;
     }
-    const char *ck = s->n_columns > 0 ? "dam.columns" : "dam.l_h";
-    for (int k = 0; k < nc; k++)
-        if (!(y[k] - r >= 0 && y[k] + r <= W)) {
+    const char *ck = s->n_columns > 0 ? "dam.columns" : s->column_count >= 0 ? "dam.n_columns" : "dam.l_h";
+    if (s->n_columns == 0 && s->column_count > 0 && s->column_count * d > W) {
+        snprintf(m, sizeof m, "%d columns of %g m do not fit across the %g m flume", s->column_count, d, W);
+        report_keys(e, at, ck, "flume.width", "%s: %s", ck, m);
+        return;
+    }
+    for (int k = 0; k < g.n_col; k++)
+        if (!(g.col_y[k] - r >= 0 && g.col_y[k] + r <= W)) {
             snprintf(m, sizeof m, "%g m wide flume: the column at y = %s m (diameter %g m) reaches outside the walls", W,
-                     num(a, y[k]), d);
+                     num(a, g.col_y[k]), d);
             report_keys(e, at, ck, "flume.width", "%s: %s", ck, m);
             return;
         }
-    qsort(y, (size_t)nc, sizeof y[0], cmp_double);
-    for (int k = 1; k < nc; k++)
-        if (y[k] - y[k - 1] < d) {
-            snprintf(m, sizeof m, "the columns at y = %s and %s m overlap (pipe diameter %g m)", num(a, y[k - 1]),
-                     num(b, y[k]), d);
+    for (int k = 1; k < g.n_col; k++) /* (ascending) */
+        if (g.col_y[k] - g.col_y[k - 1] < d) {
+            snprintf(m, sizeof m, "the columns at y = %s and %s m overlap (pipe diameter %g m)", num(a, g.col_y[k - 1]),
+                     num(b, g.col_y[k]), d);
             report_keys(e, at, ck, "dam.pipe_diameter", "%s: %s", ck, m);
             return;
         }
-    const char *bk = s->n_beams > 0 ? "dam.beams" : "dam.top_beam";
-    for (int k = 0; k < nb; k++) /* z: the beams' axes */
-        if (z[k] + r > s->wall_height) {
+    /* the beams: bk gives those below the top beam (all of them with dam.beams) */
+    const char *bk = s->n_beams > 0         ? "dam.beams"
+                     : s->n_beam_axes > 0   ? "dam.beam_axes"
+                     : s->n_beam_gaps > 0   ? "dam.beam_gaps"
+                     : g.n_beam > g.top_beam ? "dam.l_v"
+                                            : "dam.top_beam";
+    for (int k = 0; k < g.n_beam; k++) { /* z: the beams' axes */
+        const char *key = beam_is_top(&g, k) ? "dam.top_beam" : bk;
+        if (g.beam_z[k] + r > s->wall_height) {
             snprintf(m, sizeof m, "the beam with its underside at %s m tops out at %s m, above the %g m walls",
-                     num(a, z[k] - r), num(b, z[k] + r), s->wall_height);
-            report_keys(e, at, bk, "flume.wall_height", "%s: %s", bk, m);
+                     num(a, g.beam_z[k] - r), num(b, g.beam_z[k] + r), s->wall_height);
+            report_keys(e, at, key, "flume.wall_height", "%s: %s", key, m);
             return;
         }
-    qsort(z, (size_t)nb, sizeof z[0], cmp_double);
-    for (int k = 1; k < nb; k++)
-        if (z[k] - z[k - 1] < d) {
+        if (g.beam_z[k] - r < 0.0) {
+            snprintf(m, sizeof m, "the beam with its axis at %s m reaches into the bed (pipe diameter %g m)",
+                     num(a, g.beam_z[k]), d);
+            report_keys(e, at, key, "dam.pipe_diameter", "%s: %s", key, m);
+            return;
+        }
+        if (g.top_beam && !beam_is_top(&g, k) && g.beam_z[k] > g.beam_z[g.n_beam - 1]) {
+            snprintf(m, sizeof m, "the beam with its underside at %s m is above the top beam (underside %s m): lower it, "
+                     "raise dam.top_beam, or remove the top beam (dam.top_beam: false)",
+                     num(a, g.beam_z[k] - r), num(b, s->top_beam));
+            report_keys(e, at, bk, "dam.top_beam", "%s: %s", bk, m);
+            return;
+        }
+    }
+    for (int k = 1; k < g.n_beam; k++) /* (ascending, once none is above the top beam) */
+        if (g.beam_z[k] - g.beam_z[k - 1] < d) {
             snprintf(m, sizeof m, "the beams with undersides at %s and %s m overlap (pipe diameter %g m)",
-                     num(a, z[k - 1] - r), num(b, z[k] - r), d);
+                     num(a, g.beam_z[k - 1] - r), num(b, g.beam_z[k] - r), d);
             report_keys(e, at, bk, "dam.pipe_diameter", "%s: %s", bk, m);
             return;
         }
-    if (s->x_dam + d > s->x_end) {
+    if (g.n_col + g.n_beam > 0 && s->x_dam + d > s->x_end) {
         snprintf(m, sizeof m, "the dam's pipes (x = %g to %g m) reach past flume.x_end = %g m", s->x_dam, s->x_dam + d,
                  s->x_end);
         report_keys(e, at, "flume.x_end", "dam.pipe_diameter", "%s%s", m, "");
+        return;
     }
+    if (g.n_col + g.n_beam + s->n_members == 0) {
+        report_keys(e, at, "dam.n_columns", "dam.top_beam",
+                    "the dam has no pipe (no column, no beam, no member): give it some, or dam.on: false%s%s", "", "");
+        return;
+    }
+    sd_dam_pipe pipe[SD_MAX_DAM_PIPES];
+    const int n = sd_build_dam_pipes(s, &g, pipe);
+    check_members(e, at, s, pipe, n);
 }
 
 /* Cross-field checks: geometry that contradicts itself, sizes that do not fit, an unstable time
  * step. Everything a builder allocates from is checked here first. */
-static void validate(ectx *e, sd_scenario *s, const origin *at)
+static void validate(ectx *e, sd_scenario *s, origin *at)
 {
     char a[32], b[300];
+    resolve_dam_keys(e, s, at);
     check_lengths(e, at, "pile.diameters", s->pile_n_classes, "pile.counts", s->pile_n_counts);
     check_lengths(e, at, "spheres.diameters", s->n_classes, "spheres.counts", s->n_class_counts);
     if (e->errors) return;
@@ -938,6 +1233,10 @@ static const char *type_name(ptype t)
         return "list of integers";
     case P_ENUM:
         return "choice";
+    case P_NUM_OR_OFF:
+        return "number or false";
+    case P_MEMBERS:
+        return "list of {from, to, diameter}";
     }
     return "?";
 }
@@ -964,6 +1263,22 @@ static void print_value(FILE *f, const sd_scenario *s, const sd_param *p, int js
     case P_VEC3: {
         const sd_vec3 *v = (const sd_vec3 *)(base + p->off);
         fprintf(f, "[%.10g, %.10g, %.10g]", v->x, v->y, v->z);
+        break;
+    }
+    case P_NUM_OR_OFF:
+        if (*(const int *)(base + p->count_off))
+            fprintf(f, "%.10g", *(const double *)(base + p->off));
+        else
+            fputs("false", f);
+        break;
+    case P_MEMBERS: {
+        const sd_dam_member *m = (const sd_dam_member *)(base + p->off);
+        const int n = *(const int *)(base + p->count_off);
+        fputc('[', f);
+        for (int k = 0; k < n; k++)
+            fprintf(f, "%s{from: [%.10g, %.10g, %.10g], to: [%.10g, %.10g, %.10g], diameter: %.10g}", k ? ", " : "",
+                    m[k].from.x, m[k].from.y, m[k].from.z, m[k].to.x, m[k].to.y, m[k].to.z, m[k].diameter);
+        fputc(']', f);
         break;
     }
     case P_DLIST:
@@ -1004,7 +1319,7 @@ void sd_scenario_print_params(FILE *f, int format)
                 char list[128];
                 choices_text(p, list, sizeof list);
                 snprintf(range, sizeof range, ", one of %s", list);
-            } else if (p->type != P_BOOL && p->type != P_VEC3)
+            } else if (p->type != P_BOOL && p->type != P_VEC3 && p->type != P_MEMBERS)
                 snprintf(range, sizeof range, ", range %s%g, %g]", p->strict_min ? "(" : "[", p->min, p->max);
             fputs(".TP\n.B ", f);
             sd_roff_puts(f, p->key);
@@ -1029,7 +1344,7 @@ void sd_scenario_print_params(FILE *f, int format)
             char list[128];
             choices_text(p, list, sizeof list);
             fprintf(f, md ? "` | %s | %s |\n" : "  [%s]  %s\n", list, p->doc);
-        } else if (p->type == P_BOOL || p->type == P_VEC3)
+        } else if (p->type == P_BOOL || p->type == P_VEC3 || p->type == P_MEMBERS)
             fprintf(f, md ? "` | | %s |\n" : "  %s\n", p->doc);
         else
             fprintf(f, md ? "` | %s%g, %g] | %s |\n" : "  %s%g, %g]  %s\n", p->strict_min ? "(" : "[", p->min, p->max,
@@ -1040,6 +1355,16 @@ void sd_scenario_print_params(FILE *f, int format)
 int sd_scenario_param_count(void) { return N_PARAMS; }
 
 const char *sd_scenario_param_key(int i) { return i >= 0 && i < N_PARAMS ? params[i].key : NULL; }
+
+/* [x, y, z] into o under key; 0, or -1 out of memory */
+static int add_vec3(cJSON *o, const char *key, sd_vec3 v)
+{
+    const double xyz[3] = {v.x, v.y, v.z};
+    cJSON *a = cJSON_CreateDoubleArray(xyz, 3);
+    if (a && cJSON_AddItemToObject(o, key, a)) return 0;
+    cJSON_Delete(a);
+    return -1;
+}
 
 /* A parameter's value as JSON: numbers at full precision (cJSON prints a double with the
  * digits that read back to the same double), vectors and lists as arrays. */
@@ -1060,6 +1385,27 @@ static cJSON *param_json(const sd_scenario *s, const sd_param *p)
         const sd_vec3 *v = (const sd_vec3 *)(base + p->off);
         const double xyz[3] = {v->x, v->y, v->z};
         return cJSON_CreateDoubleArray(xyz, 3);
+    }
+    case P_NUM_OR_OFF:
+        return *(const int *)(base + p->count_off) ? cJSON_CreateNumber(*(const double *)(base + p->off))
+                                                   : cJSON_CreateFalse();
+    case P_MEMBERS: {
+        const sd_dam_member *m = (const sd_dam_member *)(base + p->off);
+        cJSON *a = cJSON_CreateArray();
+        for (int k = 0; a && k < *(const int *)(base + p->count_off); k++) {
+            cJSON *o = cJSON_CreateObject();
+            if (!o || !cJSON_AddItemToArray(a, o)) {
+                cJSON_Delete(o);
+                cJSON_Delete(a);
+                return NULL;
+            }
+            if (add_vec3(o, "from", m[k].from) || add_vec3(o, "to", m[k].to) ||
+                !cJSON_AddNumberToObject(o, "diameter", m[k].diameter)) {
+                cJSON_Delete(a);
+                return NULL;
+            }
+        }
+        return a;
     }
     case P_DLIST:
         return cJSON_CreateDoubleArray((const double *)(base + p->off), *(const int *)(base + p->count_off));
@@ -1086,13 +1432,11 @@ cJSON *sd_scenario_params_json(const sd_scenario *s)
 /* Keys that act only from the capture phase on (see scenario.h). dam.pipe_diameter and dam.on
  * are not among them: the bed roughness keeps the dam foot clear by the pipe diameter, and the
  * trap plane (x_dam + d/2) enters the time series from the start. */
-static const char *const capture_keys[] = {"dam.l_h",           "dam.l_v",
-                                           "dam.top_beam",      "dam.columns",
-                                           "dam.beams",         "phases.capture_limit",
-                                           "phases.quiet_time", "phases.ke_fraction",
-                                           "water.probe",       "water.h_d_floating",
-                                           "water.capture_length", "water.capture_end",
-                                           "dam.fixed_ends"};
+static const char *const capture_keys[] = {
+    "dam.l_h",          "dam.l_v",        "dam.top_beam",       "dam.columns",          "dam.beams",
+    "dam.n_columns",    "dam.beam_axes",  "dam.beam_gaps",      "dam.members",          "dam.fixed_ends",
+    "phases.capture_limit", "phases.quiet_time", "phases.ke_fraction", "water.probe", "water.h_d_floating",
+    "water.capture_length", "water.capture_end"};
 
 int sd_scenario_is_capture_key(const char *key)
 {
@@ -1101,18 +1445,24 @@ int sd_scenario_is_capture_key(const char *key)
     return 0;
 }
 
-/* The scenario's keys hashed, but for those that never change the bits (the thread count,
- * tests/test_threads.c; how often checkpoints are written) and, unless with_capture, the capture
- * keys. */
+/* Keys that never change the bits: the thread count (tests/test_threads.c), how often
+ * checkpoints are written. */
+static int changes_no_bit(const char *key)
+{
+    return !strcmp(key, "solver.threads") || !strcmp(key, "output.checkpoint_interval");
+}
+
+int sd_scenario_in_branch_hash(const char *key) { return !changes_no_bit(key) && !sd_scenario_is_capture_key(key); }
+
+/* The scenario's keys hashed, but for those that change no bit and, unless with_capture, the
+ * capture keys. */
 static uint64_t scenario_hash(const sd_scenario *s, int with_capture)
 {
     uint64_t h = sd_hash_init();
     const char *base = (const char *)s;
     for (int i = 0; i < N_PARAMS; i++) {
         const sd_param *p = &params[i];
-        if ((!with_capture && sd_scenario_is_capture_key(p->key)) || !strcmp(p->key, "solver.threads") ||
-            !strcmp(p->key, "output.checkpoint_interval"))
-            continue;
+        if (changes_no_bit(p->key) || (!with_capture && sd_scenario_is_capture_key(p->key))) continue;
         h = sd_hash_bytes(h, p->key, strlen(p->key) + 1);
         switch (p->type) {
         case P_DOUBLE:
@@ -1131,6 +1481,22 @@ static uint64_t scenario_hash(const sd_scenario *s, int with_capture)
         case P_VEC3:
             h = sd_hash_bytes(h, base + p->off, sizeof(sd_vec3));
             break;
+        case P_NUM_OR_OFF:
+            h = sd_hash_bytes(h, base + p->off, sizeof(double));
+            h = sd_hash_bytes(h, base + p->count_off, sizeof(int));
+            break;
+        case P_MEMBERS: {
+            /* field by field: the line and column are where it was said, not what */
+            const sd_dam_member *m = (const sd_dam_member *)(base + p->off);
+            const int n = *(const int *)(base + p->count_off);
+            h = sd_hash_bytes(h, &n, sizeof n);
+            for (int k = 0; k < n; k++) {
+                h = sd_hash_bytes(h, &m[k].from, sizeof m[k].from);
+                h = sd_hash_bytes(h, &m[k].to, sizeof m[k].to);
+                h = sd_hash_bytes(h, &m[k].diameter, sizeof m[k].diameter);
+            }
+            break;
+        }
         case P_DLIST:
         case P_ILIST: {
             int n = *(const int *)(base + p->count_off);

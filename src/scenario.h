@@ -12,6 +12,8 @@
 #define SD_MAX_CLASSES 8
 #define SD_MAX_IDS 64
 #define SD_MAX_PIPES 32
+/* The most arbitrary dam members (dam.members). */
+#define SD_MAX_MEMBERS 32
 /* Every coordinate and size in a scenario lies within this many metres of the origin. */
 #define SD_MAX_EXTENT 1.0e4
 
@@ -28,6 +30,13 @@ typedef struct {
     sd_vec3 v[3];
     int line;
 } sd_elem_def;
+
+/* A dam member (dam.members): a fixed steel pipe from one point to another, any orientation. */
+typedef struct {
+    sd_vec3 from, to; /* the ends of its axis, m (the flume frame) */
+    double diameter;  /* m */
+    int line, col;    /* where it was given (the file's, or the --set's) */
+} sd_dam_member;
 
 typedef struct sd_scenario {
     char path[1024];
@@ -59,13 +68,23 @@ typedef struct sd_scenario {
     double log_kw; /* woody volume ratio; used when >= 0 and log_count < 0 */
     double log_diam, log_length, log_density;
     double pack_x0, pack_height; /* packing box: x from pack_x0 to x_gate, up to pack_height */
-    /* grid dam */
+    /* grid dam: the columns from one of dam.columns, dam.n_columns, dam.l_h (in that order of
+     * precedence; the loader lets only one be given); the beams from one of dam.beams (every
+     * beam), dam.beam_axes, dam.beam_gaps, dam.l_v (each with the top beam unless
+     * dam.top_beam is false); then the members */
     int dam_on;
     double pipe_diam, l_h, l_v, top_beam;
+    int top_beam_on;  /* 0: dam.top_beam: false (no top beam) */
     int n_columns, n_beams;
+    int column_count; /* dam.n_columns: -1 not given */
     int dam_support; /* bending moments: 0 simple supports, 1 fixed ends (pipe_loads.h) */
     double column_y[SD_MAX_PIPES];
     double beam_z[SD_MAX_PIPES]; /* underside heights */
+    int n_beam_axes, n_beam_gaps;
+    double beam_axis_z[SD_MAX_PIPES]; /* dam.beam_axes: axis heights above the bed */
+    double beam_gap[SD_MAX_PIPES];    /* dam.beam_gaps: clear gaps, bed to the lowest beam, then beam to beam */
+    int n_members;
+    sd_dam_member members[SD_MAX_MEMBERS];
     /* water */
     int water_on;
     double water_u, water_h, water_rho, water_cd, water_probe;
@@ -94,6 +113,8 @@ typedef struct {
     double bytes;   /* memory: the elements with their contacts, the placement grids */
     double steps;   /* time steps to the end (a flume: to the sum of its phases' limits) */
     double seconds; /* wall time on one core, at SD_COST_S_PER_ELEMENT_STEP */
+    double flow_steps, flow_seconds; /* of those, the packing's and the flow's (a flume; else 0):
+                                      * what the runs a sweep branches from one flow share */
 } sd_scenario_cost;
 
 /* Limits a scenario's estimate must keep to (the command line's --max-memory, --max-steps). */
@@ -111,6 +132,15 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c);
  * which keys and which option change it. */
 int sd_scenario_check_cost(const sd_scenario *s, const sd_scenario_cost *c, const sd_scenario_limits *lim, FILE *err);
 sd_scenario_limits sd_scenario_limits_default(void);
+/* Seconds as whole milliseconds, the unit in which a sweep adds estimates up (exact in a double
+ * below 2^53 ms, 285,000 years), and such a count as text, "12.345 s". */
+double sd_scenario_ms(double seconds);
+void sd_scenario_ms_text(double ms, char *buf, size_t n);
+/* A time in seconds in words: "38 s", "12 min", "3.2 h", "41 days". */
+void sd_scenario_human_time(double seconds, char *buf, size_t n);
+/* `check`'s line: "time estimate: 12.345 s on one core (packing and flow 8.230 s, capture
+ * 4.115 s)", in whole milliseconds, the numbers a sweep's estimate adds up. */
+void sd_scenario_print_time(FILE *f, const sd_scenario *s, const sd_scenario_cost *c);
 
 void sd_scenario_default(sd_scenario *s);
 /* Load a scenario file and apply "key=value" overrides. Errors are printed to err as
@@ -132,7 +162,8 @@ const char *sd_scenario_param_key(int i);
 struct cJSON;
 struct cJSON *sd_scenario_params_json(const sd_scenario *s);
 /* 1 for the keys that act only from the capture phase on: the dam layout (dam.l_h, dam.l_v,
- * dam.top_beam, dam.columns, dam.beams) and the capture-phase settings (phases.capture_limit,
+ * dam.top_beam, dam.columns, dam.beams, dam.n_columns, dam.beam_axes, dam.beam_gaps,
+ * dam.members) and the capture-phase settings (phases.capture_limit,
  * quiet_time, ke_fraction, water.probe, water.h_d_floating, water.capture_length,
  * water.capture_end). Runs that differ only in these
  * share their packing and flow, bit for bit: a sweep branches them from one flow-end
@@ -142,6 +173,8 @@ int sd_scenario_is_capture_key(const char *key);
  * equal for two scenarios whose packing and flow are identical. Stored in a flow-end
  * checkpoint; a restart with a scenario of another fingerprint is refused. */
 uint64_t sd_scenario_branch_hash(const sd_scenario *s);
+/* 1 for the keys that sd_scenario_branch_hash counts (the explicit elements aside). */
+int sd_scenario_in_branch_hash(const char *key);
 /* The same with the capture keys too: equal for two scenarios whose whole runs are identical
  * (neither counts solver.threads or output.checkpoint_interval, which change no bit). Stored in
  * a periodic checkpoint. */

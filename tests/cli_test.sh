@@ -140,9 +140,10 @@ expect yaml-duplicate 2 "dup.yaml:4:3: duplicate key 'dt'" check "$tmp/dup.yaml"
 expect restart-device 2 "/dev/zero: not a regular file" run "$src_dir/examples/flume_small.yaml" --restart /dev/zero -o "$tmp/rz-out"
 
 # the side views of the arrival and the end, drawn together when the run ends: both PNGs there
-# (with Debian's python3-matplotlib, which scripts/setup.sh installs), or the note for each
+# (with Debian's python3-matplotlib, which scripts/setup.sh installs), or the note for each.
+# The dam has a member too (a strut behind it, 56 deg up, 72.1 mm long: its loads below)
 "$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/png" --set output.png=true --set phases.capture_limit=0.05 \
-  >"$tmp/png.log" 2>&1
+  --set 'dam.members=[{from: [0.84, 0.06, 0.0], to: [0.88, 0.06, 0.06], diameter: 0.012}]' >"$tmp/png.log" 2>&1
 code=$?
 if /usr/bin/python3 -c "import matplotlib" 2>/dev/null; then
   png_ok=1
@@ -174,6 +175,17 @@ for pat in "clear gaps across \(wall, between columns, wall\): 39.0, 50.0, 50.0,
   if grep -Eq -- "$pat" "$tmp/out"; then pass=$((pass + 1)); else echo "FAIL check report: no '$pat'"; cat "$tmp/out"; fail=$((fail + 1)); fi
 done
 expect check-no-beam 0 "no intermediate beam: bed to the top beam 118.0 mm = 5.90 d_max" check "$src_dir/examples/shibuya2009.yaml" --set dam.l_v=0
+# the dam of examples/shibuya2009-members.yaml: 5 columns at 44 + 53 k mm (clear gaps (300 -
+# 5 x 18)/6 = 35 mm), beams by their gaps 30 and 40 mm (axes 30 + 9 = 39, 30 + 18 + 40 + 9 = 97
+# mm) under the top beam (127 mm), a strut of sqrt(160^2 + 110^2) = 194.2 mm at atan(110/160) =
+# 34.5 deg
+expect check-members 0 "5 columns, axes at y = 44.0, 97.0, 150.0, 203.0, 256.0 mm, from the bed to 136.0 mm" check "$src_dir/examples/shibuya2009-members.yaml"
+for pat in "clear gaps across \(wall, between columns, wall\): 35.0, 35.0, 35.0, 35.0, 35.0, 35.0 mm" \
+           "3 beams, axes at z = 39.0, 97.0, 127.0 mm above the bed \(undersides 30.0, 88.0, 118.0 mm; the top beam at dam.top_beam\)" \
+           "clear gaps up \(bed, between beams, above the top beam to the wall top\): 30.0, 40.0, 12.0, 364.0 mm" \
+           "0: from \[4.2000, 0.1500, 0.0000\] to \[4.0400, 0.1500, 0.1100\] m, d = 18.0 mm, length 194.2 mm, 34.5 deg from the bed plane"; do
+  if grep -Eq -- "$pat" "$tmp/out"; then pass=$((pass + 1)); else echo "FAIL check report: no '$pat'"; cat "$tmp/out"; fail=$((fail + 1)); fi
+done
 expect check-png-noflume 2 "has no flume" check "$tmp/good.yaml" --png "$tmp/x.png"
 # check --png: the design drawn (a PNG), or, without matplotlib, exit 1 saying so; its
 # temporary data removed either way
@@ -242,7 +254,13 @@ assert abs((v["held_at_dam"] + v["in_channel"]) / total - s["trap_ratio"]) <= 2e
 assert s["capture"] == "cut by its time limit", s["capture"]
 rows = list(csv.DictReader(open(d + "/pipes.csv")))
 n = len(s["pipes"])
-assert n == 4 and len(rows) % n == 0 and len(rows) >= 2 * n, (n, len(rows))
+assert n == 5 and len(rows) % n == 0 and len(rows) >= 2 * n, (n, len(rows))
+# the member: last, its ends and span (its length), no axis coordinate in pipes.csv
+m = s["pipes"][4]
+assert m["kind"] == "member" and m["member"] == 0 and m["from_m"] == [0.84, 0.06, 0.0] and m["to_m"] == [0.88, 0.06, 0.06], m
+assert abs(m["span_m"] - (0.04 ** 2 + 0.06 ** 2) ** 0.5) < 1e-15 and m["diameter_m"] == 0.012, m
+assert all(r["kind"] == "member" and r["axis_m"] == "" for r in rows if r["pipe"] == "4"), rows[4]
+assert [p["kind"] for p in s["pipes"][:4]] == ["column", "column", "beam", "beam"], s["pipes"]
 for r in rows:
     span = s["pipes"][int(r["pipe"])]["span_m"]
     assert 0.0 <= float(r["s_m"]) <= span and float(r["m_bend_Nm"]) >= 0.0, r

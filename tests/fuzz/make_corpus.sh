@@ -51,4 +51,20 @@ done
 printf 'base: base.yaml\nruns: 2\nseed_base: 7\nparallel: 1\nvary:\n  dam.l_h: [0.03, 0.05]\n  solver.dt: [1.0e-5, 2.0e-5]\nset:\n  solver.duration: 0.002\n' \
   > "$c/sweep/branch.yaml"
 printf 'base: base.yaml\n' > "$c/sweep/minimal.yaml"
+# named variants (several keys each, one of none) and list values (a list of lists, vectors)
+cat > "$c/sweep/variants.yaml" <<'Y'
+base: base.yaml
+runs: 2
+vary:
+  layout:
+    narrow: {dam.l_h: 0.04, dam.l_v: 0.03}
+    wide: {dam.l_h: 0.06, dam.l_v: 0, solver.dt: 2.0e-5}
+    plain: {}
+  dam.columns: [[0.05, 0.1, 0.15], [0.07, 0.14]]
+  gravity: [[0, 0, -9.81], [0, 0, -1.62]]
+set:
+  solver.duration: 0.002
+  dam.beams: [0.03, 0.08]
+  output.trajectory_ids: [0]
+Y
 du -sh "$c"
