@@ -7,8 +7,8 @@
 
 static const app_option run_options[] = {
     {"-o", "DIR"}, {"--output", "DIR"}, {"--overwrite", NULL}, {"--progress", "S"}, {"--set", "key=value"}, {"--threads", "N"}, {"--seed", "S"},
-    {"--checkpoint-at", "flow_end"}, {"--restart", "CHECKPOINT"}, {"--max-memory", "BYTES"}, {"--max-steps", "N"},
-    {"--help", NULL}, {NULL, NULL}};
+    {"--checkpoint-at", "flow_end"}, {"--restart", "CHECKPOINT"}, {"--decompose", NULL}, {"--max-memory", "BYTES"},
+    {"--max-steps", "N"}, {"--help", NULL}, {NULL, NULL}};
 static const app_option check_options[] = {{"--set", "key=value"}, {"--threads", "N"}, {"--seed", "S"},
                                            {"--png", "OUT.png"}, {"--max-memory", "BYTES"}, {"--max-steps", "N"},
                                            {"--help", NULL},  {NULL, NULL}};
@@ -24,7 +24,8 @@ static const app_option completion_options[] = {{"bash", NULL}, {"--help", NULL}
 const app_command app_commands[] = {
     {"run",
      "sabodem run FILE [-o DIR] [--overwrite] [--progress S] [--set key=value]... [--threads N] [--seed S]\n"
-     "                 [--checkpoint-at flow_end] [--restart CHECKPOINT] [--max-memory BYTES] [--max-steps N]",
+     "                 [--checkpoint-at flow_end] [--restart CHECKPOINT] [--decompose] [--max-memory BYTES]\n"
+     "                 [--max-steps N]",
      "simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
      "  -o, --output DIR          the output directory (refused if it holds another run's files)\n"
      "  --overwrite               delete another run's files in DIR first\n"
@@ -39,6 +40,9 @@ const app_command app_commands[] = {
      "                            capture-phase keys, docs/sweep.md) or from a periodic one\n"
      "                            (output.checkpoint_interval: DIR/checkpoint_<step>.ckpt, the same\n"
      "                            scenario, any phase, the same bits as a run never stopped)\n"
+     "  --decompose               the run over slabs along x, one a rank under mpirun -np N (which\n"
+     "                            implies it), one in a single process: the same bits and outputs on\n"
+     "                            any count of ranks (docs/decomposition.md)\n"
      "  --max-memory BYTES        refuse a scene estimated to need more memory (default 8G;\n"
      "                            suffixes K, M, G, T)\n"
      "  --max-steps N             refuse a run of more time steps (default 1e8)",

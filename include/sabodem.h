@@ -276,6 +276,15 @@ int sd_world_needs_rebuild(const sd_world *w);
 void sd_world_request_rebuild(sd_world *w);
 /* The clock of a world made from another's state (time in s, steps done). */
 sd_status sd_world_set_clock(sd_world *w, double time, long step);
+/* The gids the next added body gets from here on: at least next_gid (a world made of another's
+ * bodies gives its additions the gids the other would). SD_ERR_ARG below a gid in use. */
+sd_status sd_world_set_next_gid(sd_world *w, int next_gid);
+int sd_world_next_gid(const sd_world *w);
+/* The last step's force of the active triangles of a group (every group: group < 0) on each
+ * body, N, out[i] by store index (sd_world_bodies), each body's wall pairs summed in their
+ * order: the same bits in every world that holds the body's wall pairs, so that worlds holding
+ * parts of one system can add up the walls' loads over their own bodies. */
+sd_status sd_world_body_wall_forces(const sd_world *w, int group, sd_vec3 *out);
 
 /* Hash of a state given as body records and springs, in a canonical order (bodies by gid:
  * position, velocity, spin, attitude, force; springs by key: shear), the same FNV-1a as

@@ -231,8 +231,10 @@ static int event_row(sd_pipe_loads *L, int k, int why)
     /* a member has no one axis coordinate (as in pipes.csv) */
     fprintf(L->ev_csv, "%d,%s,", k, sd_build_pipe_kind_name(p->kind));
     if (p->kind != SD_PIPE_MEMBER) fprintf(L->ev_csv, "%.6f", p->coord);
-    fprintf(L->ev_csv, ",%.6f,%.6e,%.6e,%.6f,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%s\n", e->t0, e->duration, e->peak, e->t_peak, e->impulse,
-            e->impulse_vec.x, e->impulse_vec.y, e->impulse_vec.z, e->energy, e->base, end[why]);
+    fprintf(L->ev_csv, ",%.6f,%.6e,%.6e,%.6f,%.6e,%.6e,%.6e,%.6e,", e->t0, e->duration, e->peak, e->t_peak, e->impulse,
+            e->impulse_vec.x, e->impulse_vec.y, e->impulse_vec.z);
+    if (!L->no_energy) fprintf(L->ev_csv, "%.6e", e->energy); /* (none: the field left empty) */
+    fprintf(L->ev_csv, ",%.6e,%s\n", e->base, end[why]);
     return ferror(L->ev_csv) ? -1 : 0;
 }
 
@@ -291,7 +293,7 @@ double sd_pipe_loads_step(sd_pipe_loads *L, const sd_world *w, double t, double 
         }
         e->impulse += f * dt;
         e->impulse_vec = v3_madd(e->impulse_vec, st.force, dt);
-        const double pw = event_power(L, k, &st, w, dt);
+        const double pw = L->no_energy ? 0.0 : event_power(L, k, &st, w, dt);
         if (pw > 0.0) e->energy += pw * dt;
     }
     return tot;

@@ -75,6 +75,8 @@ typedef struct {
     FILE *csv;                    /* pipes.csv, NULL when not written */
     FILE *ev_csv;                 /* events.csv, a row per event as it ends; NULL when not written */
     int ev_csv_bad;               /* a row could not be written */
+    int no_energy;                /* 1: events get no energy (a decomposed run, where the strikers' velocities
+                                   * are not at hand every step; docs/decomposition.md) */
     double ev_threshold;          /* an event's threshold above the baseline, N (dam.event_threshold, or
                                    * four times the weight of the heaviest moving body at the capture's start) */
     double ev_time;               /* dam.event_time, s */

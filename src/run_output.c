@@ -42,7 +42,7 @@ void sd_output_series_row(run_ctx *c)
     const sd_vec3 mesh_dam = c->n_dam_tri ? sd_world_group_force(c->w, SD_GROUP_DAM) : v3(0.0, 0.0, 0.0);
     fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e\n",
             sd_world_time(c->w), sd_run_phase_name(c->phase), sd_world_body_count(c->w) ? sd_trap_front_x(c) : 0.0, up,
-            sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w), c->dam_force_now, pv, c->h_d,
+            sd_world_kinetic_energy(c->w), c->sys ? c->sys_contacts : sd_world_contact_count(c->w), c->dam_force_now, pv, c->h_d,
             sd_world_body_count(c->w), c->n_passed, rough.x, rough.z, tri_bed.x, tri_bed.z, mesh_dam.x, mesh_dam.y,
             mesh_dam.z);
     if (ferror(c->series)) out_failed(c, "series.csv", errno);
@@ -64,7 +64,7 @@ void sd_output_traj(run_ctx *c)
 
 int sd_output_snapshot(run_ctx *c, const char *name)
 {
-    if (!c->s->vtk_on) return 0;
+    if (!c->s->vtk_on || c->rank != 0) return 0; /* (a decomposed run's rank 0 writes the whole copy) */
     const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
     size_t cap = (size_t)(b->n + 1);
     sd_vec3 *pos = malloc(cap * sizeof(sd_vec3)), *vel = malloc(cap * sizeof(sd_vec3)),
@@ -118,7 +118,7 @@ int sd_output_snapshot(run_ctx *c, const char *name)
 
 int sd_output_walls(run_ctx *c)
 {
-    if (!c->s->vtk_on) return 0;
+    if (!c->s->vtk_on || c->rank != 0) return 0;
     const int nt = sd_world_triangle_count(c->w);
     char f[1200];
     snprintf(f, sizeof f, "%s/walls.vtp", c->dir);
@@ -191,7 +191,7 @@ static int add_xyz(cJSON *o, const char *key, sd_vec3 v)
 static int summary_run(run_ctx *c, cJSON *o, int status_code, const char *status_msg)
 {
     char hash[32];
-    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)sd_world_state_hash(c->w));
+    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)(c->sys ? c->sys_hash : sd_world_state_hash(c->w)));
     int bad = add_str(o, "scenario", c->s->path) | add_str(o, "status", status_msg) |
               add_num(o, "exit_code", status_code) | add_num(o, "simulated_time_s", sd_world_time(c->w)) |
               add_num(o, "steps", (double)sd_world_step_count(c->w)) | add_num(o, "wall_time_s", sd_now() - c->wall0) |
@@ -205,22 +205,34 @@ static int summary_run(run_ctx *c, cJSON *o, int status_code, const char *status
 static int summary_engine(run_ctx *c, cJSON *o)
 {
     static const char *const simd_names[] = {"auto", "scalar", "avx2", "avx512"};
-    int bad = add_str(o, "simd_kernels", simd_names[sd_world_simd_level(c->w)]);
+    const sd_world *sw = sd_run_slabs_world(c); /* (a decomposed run: rank 0's slab) */
+    int bad = add_str(o, "simd_kernels", simd_names[sd_world_simd_level(sw)]);
     /* the front prefetch and, in auto mode, the last trial's verdict and its time on over off */
     double pf_ratio = 0.0;
     int pf_trial = -1;
-    const int pf_on = sd_world_prefetch(c->w, &pf_trial, &pf_ratio) == SD_PREFETCH_ON;
+    const int pf_on = sd_world_prefetch(sw, &pf_trial, &pf_ratio) == SD_PREFETCH_ON;
     char pf[64];
-    if (sd_world_definition(c->w)->tuning.prefetch != SD_PREFETCH_AUTO)
+    if (sd_world_definition(sw)->tuning.prefetch != SD_PREFETCH_AUTO)
         snprintf(pf, sizeof pf, "%s (set)", pf_on ? "on" : "off");
     else if (pf_trial < 0)
         snprintf(pf, sizeof pf, "%s (no trial)", pf_on ? "on" : "off");
     else
         snprintf(pf, sizeof pf, "%s (trial: on/off %.3f)", pf_trial ? "on" : "off", pf_ratio);
     bad |= add_str(o, "front_prefetch", pf);
-    const sd_world_timers tm = sd_world_get_timers(c->w);
+    const sd_world_timers tm = sd_world_get_timers(sw);
     cJSON *t = add_obj(o, "timers_s");
     if (!t) return -1;
+    if (c->sys) { /* the slabs (docs/decomposition.md); the timers are rank 0's */
+        const sd_run_slabs_report *r = &c->sys_report;
+        cJSON *d = add_obj(o, "decomposition");
+        cJSON *xb = cJSON_AddArrayToObject(d, "bounds_m");
+        if (!d || !xb) return -1;
+        for (int k = 1; k < r->ranks; k++)
+            if (!cJSON_AddItemToArray(xb, cJSON_CreateNumber(r->bounds[k]))) bad = 1;
+        bad |= add_num(d, "ranks", r->ranks) | add_num(d, "ghost_width_m", r->ghost_width) |
+               add_num(d, "redistributions", (double)r->redistributions) | add_num(d, "migrations", (double)r->migrations) |
+               add_num(d, "boundary_moves", (double)r->boundary_moves) | add_num(d, "bytes_sent", r->bytes);
+    }
     return bad | add_num(t, "rebuild", tm.rebuild) | add_num(t, "contacts", tm.contacts) | add_num(t, "moves", tm.moves) |
            add_num(t, "checks", tm.checks) | add_num(t, "rebuilds", (double)tm.rebuilds);
 }
@@ -330,7 +342,8 @@ static int summary_pipes(run_ctx *c, cJSON *o)
         cJSON *ev = add_obj(p, "events");
         if (!ev) return -1;
         bad |= add_num(ev, "count", L->n_events) | add_num(ev, "largest_peak_N", L->ev_peak) |
-               add_num(ev, "largest_impulse_Ns", L->ev_impulse) | add_num(ev, "largest_energy_J", L->ev_energy);
+               add_num(ev, "largest_impulse_Ns", L->ev_impulse) | (c->loads.no_energy ? (cJSON_AddNullToObject(ev, "largest_energy_J") ? 0 : -1)
+                                   : add_num(ev, "largest_energy_J", L->ev_energy));
     }
     return bad;
 }
@@ -445,6 +458,10 @@ int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const cha
     if (!text) {
         errno = ENOMEM;
         return -1;
+    }
+    if (c->rank != 0) { /* (a decomposed run's rank 0 writes it) */
+        cJSON_free(text);
+        return 0;
     }
     FILE *f = fopen(tmp, "w");
     if (!f) {

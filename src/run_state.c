@@ -367,7 +367,27 @@ int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg
     return 0;
 }
 
+static sd_status write_world(run_ctx *c, const sd_world *w, const char *path, int kind);
+
 static sd_status write_state(run_ctx *c, const char *path, int kind)
+{
+    /* a decomposed run: the whole system gathered into one world (rank 0 writes it), taken
+     * where the pairs are remade at the next step (run.c), as a restart from it remakes them at
+     * its first */
+    sd_world *whole = NULL;
+    if (c->sys) {
+        sd_status st = sd_run_slabs_whole(c, &whole);
+        if (st || c->rank != 0) {
+            sd_world_destroy(whole);
+            return st;
+        }
+    }
+    const sd_status st = write_world(c, whole ? whole : c->w, path, kind);
+    sd_world_destroy(whole);
+    return st;
+}
+
+static sd_status write_world(run_ctx *c, const sd_world *w, const char *path, int kind)
 {
     long sl = file_len(c->series), tl = c->traj ? file_len(c->traj) : -1, pl = c->loads.csv ? file_len(c->loads.csv) : -1;
     long el = c->loads.ev_csv ? file_len(c->loads.ev_csv) : -1;
@@ -380,7 +400,7 @@ static sd_status write_state(run_ctx *c, const char *path, int kind)
     sd_bin_writer b;
     sd_bin_writer_init(&b);
     state_pack(c, &b, kind, sl, tl, pl, el);
-    sd_status st = b.err ? SD_ERR_NOMEM : sd_checkpoint_write(path, c->w, b.p, b.n);
+    sd_status st = b.err ? SD_ERR_NOMEM : sd_checkpoint_write(path, w, b.p, b.n);
     sd_bin_writer_fini(&b);
     return st;
 }
@@ -388,6 +408,7 @@ static sd_status write_state(run_ctx *c, const char *path, int kind)
 sd_status sd_run_state_checkpoint(run_ctx *c, const char *path)
 {
     c->flow_ckpt_written = 1; /* (a restart from it does not write it again) */
+    if (c->sys) sd_run_slabs_request_rebuild(c); /* (the dam's pipes go in next anyway, if any) */
     return write_state(c, path, SD_CKPT_FLOW_END);
 }
 
@@ -411,7 +432,7 @@ sd_status sd_run_state_periodic(run_ctx *c)
     char path[1400];
     snprintf(path, sizeof path, "%s/checkpoint_%010ld.ckpt", c->dir, step);
     sd_status st = write_state(c, path, SD_CKPT_PERIODIC);
-    if (st) return st;
+    if (st || c->rank != 0) return st;
     /* keep this one and the newest before it */
     DIR *d = opendir(c->dir);
     if (!d) return SD_OK;

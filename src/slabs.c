@@ -508,6 +508,29 @@ sd_status sd_slab_state(const sd_slab *s, void **recs, int *nb, sd_spring **spri
     return SD_OK;
 }
 
+sd_status sd_slab_add_body(sd_slab *s, const void *rec, double x)
+{
+    if (slab_of(s, x) != s->k) return SD_OK;
+    sd_status st = sd_world_body_put(s->w, rec, 0);
+    if (!st) s->nowned++;
+    return st;
+}
+
+int sd_slab_owns(const sd_slab *s, int gid) { return owned_here(s, gid); }
+
+long sd_slab_contacts(const sd_slab *s)
+{
+    const int m = sd_world_springs(s->w, NULL, 0);
+    sd_spring *sp = malloc((size_t)(m + 1) * sizeof(sd_spring));
+    if (!sp) return -1;
+    sd_world_springs(s->w, sp, m);
+    long n = 0;
+    for (int k = 0; k < m; k++)
+        n += owned_here(s, sp[k].gid_a);
+    free(sp);
+    return n;
+}
+
 sd_world *sd_slab_world(sd_slab *s) { return s->w; }
 const sd_slabs_stats *sd_slab_stats(const sd_slab *s) { return &s->st; }
 int sd_slab_owned(const sd_slab *s) { return s->nowned; }

@@ -348,6 +348,10 @@ sd_status sd_world_step(sd_world *w)
         if ((st = sd_world_check(w))) return st;
         w->checked = 1;
     }
+    if (w->ghost_drift > 0.0) { /* (a decomposition's ghosts moved by their owners, decomp.c) */
+        w->near_drift += w->ghost_drift;
+        w->ghost_drift = 0.0;
+    }
     double t0 = sd_now();
     if (sd_neighbor_needs_rebuild(w)) {
         if ((st = sd_neighbor_rebuild(w))) return st;
