@@ -34,6 +34,9 @@
 #include "sweep_identity.h"
 #include "core/status.h"
 
+/* invalid cases told before the sweep stops checking the others */
+#define SWEEP_MAX_BAD_CASES 3
+
 /* What every run of the sweep shares: the file, how the engine runs, the callback. */
 typedef struct {
     const sd_sweep_file *f;
@@ -774,7 +777,9 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
     sd_scenario_limits lim = sd_scenario_limits_default();
     if (so->limits.max_bytes > 0) lim.max_bytes = so->limits.max_bytes;
     if (so->limits.max_steps > 0) lim.max_steps = so->limits.max_steps;
-    for (int c = 0; c < ncase; c++)
+    int n_bad = 0; /* invalid or too large cases: after SWEEP_MAX_BAD_CASES the rest are not checked (the same
+                    * mistake would be told once a case) */
+    for (int c = 0; c < ncase && n_bad < SWEEP_MAX_BAD_CASES; c++)
         for (int s = 0; s < file->runs; s++) {
             run_item *r = &items[c * file->runs + s];
             r->case_id = c;
@@ -797,12 +802,18 @@ int sd_sweep_run(const char *sweep_file, const char *outdir, const sd_sweep_opts
             if (load_run_scenario(&d, r, &sc, err)) {
                 fprintf(err, "%s: %s is invalid (see above)\n", sweep_file, which);
                 code = 2;
-                continue;
+                if (++n_bad == SWEEP_MAX_BAD_CASES && c + 1 < ncase)
+                    fprintf(err, "%s: cases %d to %d not checked after %d invalid ones\n", sweep_file, c + 1,
+                            ncase - 1, n_bad);
+                break;
             }
             sd_scenario_estimate(&sc, &cost);
             if (sd_scenario_check_cost(&sc, &cost, &lim, err)) {
                 fprintf(err, "%s: %s is too large (see above)\n", sweep_file, which);
                 code = 2;
+                if (++n_bad == SWEEP_MAX_BAD_CASES && c + 1 < ncase)
+                    fprintf(err, "%s: cases %d to %d not checked after %d invalid ones\n", sweep_file, c + 1,
+                            ncase - 1, n_bad);
             }
             cases[c] = (case_info){sd_scenario_branch_hash(&sc), sc.flume_on, sd_scenario_ms(cost.seconds),
                                    sd_scenario_ms(cost.flow_seconds)};

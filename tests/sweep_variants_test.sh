@@ -289,6 +289,13 @@ expect_bad set-list "bad.yaml:4:16: dam.columns: must be in \[0, 100\] \(m\)" \
 vary: {dam.l_v: [0.04]}
 set:
   dam.columns: [0.03, 5000]"
+# the same mistake in every case: told for three cases, the rest not checked
+expect_bad many-bad "bad.yaml: cases 3 to 99 not checked after 3 invalid ones" \
+  "$base
+vary:
+  dam.l_hh: [0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.07, 0.08, 0.09, 0.10]
+  dam.l_v: [0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.07, 0.08, 0.09, 0.10]"
+[ "$(grep -c "is invalid" "$tmp/bad.log")" -eq 3 ] && ok || bad "many-bad: not three cases told"
 
 echo "sweep_variants: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
