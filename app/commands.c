@@ -7,8 +7,8 @@
 
 static const app_option run_options[] = {
     {"-o", "DIR"}, {"--output", "DIR"}, {"--overwrite", NULL}, {"--progress", "S"}, {"--set", "key=value"}, {"--threads", "N"}, {"--seed", "S"},
-    {"--checkpoint-at", "flow_end"}, {"--restart", "CHECKPOINT"}, {"--max-memory", "BYTES"}, {"--max-steps", "N"},
-    {"--help", NULL}, {NULL, NULL}};
+    {"--checkpoint-at", "flow_end"}, {"--restart", "CHECKPOINT"}, {"--decompose", NULL}, {"--max-memory", "BYTES"},
+    {"--max-steps", "N"}, {"--help", NULL}, {NULL, NULL}};
 static const app_option check_options[] = {{"--set", "key=value"}, {"--threads", "N"}, {"--seed", "S"},
                                            {"--png", "OUT.png"}, {"--max-memory", "BYTES"}, {"--max-steps", "N"},
                                            {"--help", NULL},  {NULL, NULL}};
@@ -24,7 +24,8 @@ static const app_option completion_options[] = {{"bash", NULL}, {"--help", NULL}
 const app_command app_commands[] = {
     {"run",
      "sabodem run FILE [-o DIR] [--overwrite] [--progress S] [--set key=value]... [--threads N] [--seed S]\n"
-     "                 [--checkpoint-at flow_end] [--restart CHECKPOINT] [--max-memory BYTES] [--max-steps N]",
+     "                 [--checkpoint-at flow_end] [--restart CHECKPOINT] [--decompose] [--max-memory BYTES]\n"
+     "                 [--max-steps N]",
      "simulate the scenario; outputs go to DIR (default out/<scenario name>)\n"
      "  -o, --output DIR          the output directory (refused if it holds another run's files)\n"
      "  --overwrite               delete another run's files in DIR first\n"
@@ -39,14 +40,17 @@ const app_command app_commands[] = {
      "                            capture-phase keys, docs/sweep.md) or from a periodic one\n"
      "                            (output.checkpoint_interval: DIR/checkpoint_<step>.ckpt, the same\n"
      "                            scenario, any phase, the same bits as a run never stopped)\n"
+     "  --decompose               the run over slabs along x, one a rank under mpirun -np N (which\n"
+     "                            implies it), one in a single process: the same bits and outputs on\n"
+     "                            any count of ranks (docs/decomposition.md)\n"
      "  --max-memory BYTES        refuse a scene estimated to need more memory (default 8G;\n"
      "                            suffixes K, M, G, T)\n"
      "  --max-steps N             refuse a run of more time steps (default 1e8)",
      run_options},
     {"check", "sabodem check FILE [--set key=value]... [--threads N] [--seed S] [--png OUT.png]\n"
               "                   [--max-memory BYTES] [--max-steps N]",
-     "validate the scenario, estimate its memory and steps, build its scene without running and\n"
-     "describe it: the debris\n"
+     "validate the scenario, estimate its memory, steps and time (in all, and of the packing and\n"
+     "flow a sweep's branches share), build its scene without running and describe it: the debris\n"
      "(counts, solid volume, K_w), the dam (axes, clear gaps, l_H/d_max, l_V/d_max)\n"
      "  --png OUT.png  also draw the dam's front view (with the largest boulder and a log to\n"
      "                 scale) and a side view of the initial state (python3-matplotlib)\n"
@@ -55,17 +59,23 @@ const app_command app_commands[] = {
     {"sweep",
      "sabodem sweep FILE [-o DIR] [--parallel N] [--dry-run] [--no-branch]\n"
      "                   [--shard U/N | --collect | --emit slurm] [--max-memory BYTES] [--max-steps N]",
-     "run a matrix of cases x seeds in parallel (resumable), with CSV and figures; runs that\n"
-     "differ only in the dam layout share one packing + flow (docs/sweep.md). Under mpirun the\n"
+     "run a matrix of cases x seeds in parallel (resumable), with CSV and figures. vary takes a\n"
+     "key's values (scalars or lists: spheres.counts: [[10, 20], [20, 10]]) or named variants\n"
+     "that set several keys (layout: {narrow: {dam.l_h: 0.04, dam.l_v: 0.03}, wide: {...}}).\n"
+     "Runs that differ only in keys acting after the flow (the dam layout, capture settings)\n"
+     "share one packing + flow; a flow checkpoint is reused on resuming only when the engine\n"
+     "and the keys acting before the flow end match it (docs/sweep.md). Under mpirun the\n"
      "ranks share the runs (one at a time each unless --parallel), rank 0 collects.\n"
      "  --parallel N  processes at once (default: the sweep file's, else the cores; 1 per rank\n"
      "                under mpirun)\n"
-     "  --dry-run     list the runs and shared flows, and what is already done\n"
+     "  --dry-run     list the runs and shared flows, what is already done, and the time\n"
+     "                estimate (sabodem check's, per run and in all, with branching and N)\n"
      "  --no-branch   every run packs and flows on its own\n"
      "  --shard U/N   run only work unit U, U+N, U+2N, ... (a shared flow and its runs, or a\n"
      "                run); no results.csv (--collect writes it)\n"
      "  --collect     run nothing: results.csv, cases.csv and figures from the finished runs\n"
-     "  --emit slurm  write DIR/slurm/: a job array (one task per unit) and a collect job\n"
+     "  --emit slurm  write DIR/slurm/: a job array (one task per unit, with its time estimate\n"
+     "                in units.txt) and a collect job\n"
      "  --max-memory BYTES, --max-steps N   the limits each run's estimate must keep to (as run)",
      sweep_options},
     {"params", "sabodem params [--markdown]", "list every scenario key with its type, unit, default and range",

@@ -17,4 +17,9 @@ int app_ranks_max(const app_ranks *r, int code);
 
 void app_ranks_finish(app_ranks *r);
 
+/* The ranks as the transport of one decomposed run (sd_run_comm over MPI_COMM_WORLD); 0, or -1
+ * when MPI was not started (the run is then one process). */
+struct sd_run_comm;
+int app_ranks_comm(const app_ranks *r, struct sd_run_comm *comm);
+
 #endif

@@ -29,3 +29,10 @@ int app_ranks_max(const app_ranks *r, int code)
 }
 
 void app_ranks_finish(app_ranks *r) { (void)r; }
+
+int app_ranks_comm(const app_ranks *r, struct sd_run_comm *comm)
+{
+    (void)r;
+    (void)comm;
+    return -1;
+}

@@ -292,7 +292,7 @@ int main(int argc, char **argv)
         return 2;
     }
     const char *file = NULL, *outdir = NULL, *restart = NULL, *png = NULL;
-    int ckpt_flow_end = 0, overwrite = 0;
+    int ckpt_flow_end = 0, overwrite = 0, decompose = 0;
     double progress = 5.0; /* s of wall time between progress lines in a log (--progress) */
     sd_scenario_limits lim = sd_scenario_limits_default();
     const char **sets = calloc((size_t)argc + 2, sizeof(char *));
@@ -330,6 +330,7 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--restart") && i + 1 < argc && !strcmp(cmd, "run")) restart = argv[++i];
         else if (!strcmp(a, "--png") && i + 1 < argc && !strcmp(cmd, "check")) png = argv[++i];
         else if (!strcmp(a, "--overwrite") && !strcmp(cmd, "run")) overwrite = 1;
+        else if (!strcmp(a, "--decompose") && !strcmp(cmd, "run")) decompose = 1;
         else if (!strcmp(a, "--progress") && i + 1 < argc && !strcmp(cmd, "run")) {
             char *end;
             progress = strtod(argv[++i], &end);
@@ -396,6 +397,7 @@ int main(int argc, char **argv)
         }
         printf("%s: ok (%d elements, %d triangles; estimate: %.3g MB, %.4g steps, about %.3g s on one core)\n", file,
                n, t, cost.bytes / 1e6, cost.steps, cost.seconds);
+        sd_scenario_print_time(stdout, &s, &cost);
         sd_scene_report(stdout, &s, &info, n, t);
         int code = 0;
         if (png) code = draw_design(&s, w, png);
@@ -424,11 +426,33 @@ int main(int argc, char **argv)
     o.checkpoint_flow_end = ckpt_flow_end ? ckpt_path : NULL;
     o.restart = restart;
     o.overwrite = overwrite;
+    /* under mpirun -np N (N > 1), or with --decompose: one run over slabs, a rank each (rank 0
+     * writes the files and speaks for the run) */
+    app_ranks ranks;
+    if (app_ranks_start(&ranks, &argc, &argv)) {
+        sd_scenario_free(&s);
+        return 2;
+    }
+    sd_run_comm comm;
+    FILE *quiet = NULL;
+    o.decompose = decompose || (ranks.active && ranks.size > 1);
+    if (o.decompose && !app_ranks_comm(&ranks, &comm)) {
+        o.comm = &comm;
+        if (comm.rank != 0) {
+            quiet = fopen("/dev/null", "w");
+            o.log = NULL;
+            o.err = quiet ? quiet : stderr;
+            o.progress_tty = 0;
+        }
+    }
     sd_run_result r;
     memset(&r, 0, sizeof r);
     int code = sd_run_scenario(&s, &o, &r);
-    app_draw_pictures(&r, stderr);
-    if (code == 0 || code == 130) {
+    const int speaker = ranks.rank == 0;
+    app_ranks_finish(&ranks);
+    if (quiet) fclose(quiet);
+    if (speaker) app_draw_pictures(&r, stderr);
+    if (speaker && (code == 0 || code == 130)) {
         printf("%s: %s, %ld steps, %.1f s wall", file, code ? "interrupted" : "done", r.steps, r.wall_time);
         if (s.flume_on) printf(", trap ratio P_V = %.4f (capture limit %.2f s)", r.p_v, s.capture_limit);
         printf("; outputs in %s\n", outdir);

@@ -158,6 +158,10 @@ sd_status sd_world_set_pair_contact(sd_world *w, int a, int b, const sd_contact_
 /* The springs of the pair (a, b) into *c (may be NULL): 1 when set for the pair, 0 when they are
  * def.contact, -1 for an id out of range. */
 int sd_world_pair_contact(const sd_world *w, int a, int b, sd_contact_def *c);
+/* dst takes src's springs per pair of materials and its triangles' materials (dst holds the
+ * same triangles, in the same order: SD_ERR_ARG otherwise); for a world made from another's
+ * triangles and body records, which carry the bodies' materials themselves. */
+sd_status sd_world_copy_materials(sd_world *dst, const sd_world *src);
 
 /* The largest stable time step for the springs k_n, k_s (N/m) and the smallest moving sphere
  * mass m_min (kg): 8 steps per half period of the stiffest mode of a contact between two such
@@ -299,6 +303,15 @@ int sd_world_needs_rebuild(const sd_world *w);
 void sd_world_request_rebuild(sd_world *w);
 /* The clock of a world made from another's state (time in s, steps done). */
 sd_status sd_world_set_clock(sd_world *w, double time, long step);
+/* The gids the next added body gets from here on: at least next_gid (a world made of another's
+ * bodies gives its additions the gids the other would). SD_ERR_ARG below a gid in use. */
+sd_status sd_world_set_next_gid(sd_world *w, int next_gid);
+int sd_world_next_gid(const sd_world *w);
+/* The last step's force of the active triangles of a group (every group: group < 0) on each
+ * body, N, out[i] by store index (sd_world_bodies), each body's wall pairs summed in their
+ * order: the same bits in every world that holds the body's wall pairs, so that worlds holding
+ * parts of one system can add up the walls' loads over their own bodies. */
+sd_status sd_world_body_wall_forces(const sd_world *w, int group, sd_vec3 *out);
 
 /* Hash of a state given as body records and springs, in a canonical order (bodies by gid:
  * position, velocity, spin, attitude, force; springs by key: shear), the same FNV-1a as
@@ -321,6 +334,9 @@ sd_status sd_checkpoint_write(const char *path, const sd_world *w, const void *e
  * names the file and what is wrong. */
 sd_status sd_checkpoint_read(const char *path, sd_world **out, void **extra, size_t *extra_len, char *msg,
                              size_t msglen);
+/* The format version of the checkpoints this library writes and reads (a file of another is
+ * refused). */
+uint32_t sd_checkpoint_version(void);
 
 /* Wall time of the step's stages (seconds, summed over the steps). */
 typedef struct {

@@ -29,6 +29,10 @@ typedef struct sd_run sd_run;
 
 /* The library's version, "MAJOR.MINOR.PATCH". */
 const char *sd_version(void);
+/* The source it was built from: "git <commit>", with "+<hash>" of the uncommitted changes to
+ * src/, include/ and CMakeLists.txt when there are any, or "unknown" (not built from a git
+ * checkout). */
+const char *sd_build_id(void);
 
 /* A scenario from a YAML file, or from YAML text (name: what its messages call it), with
  * "key=value" overrides (as `--set`). 0 on success; else 2 with every error in err, each as

@@ -5,14 +5,14 @@
 # under FUZZ_OUT/<target>/ (default build-fuzz/findings): copy it to tests/fuzz/regressions/<target>/
 # once fixed. Warnings are not errors here (clang warns of what gcc, the build of record, does
 # not). The last lines of each target's log (executions, cov, ft) are printed.
-#   usage: scripts/fuzz.sh [TARGET...]     (default: scenario checkpoint sweep)
+#   usage: scripts/fuzz.sh [TARGET...]     (default: scenario checkpoint sweep stl)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${FUZZ_BUILD:-$root/build-fuzz}"
 secs="${FUZZ_SECONDS:-60}"
 out="${FUZZ_OUT:-$build/findings}"
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(scenario checkpoint sweep)
+[ ${#targets[@]} -gt 0 ] || targets=(scenario checkpoint sweep stl)
 cmake -S "$root" -B "$build" -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSD_SANITIZE=ON \
   -DSD_FUZZ=ON -DSD_WERROR=OFF >/dev/null
 cmake --build "$build" -j "${JOBS:-2}" --target $(printf 'fuzz_%s ' "${targets[@]}")

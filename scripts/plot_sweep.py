@@ -12,6 +12,9 @@ SWEEP_DIR/cases.csv and, with matplotlib (Debian's python3-matplotlib, Agg backe
 each run a point, the case mean a line, one line per value of the other varied keys (labelled
 with them). K_w and l_V/d_max are each run's own (results.csv's k_w and l_v_d_max, from its
 scenario's counts, sizes and dam), so the figures hold for any flume, not only the paper's.
+A varied key's values are numbers, or text: the names of a set of variants (layout: narrow,
+wide) or lists ([20, 40, 120]); text values keep the sweep file's order, on the heatmap's axes
+and in the legends.
 """
 import csv
 import os
@@ -31,12 +34,30 @@ def main():
     for r in rows:
         key = tuple(r[k] for k in vary)
         cases.setdefault(key, []).append(r)
+    # each varied key's values in the order of the runs (the sweep file's), and whether they are numbers
+    order = {k: {} for k in vary}
+    for r in rows:
+        for k in vary:
+            order[k].setdefault(r[k], len(order[k]))
+
+    def is_number(v):
+        try:
+            float(v)
+            return True
+        except ValueError:
+            return False
+
+    numeric = {k: all(is_number(v) for v in order[k]) for k in vary}
+
+    def value_rank(k, v):
+        """how a key's values sort: numbers by value, text in the sweep file's order"""
+        return float(v) if numeric[k] else order[k][v]
     with open(os.path.join(d, "cases.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(vary + ["runs", "p_v_mean", "p_v_std", "p_v_min", "p_v_max", "p_v_logs_mean",
                            "v_held_mean_m3", "v_channel_mean_m3", "v_passed_mean_m3", "runs_cut_by_limit",
                            "peak_dam_force_mean_N", "wall_s_total"])
-        for key, rs in sorted(cases.items(), key=lambda kv: [float(x) for x in kv[0]]):
+        for key, rs in sorted(cases.items(), key=lambda kv: [value_rank(k, v) for k, v in zip(vary, kv[0])]):
             pv = [float(r["p_v"]) for r in rs]
             w.writerow(list(key) + [len(rs), "%.5f" % statistics.mean(pv),
                                     "%.5f" % (statistics.stdev(pv) if len(pv) > 1 else 0.0),
@@ -53,12 +74,19 @@ def main():
     import matplotlib.pyplot as plt
 
     def case_x(k, rs):
-        """a case's x for key k: its runs' own K_w (%) or l_V/d_max for those keys, else the value"""
+        """a case's x for key k: its runs' own K_w (%) or l_V/d_max for those keys, else the value
+        (text values: their rank)"""
         if k in ("logs.count", "logs.k_w"):
             return round(100.0 * statistics.mean(float(r["k_w"]) for r in rs), 3)
         if k == "dam.l_v":
             return round(statistics.mean(float(r["l_v_d_max"]) for r in rs), 3)
-        return float(rs[0][k])
+        return value_rank(k, rs[0][k])
+
+    def tick_labels(k, xs):
+        if numeric[k] or k in ("logs.count", "logs.k_w", "dam.l_v"):
+            return ["%.3g" % x for x in xs]
+        names = {i: v for v, i in order[k].items()}
+        return [names[x] for x in xs]
 
     def label(k):
         return {"logs.count": "woody volume ratio K_w (%)", "logs.k_w": "woody volume ratio K_w (%)",
@@ -75,7 +103,8 @@ def main():
         if not groups:
             return
         fig, ax = plt.subplots(figsize=(5.5, 4))
-        for n, (g, members) in enumerate(sorted(groups.items())):
+        for n, (g, members) in enumerate(sorted(groups.items(),
+                                                key=lambda kv: [value_rank(k, v) for k, v in zip(others, kv[0])])):
             name = ", ".join(f"{k}={v}" for k, v in zip(others, g))
             xs = sorted(x for x, _ in members)
             ax.scatter([x for x, rs in members for _ in rs], [float(r["p_v"]) for _, rs in members for r in rs],
@@ -116,8 +145,8 @@ def main():
         grid = [[statistics.mean(cell[(x, y)]) if (x, y) in cell else float("nan") for x in xs] for y in ys]
         fig, ax = plt.subplots(figsize=(5.5, 4))
         im = ax.imshow(grid, origin="lower", cmap="viridis", vmin=0, vmax=1, aspect="auto")
-        ax.set_xticks(range(len(xs)), ["%.3g" % x for x in xs])
-        ax.set_yticks(range(len(ys)), ["%.3g" % y for y in ys])
+        ax.set_xticks(range(len(xs)), tick_labels(a, xs))
+        ax.set_yticks(range(len(ys)), tick_labels(b, ys))
         for j, row in enumerate(grid):
             for i, v in enumerate(row):
                 if v == v:

@@ -220,40 +220,217 @@ int sd_placer_try_cylinder(sd_placer *p, sd_rng *rng, double r, double hl, doubl
     return 0;
 }
 
-int sd_build_dam_layout(const sd_scenario *s, double *col_y, int *n_col, double *beam_z, int *n_beam)
+/* ascending, in place (a handful of values) */
+static void sort_up(double *v, int n)
 {
-    double d = s->pipe_diam, r = 0.5 * d;
+    for (int i = 1; i < n; i++)
+        for (int j = i; j > 0 && v[j - 1] > v[j]; j--) {
+            const double t = v[j];
+            v[j] = v[j - 1];
+            v[j - 1] = t;
+        }
+}
+
+int sd_build_dam_grid(const sd_scenario *s, sd_dam_grid *g)
+{
+    memset(g, 0, sizeof *g);
+    const double d = s->pipe_diam, r = 0.5 * d;
     int over = 0;
     if (s->n_columns > 0) {
-        *n_col = s->n_columns;
+        g->n_col = s->n_columns;
         for (int k = 0; k < s->n_columns; k++)
-            col_y[k] = s->column_y[k];
+            g->col_y[k] = s->column_y[k];
+        sort_up(g->col_y, g->n_col);
+    } else if (s->column_count >= 0) {
+        /* n columns centred, every clear gap the same, the two at the walls too: the pitch is
+         * (W + d)/(n + 1), each gap (W - n d)/(n + 1) */
+        const int n = s->column_count < SD_MAX_PIPES ? s->column_count : SD_MAX_PIPES;
+        const double pitch = (s->width + d) / (n + 1);
+        g->n_col = n;
+        for (int k = 0; k < n; k++)
+            g->col_y[k] = 0.5 * s->width + (k - 0.5 * (n - 1)) * pitch;
     } else {
         /* columns centred across the width, clear spacing l_h, wall gaps no wider than l_h */
         double pitch = s->l_h + d;
         const double nd = ceil((s->width - s->l_h) / pitch - 1e-9);
         int n = nd < 1 ? 1 : nd > SD_MAX_PIPES ? SD_MAX_PIPES : (int)nd;
         if (nd > SD_MAX_PIPES) over = 1;
-        *n_col = n;
+        g->n_col = n;
         for (int k = 0; k < n; k++)
-            col_y[k] = 0.5 * s->width + (k - 0.5 * (n - 1)) * pitch;
+            g->col_y[k] = 0.5 * s->width + (k - 0.5 * (n - 1)) * pitch;
     }
+    int n = 0;
     if (s->n_beams > 0) {
-        *n_beam = s->n_beams;
+        /* every beam, the top one among them, by its underside */
         for (int k = 0; k < s->n_beams; k++)
-            beam_z[k] = s->beam_z[k] + r;
+            g->beam_z[n++] = s->beam_z[k] + r;
     } else {
-        int n = 0;
-        if (s->l_v > 0.0 && s->l_v + d < s->top_beam) beam_z[n++] = s->l_v + r;
-        beam_z[n++] = s->top_beam + r;
-        *n_beam = n;
+        if (s->n_beam_axes > 0) {
+            for (int k = 0; k < s->n_beam_axes; k++)
+                g->beam_z[n++] = s->beam_axis_z[k];
+        } else if (s->n_beam_gaps > 0) {
+            double below = 0.0; /* the bed, then each beam's top */
+            for (int k = 0; k < s->n_beam_gaps; k++) {
+                g->beam_z[n++] = below + s->beam_gap[k] + r;
+                below = g->beam_z[n - 1] + r;
+            }
+        } else if (s->l_v > 0.0)
+            g->beam_z[n++] = s->l_v + r;
+        sort_up(g->beam_z, n);
+        if (s->top_beam_on) {
+            g->beam_z[n++] = s->top_beam + r;
+            g->top_beam = 1;
+        }
     }
+    if (s->n_beams > 0) sort_up(g->beam_z, n);
+    g->n_beam = n;
+    double top = -INFINITY;
+    for (int k = 0; k < n; k++)
+        top = fmax(top, g->beam_z[k] + r);
+    g->col_top = n > 0 ? top : s->wall_height;
     return over ? -1 : 0;
+}
+
+int sd_build_dam_pipes(const sd_scenario *s, const sd_dam_grid *g, sd_dam_pipe *out)
+{
+    const double W = s->width, r = 0.5 * s->pipe_diam, xc = s->x_dam + r, top = g->col_top;
+    int n = 0;
+    for (int k = 0; k < g->n_col; k++)
+        out[n++] = (sd_dam_pipe){SD_PIPE_COLUMN, g->col_y[k],      v3(xc, g->col_y[k], 0.0), v3(xc, g->col_y[k], top),
+                                 v3(xc, g->col_y[k], 0.5 * top), v3(0, 0, 1),           top, r};
+    for (int k = 0; k < g->n_beam; k++)
+        out[n++] = (sd_dam_pipe){SD_PIPE_BEAM, g->beam_z[k],       v3(xc, 0.0, g->beam_z[k]), v3(xc, W, g->beam_z[k]),
+                                 v3(xc, 0.5 * W, g->beam_z[k]), v3(0, 1, 0),            W,   r};
+    for (int k = 0; k < s->n_members; k++) {
+        const sd_dam_member *m = &s->members[k];
+        const sd_vec3 ax = v3_sub(m->to, m->from);
+        out[n++] = (sd_dam_pipe){SD_PIPE_MEMBER, k, m->from, m->to, v3_scale(v3_add(m->from, m->to), 0.5), ax,
+                                 v3_norm(ax), 0.5 * m->diameter};
+    }
+    return n;
+}
+
+const char *sd_build_pipe_kind_name(int kind)
+{
+    return kind == SD_PIPE_COLUMN ? "column" : kind == SD_PIPE_BEAM ? "beam" : "member";
+}
+
+/* the point of segment a + t (b - a), t in [0, 1], nearest p, as its distance */
+static double point_segment_distance(sd_vec3 p, sd_vec3 a, sd_vec3 b)
+{
+    const sd_vec3 ab = v3_sub(b, a);
+    const double l2 = v3_dot(ab, ab);
+    const double t = l2 > 0.0 ? fmin(fmax(v3_dot(v3_sub(p, a), ab) / l2, 0.0), 1.0) : 0.0;
+    return v3_norm(v3_sub(p, v3_madd(a, ab, t)));
+}
+
+double sd_build_segment_distance(sd_vec3 p0, sd_vec3 p1, sd_vec3 q0, sd_vec3 q1)
+{
+    /* the least distance is at an end of one of them, or between two inner points where the
+     * common normal of the two lines meets both segments */
+    double best = fmin(fmin(point_segment_distance(p0, q0, q1), point_segment_distance(p1, q0, q1)),
+                       fmin(point_segment_distance(q0, p0, p1), point_segment_distance(q1, p0, p1)));
+    const sd_vec3 u = v3_sub(p1, p0), v = v3_sub(q1, q0), w0 = v3_sub(p0, q0);
+    const double a = v3_dot(u, u), b = v3_dot(u, v), c = v3_dot(v, v), dd = v3_dot(u, w0), e = v3_dot(v, w0);
+    const double den = a * c - b * b;
+    if (den > 1e-12 * a * c) { /* not parallel: the lines' closest points */
+        const double sp = (b * e - c * dd) / den, tq = (a * e - b * dd) / den;
+        if (sp > 0.0 && sp < 1.0 && tq > 0.0 && tq < 1.0)
+            best = fmin(best, v3_norm(v3_sub(v3_madd(p0, u, sp), v3_madd(q0, v, tq))));
+    }
+    return best;
+}
+
+int sd_build_log_sizes_vary(const sd_scenario *s)
+{
+    return s->log_length_dist.type != SD_SIZE_FIXED || s->log_diam_dist.type != SD_SIZE_FIXED;
+}
+
+double sd_build_log_mean_volume(const sd_scenario *s, int paper)
+{
+    if (!sd_build_log_sizes_vary(s)) /* (the expression eq 54's count has always used) */
+        return paper ? s->log_diam * s->log_diam * s->log_length : M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length;
+    double l1, l2, d1, d2;
+    sd_debris_size_moments(&s->log_length_dist, s->log_length, &l1, &l2);
+    sd_debris_size_moments(&s->log_diam_dist, s->log_diam, &d1, &d2);
+    return (paper ? 1.0 : M_PI * 0.25) * d2 * l1; /* the length and diameter are drawn apart */
+}
+
+/* eq 54's V for the logs' count and whether each log counts as d^2 L (the paper's) */
+static double kw_volume(const sd_scenario *s, int *paper)
+{
+    *paper = s->log_kw_volume > 0.0;
+    if (*paper) return s->log_kw_volume;
+    double vs = 0.0;
+    for (int k = 0; k < s->n_classes; k++)
+        vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+    return vs;
+}
+
+/* The count from K_w when the sizes are drawn: the logs of the stream in order, as many as
+ * bring their volume nearest to V_t = K_w V / (1 - K_w) (a tie: the more) */
+static int drawn_log_count(const sd_scenario *s)
+{
+    int paper;
+    const double vt = s->log_kw * kw_volume(s, &paper) / (1.0 - s->log_kw);
+    sd_rng r = sd_debris_log_stream(s->seed);
+    double sum = 0.0;
+    for (int n = 0; n < SD_MAX_LOGS; n++) {
+        double len, d;
+        sd_debris_log_next(&r, &s->log_length_dist, s->log_length, &s->log_diam_dist, s->log_diam, &len, &d);
+        const double v = (paper ? 1.0 : M_PI * 0.25) * d * d * len;
+        if (sum + v >= vt) return sum + v - vt <= vt - sum ? n + 1 : n;
+        sum += v;
+    }
+    return SD_MAX_LOGS;
+}
+
+void sd_build_log_stats(const sd_scenario *s, sd_log_stats *st)
+{
+    memset(st, 0, sizeof *st);
+    st->n = sd_build_log_count(s);
+    sd_rng r = sd_debris_log_stream(s->seed);
+    double ml2 = 0.0, md2 = 0.0; /* Welford's sums of squared deviations: no cancellation */
+    for (int k = 0; k < st->n; k++) {
+        double len = s->log_length, d = s->log_diam;
+        if (sd_build_log_sizes_vary(s))
+            sd_debris_log_next(&r, &s->log_length_dist, s->log_length, &s->log_diam_dist, s->log_diam, &len, &d);
+        st->len_min = k ? fmin(st->len_min, len) : len;
+        st->len_max = k ? fmax(st->len_max, len) : len;
+        st->d_min = k ? fmin(st->d_min, d) : d;
+        st->d_max = k ? fmax(st->d_max, d) : d;
+        const double dl = len - st->len_mean, dd = d - st->d_mean;
+        st->len_mean += dl / (k + 1);
+        st->d_mean += dd / (k + 1);
+        ml2 += dl * (len - st->len_mean);
+        md2 += dd * (d - st->d_mean);
+        st->volume += M_PI * 0.25 * d * d * len;
+    }
+    if (st->n > 0) { /* the sample's own spread (divided by n): 0 for one log or fixed sizes */
+        st->len_sd = sqrt(ml2 / st->n);
+        st->d_sd = sqrt(md2 / st->n);
+    }
+}
+
+double sd_build_placer_cell(const sd_scenario *s, int pile)
+{
+    double d = SD_PLACER_CELL;
+    if (pile) {
+        for (int k = 0; k < s->pile_n_classes && k < s->pile_n_counts; k++)
+            if (s->pile_count[k] > 0) d = fmax(d, s->pile_diam[k]);
+        return d;
+    }
+    for (int k = 0; k < s->n_classes && k < s->n_class_counts; k++)
+        if (s->class_count[k] > 0) d = fmax(d, s->class_diam[k]);
+    if (s->log_count != 0 && (s->log_count > 0 || s->log_kw > 0.0))
+        d = fmax(d, s->log_diam_dist.type != SD_SIZE_FIXED ? s->log_diam_dist.max : s->log_diam);
+    return d;
 }
 
 int sd_build_log_count(const sd_scenario *s)
 {
     if (s->log_count >= 0) return s->log_count;
+    if (s->log_kw > 0.0 && sd_build_log_sizes_vary(s)) return drawn_log_count(s);
     if (s->log_kw <= 0.0) return 0;
     double vs = 0.0, vlog;
     if (s->log_kw_volume > 0.0) {
@@ -274,43 +451,71 @@ int sd_build_log_count(const sd_scenario *s)
 sd_status sd_build_dam(sd_world *w, const sd_scenario *s, sd_build_info *info)
 {
     if (!s->dam_on) return SD_OK;
-    double W = s->width;
-    double col_y[SD_MAX_PIPES], beam_z[SD_MAX_PIPES];
-    int nc, nb;
-    sd_build_dam_layout(s, col_y, &nc, beam_z, &nb);
-    double r = 0.5 * s->pipe_diam, xc = s->x_dam + r;
-    double top = beam_z[nb - 1] + r;
-    for (int k = 0; k < nc; k++) {
+    sd_dam_grid g;
+    sd_build_dam_grid(s, &g);
+    sd_dam_pipe pipe[SD_MAX_DAM_PIPES];
+    const int n = sd_build_dam_pipes(s, &g, pipe);
+    for (int k = 0; k < n && info->n_pipes < SD_MAX_DAM_PIPES; k++) {
         sd_cylinder_def c = sd_cylinder_def_default();
-        c.pos = v3(xc, col_y[k], 0.5 * top);
-        c.axis = v3(0, 0, 1);
-        c.radius = r;
-        c.length = top;
+        c.pos = pipe[k].centre;
+        c.axis = pipe[k].axis;
+        c.radius = pipe[k].radius;
+        c.length = pipe[k].length;
         c.density = 7850.0;
         c.fixed = 1;
         c.tag = SD_TAG_PIPE;
         c.material = s->pipe_mat;
-        int g = sd_world_add_cylinder(w, &c);
-        if (g < 0) return (sd_status)-g;
-        info->pipe_gid[info->n_pipes] = g;
-        info->pipe_is_column[info->n_pipes] = 1;
-        info->pipe_coord[info->n_pipes++] = col_y[k];
+        int gid = sd_world_add_cylinder(w, &c);
+        if (gid < 0) return (sd_status)-gid;
+        info->pipe_gid[info->n_pipes] = gid;
+        info->pipe_kind[info->n_pipes] = pipe[k].kind;
+        info->pipe_coord[info->n_pipes++] = pipe[k].coord;
     }
-    for (int k = 0; k < nb; k++) {
-        sd_cylinder_def c = sd_cylinder_def_default();
-        c.pos = v3(xc, 0.5 * W, beam_z[k]);
-        c.axis = v3(0, 1, 0);
-        c.radius = r;
-        c.length = W;
-        c.density = 7850.0;
-        c.fixed = 1;
-        c.tag = SD_TAG_PIPE;
-        c.material = s->pipe_mat;
-        int g = sd_world_add_cylinder(w, &c);
-        if (g < 0) return (sd_status)-g;
-        info->pipe_gid[info->n_pipes] = g;
-        info->pipe_is_column[info->n_pipes] = 0;
-        info->pipe_coord[info->n_pipes++] = beam_z[k];
+    return SD_OK;
+}
+
+/* Does the triangle meet the box [lo, hi]? The separating-axis test: the box's three axes, the
+ * triangle's normal, and the nine cross products of their edges. */
+static int tri_meets_box(const sd_vec3 tri[3], sd_vec3 lo, sd_vec3 hi)
+{
+    const sd_vec3 c = v3_scale(v3_add(lo, hi), 0.5), h = v3_scale(v3_sub(hi, lo), 0.5);
+    const sd_vec3 v[3] = {v3_sub(tri[0], c), v3_sub(tri[1], c), v3_sub(tri[2], c)};
+    const sd_vec3 e[3] = {v3_sub(v[1], v[0]), v3_sub(v[2], v[1]), v3_sub(v[0], v[2])};
+    const sd_vec3 box_axis[3] = {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)};
+    sd_vec3 axes[13];
+    int na = 0;
+    for (int i = 0; i < 3; i++)
+        axes[na++] = box_axis[i];
+    axes[na++] = v3_cross(e[0], e[1]);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            axes[na++] = v3_cross(box_axis[i], e[j]);
+    for (int k = 0; k < na; k++) {
+        const sd_vec3 a = axes[k];
+        if (!(v3_norm2(a) > 0.0)) continue; /* an edge along a box axis: covered by the others */
+        double pmin = v3_dot(v[0], a), pmax = pmin;
+        for (int i = 1; i < 3; i++) {
+            const double p = v3_dot(v[i], a);
+            pmin = fmin(pmin, p);
+            pmax = fmax(pmax, p);
+        }
+        const double r = h.x * fabs(a.x) + h.y * fabs(a.y) + h.z * fabs(a.z);
+        if (pmin > r || pmax < -r) return 0;
+    }
+    return 1;
+}
+
+/* The scenario's meshes as fixed walls, each in its role's group. */
+static sd_status build_meshes(sd_world *w, const sd_scenario *s, FILE *err)
+{
+    static const int group[3] = {SD_GROUP_BED, SD_GROUP_WALLS, SD_GROUP_DAM};
+    for (int k = 0; k < s->n_meshes; k++) {
+        const sd_mesh_def *m = &s->meshes[k];
+        for (int t = 0; t < m->n_tri; t++)
+            if (add_tri(w, m->tri[t][0], m->tri[t][1], m->tri[t][2], group[m->role], m->material)) {
+                fprintf(err, "%s:%d: meshes: %s: triangle %d rejected\n", s->path, m->line, m->file, t);
+                return SD_ERR_ARG;
+            }
     }
     return SD_OK;
 }
@@ -320,9 +525,12 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
 {
     double W = s->width, H = s->wall_height, L = s->x_end;
     sd_status st;
-    /* bed, side walls and end wall; triangles of at most 0.25 m along x */
+    /* bed (unless a mesh stands in for it), side walls and end wall; triangles of at most 0.25 m
+     * along x */
     const int mw = s->wall_mat;
-    if ((st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, W, 0), v3(0, W, 0), SD_GROUP_BED, s->bed_mat, 0.25))) return st;
+    if (s->flume_bed &&
+        (st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, W, 0), v3(0, W, 0), SD_GROUP_BED, s->bed_mat, 0.25)))
+        return st;
     if ((st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, 0, H), v3(0, 0, H), SD_GROUP_WALLS, mw, 0.25))) return st;
     if ((st = add_quad(w, v3(0, W, 0), v3(L, W, 0), v3(L, W, H), v3(0, W, H), SD_GROUP_WALLS, mw, 0.25))) return st;
     if ((st = add_quad(w, v3(0, 0, 0), v3(0, W, 0), v3(0, W, H), v3(0, 0, H), SD_GROUP_END, mw, 0))) return st;
@@ -378,13 +586,27 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
     /* packing box above the reservoir: logs first (hardest to place), then spheres large to small */
     double gap = 0.002;
     sd_vec3 lo = v3(gap, gap, s->rough_dmax * 0.5 + gap), hi = v3(s->x_gate - gap, W - gap, s->pack_height);
-    sd_placer *pl = sd_placer_create(lo, hi, SD_PLACER_CELL);
+    /* the placer knows nothing of the meshes: none may reach into the box */
+    for (int k = 0; k < s->n_meshes; k++)
+        for (int t = 0; t < s->meshes[k].n_tri; t++)
+            if (tri_meets_box(s->meshes[k].tri[t], lo, hi)) {
+                fprintf(err,
+                        "%s:%d: meshes: %s: its triangle %d reaches into the flume's packing box (x %g to %g, y %g to "
+                        "%g, z %g to %g m): move the mesh, or the gate (flume.x_gate) and flume.pack_height\n",
+                        s->path, s->meshes[k].line, s->meshes[k].file, t, lo.x, hi.x, lo.y, hi.y, lo.z, hi.z);
+                return SD_ERR_ARG;
+            }
+    sd_placer *pl = sd_placer_create(lo, hi, sd_build_placer_cell(s, 0));
     if (!pl) return SD_ERR_NOMEM;
     info->first_moving_gid = -1;
     int nlogs = sd_build_log_count(s);
+    sd_rng sizes = sd_debris_log_stream(s->seed); /* (drawn only when a size varies) */
     for (int k = 0; k < nlogs; k++) {
         sd_vec3 pos, axis;
-        if (!sd_placer_try_cylinder(pl, rng, 0.5 * s->log_diam, 0.5 * s->log_length, 0.0005, 200000, &pos, &axis)) {
+        double len = s->log_length, d = s->log_diam;
+        if (sd_build_log_sizes_vary(s))
+            sd_debris_log_next(&sizes, &s->log_length_dist, s->log_length, &s->log_diam_dist, s->log_diam, &len, &d);
+        if (!sd_placer_try_cylinder(pl, rng, 0.5 * d, 0.5 * len, 0.0005, 200000, &pos, &axis)) {
             fprintf(err, "%s: no room for log %d of %d in the packing box; raise flume.pack_height\n", s->path, k + 1,
                     nlogs);
             sd_placer_destroy(pl);
@@ -393,8 +615,8 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
         sd_cylinder_def c = sd_cylinder_def_default();
         c.pos = pos;
         c.axis = axis;
-        c.radius = 0.5 * s->log_diam;
-        c.length = s->log_length;
+        c.radius = 0.5 * d;
+        c.length = len;
         c.density = s->log_density;
         c.tag = SD_TAG_LOG;
         c.material = s->log_mat;
@@ -484,7 +706,7 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
     }
     if (s->box_on && (st = sd_build_box(w, s->box_min, s->box_max, SD_GROUP_BOX, s->box_mat))) return st;
     if (s->pile_n_classes > 0) {
-        sd_placer *pl = sd_placer_create(s->pile_min, s->pile_max, SD_PLACER_CELL);
+        sd_placer *pl = sd_placer_create(s->pile_min, s->pile_max, sd_build_placer_cell(s, 1));
         if (!pl) return SD_ERR_NOMEM;
         for (int cl = 0; cl < s->pile_n_classes; cl++)
             for (int k = 0; k < s->pile_count[cl]; k++) {
@@ -511,5 +733,7 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
         sd_placer_destroy(pl);
     }
     if (s->flume_on && (st = build_flume(w, s, info, &rng, err, with_dam))) return st;
+    /* after everything else, so that a scene's other walls and bodies keep their order */
+    if ((st = build_meshes(w, s, err))) return st;
     return SD_OK;
 }

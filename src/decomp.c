@@ -83,7 +83,22 @@ sd_status sd_world_body_put(sd_world *w, const void *rec, int ghost)
     if (gid < w->next_gid && w->gid_map[gid] >= 0) {
         const int i = w->gid_map[gid];
         const uint8_t shape = b->shape[i], fixed = b->fixed[i];
+        const sd_vec3 p0 = b->pos[i];
+        const sd_quat q0 = b->quat[i];
         sd_bodies_set_record(b, i, rec);
+        if (ghost) {
+            /* how far its surface moved: the centre's move, and for a log the attitude's
+             * (|R' - R| <= 2 |q' - q| for unit quaternions) times its bounding radius; the
+             * near pairs of this world are remade once its drift passes half their skin, as
+             * after a move of its own bodies (a near list left as it was would miss a contact
+             * this ghost closed: another world's own body would miss its force) */
+            const sd_quat dq = {b->quat[i].w - q0.w, b->quat[i].x - q0.x, b->quat[i].y - q0.y, b->quat[i].z - q0.z};
+            double d = v3_norm(v3_sub(b->pos[i], p0));
+            if (shape != SD_SHAPE_SPHERE)
+                d += 2.0 * sqrt(dq.w * dq.w + dq.x * dq.x + dq.y * dq.y + dq.z * dq.z) * b->bound_r[i];
+            d *= 1.0 + 1e-9;
+            if (!(d <= w->ghost_drift)) w->ghost_drift = isfinite(d) ? d : INFINITY;
+        }
         if (b->shape[i] != shape || b->fixed[i] != fixed) {
             b->shape[i] = shape, b->fixed[i] = fixed;
             return SD_ERR_ARG;
@@ -227,6 +242,36 @@ sd_status sd_world_set_clock(sd_world *w, double time, long step)
     w->step = step;
     w->last_rebuild_time = time;
     w->need_rebuild = 1;
+    return SD_OK;
+}
+
+sd_status sd_world_set_next_gid(sd_world *w, int next_gid)
+{
+    if (!w || next_gid < 0 || next_gid == INT32_MAX) return SD_ERR_ARG;
+    for (int i = 0; i < w->b.n; i++)
+        if (w->b.gid[i] >= next_gid) return SD_ERR_ARG;
+    if (next_gid > w->next_gid) {
+        if (sd_grow((void **)&w->gid_map, &w->gid_cap, next_gid + 1, sizeof(int32_t))) return SD_ERR_NOMEM;
+        for (int g = w->next_gid; g < next_gid; g++)
+            w->gid_map[g] = -1;
+    }
+    w->next_gid = next_gid;
+    return SD_OK;
+}
+
+int sd_world_next_gid(const sd_world *w) { return w ? w->next_gid : 0; }
+
+sd_status sd_world_body_wall_forces(const sd_world *w, int group, sd_vec3 *out)
+{
+    if (!w || (w->b.n > 0 && !out)) return SD_ERR_ARG;
+    for (int i = 0; i < w->b.n; i++)
+        out[i] = v3(0.0, 0.0, 0.0);
+    if (w->keys_collected) return SD_OK; /* (no pairs since the store changed: no loads either) */
+    for (int k = 0; k < w->bt.n; k++) {
+        const int t = w->bt.p[k].b;
+        if (!w->bt.active[k] || !w->w.active[t] || (group >= 0 && w->w.group[t] != group)) continue;
+        out[w->bt.p[k].a] = v3_add(out[w->bt.p[k].a], w->bt.out[k]);
+    }
     return SD_OK;
 }
 

@@ -998,6 +998,8 @@ static sd_status slurp(const rd_ctx *r, unsigned char **data, size_t *size)
     return SD_OK;
 }
 
+uint32_t sd_checkpoint_version(void) { return SD_CHECKPOINT_VERSION; }
+
 sd_status sd_checkpoint_read(const char *path, sd_world **out, void **extra, size_t *extra_len, char *msg,
                              size_t msglen)
 {

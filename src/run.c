@@ -25,8 +25,9 @@
 static void set_fluid(run_ctx *c)
 {
     const sd_scenario *s = c->s;
+    sd_world *moved = sd_run_slabs_world(c); /* (the slab's, in a decomposed run) */
     if (!s->water_on || c->phase == PH_PACK || (c->phase == PH_RUN && s->water_scene == SD_SCENE_WATER_NONE)) {
-        sd_world_set_external_force_fn(c->w, NULL, NULL);
+        sd_world_set_external_force_fn(moved, NULL, NULL);
         return;
     }
     /* the flume frame; a scene's frame is the world's (x downstream, bed z = 0, normal +z) */
@@ -46,7 +47,7 @@ static void set_fluid(run_ctx *c)
     c->fluid.xd = s->water_capture_end == SD_CAPTURE_END_DAM_FACE ? s->x_dam : sd_trap_plane_x(c);
     c->fluid.x_from = s->water_capture_length > 0.0 ? s->x_dam - s->water_capture_length : -INFINITY;
     c->fluid.h_d = c->h_d;
-    sd_world_set_external_force_fn(c->w, sd_water_forces, &c->fluid);
+    sd_world_set_external_force_fn(moved, sd_water_forces, &c->fluid);
 }
 
 static void update_h_d(run_ctx *c) { c->h_d = sd_trap_capture_depth(c->s, c->w); }
@@ -62,7 +63,9 @@ static void remove_passed(run_ctx *c)
         else if (b->tag[i] >= 0 && b->tag[i] < SD_MAX_CLASSES)
             c->vol_passed_class[b->tag[i]] += sd_trap_body_volume(b, i);
         c->n_passed++;
-        sd_world_remove_body(c->w, b->gid[i]);
+        const int gid = b->gid[i];
+        sd_world_remove_body(c->w, gid);
+        if (c->sys) sd_run_slabs_remove(c, gid);
         bv = sd_world_bodies(c->w); /* (the last body took i's place: those above i are done) */
     }
 }
@@ -73,13 +76,18 @@ static void remove_passed(run_ctx *c)
 static sd_status capture_start(run_ctx *c)
 {
     const sd_scenario *s = c->s;
+    const int n0 = c->info.n_pipes;
     sd_status st = sd_build_dam(c->w, s, &c->info);
+    for (int k = n0; k < c->info.n_pipes && !st && c->sys; k++) /* (built into the copy, handed to the slabs) */
+        st = sd_run_slabs_add(c, c->info.pipe_gid[k]);
     if (st) return st;
     c->dam_built = 1;
-    char csv[1200];
+    char csv[1200], ev[1200];
     snprintf(csv, sizeof csv, "%s/pipes.csv", c->dir);
-    if (sd_pipe_loads_start(&c->loads, s, &c->info, c->w, c->series ? csv : NULL))
-        sd_output_note_failure(c, "pipes.csv", errno);
+    snprintf(ev, sizeof ev, "%s/events.csv", c->dir);
+    if (sd_pipe_loads_start(&c->loads, s, &c->info, c->w, c->series ? csv : NULL, c->series ? ev : NULL))
+        sd_output_note_failure(c, c->loads.csv ? "events.csv" : "pipes.csv", errno);
+    c->loads.no_energy = c->sys != NULL;
     c->phase = PH_CAPTURE;
     c->phase_t0 = sd_world_time(c->w);
     c->phase_w0 = sd_now();
@@ -88,6 +96,21 @@ static sd_status capture_start(run_ctx *c)
     sd_output_snapshot(c, "arrival");
     sd_output_picture(c, "arrival", "side_arrival.png", s->x_dam - 1.2, s->x_end);
     return SD_OK;
+}
+
+/* The dam body of meshes after a step: its peak and impulses, every step as the pipes' (an impact
+ * lasts a few milliseconds, less than a log interval). This gathers the walls' loads every step,
+ * which only scenes with a dam mesh pay for (contact.c, sd_contact_gather). */
+static void dam_mesh_step(run_ctx *c, double interval)
+{
+    const sd_vec3 f = sd_world_group_force(c->w, SD_GROUP_DAM);
+    const double a = v3_norm(f);
+    if (a > c->mesh_dam_peak) {
+        c->mesh_dam_peak = a;
+        c->mesh_dam_t_peak = sd_world_time(c->w);
+    }
+    c->mesh_dam_impulse += a * interval;
+    c->mesh_dam_impulse_vec = v3_madd(c->mesh_dam_impulse_vec, f, interval);
 }
 
 /* ---------------------------------------------------------------- the run ---- */
@@ -102,6 +125,7 @@ int sd_run_begin(sd_run *r)
     sd_status st;
     sd_run_restored rs;
     memset(&rs, 0, sizeof rs);
+    c->rank = o->decompose && o->comm ? o->comm->rank : 0;
     if (o->restart) {
         char msg[1600];
         void *blob = NULL;
@@ -150,44 +174,68 @@ int sd_run_begin(sd_run *r)
             return 2;
         }
     }
-    /* only now, with valid input, does the output directory appear */
+    /* a decomposed run: the slabs over the world, which stays as the whole system's copy (a dam
+     * body of meshes is not summed over the slabs yet: refused rather than reported wrong) */
+    int dam_mesh = 0;
+    for (int k = 0; k < s->n_meshes; k++)
+        dam_mesh |= s->meshes[k].role == SD_MESH_DAM;
+    if (o->decompose && dam_mesh) {
+        fprintf(o->err, "%s: meshes: a mesh with role dam is not supported in a decomposed run (mpirun -np N > 1 or "
+                        "--decompose); run it in one process\n", s->path);
+        sd_run_state_free(&rs);
+        sd_pipe_loads_free(&c->loads);
+        sd_world_destroy(c->w);
+        return 2;
+    }
+    if (o->decompose && sd_run_slabs_begin(c)) {
+        sd_run_state_free(&rs);
+        sd_pipe_loads_free(&c->loads);
+        sd_world_destroy(c->w);
+        return 1;
+    }
+    /* only now, with valid input, does the output directory appear (rank 0's) */
     snprintf(c->dir, sizeof c->dir, "%s", o->outdir);
-    {
+    int code = 0;
+    if (c->rank == 0) {
         char msg[1800];
         const int resume = c->restarted_from && sd_run_dir_holds(c->dir, c->restarted_from);
         if (sd_run_dir_claim(c->dir, o->overwrite, resume, msg, sizeof msg)) {
             fprintf(o->err, "%s\n", msg);
-            sd_run_state_free(&rs);
-            sd_pipe_loads_free(&c->loads);
-            sd_world_destroy(c->w);
-            return 2;
+            code = 2;
         }
     }
-    if (c->restarted_from) {
+    if (!code && c->restarted_from && c->rank == 0) {
         char msg[1600];
         if (sd_run_state_restore_outputs(c, &rs, msg, sizeof msg)) {
             fprintf(o->err, "%s: cannot continue the outputs of %s: %s\n", c->dir, o->restart, msg);
-            sd_run_state_free(&rs);
-            sd_pipe_loads_free(&c->loads);
-            sd_world_destroy(c->w);
-            return 1;
+            code = 1;
         }
+    }
+    if (c->sys) code = sd_run_slabs_agree(c, code);
+    if (code) {
+        sd_run_state_free(&rs);
+        sd_pipe_loads_free(&c->loads);
+        sd_run_slabs_end(c);
+        sd_world_destroy(c->w);
+        return code;
     }
     char path[1200];
     const char *mode = c->restarted_from ? "a" : "w";
+    const int writer = c->rank == 0; /* (the other ranks of a decomposed run write nothing) */
     snprintf(path, sizeof path, "%s/series.csv", c->dir);
-    c->series = fopen(path, mode);
+    c->series = writer ? fopen(path, mode) : NULL;
     if (c->series && !c->restarted_from)
         fprintf(c->series,
                 "t,phase,front_x,volume_upstream_m3,kinetic_energy_J,contacts,dam_force_N,p_v,h_d,elements,passed,"
-                "roughness_force_x_N,roughness_force_z_N,bed_force_x_N,bed_force_z_N\n");
-    if (s->n_traj > 0) {
+                "roughness_force_x_N,roughness_force_z_N,bed_force_x_N,bed_force_z_N,dam_mesh_force_x_N,"
+                "dam_mesh_force_y_N,dam_mesh_force_z_N\n");
+    if (s->n_traj > 0 && writer) {
         snprintf(path, sizeof path, "%s/trajectories.csv", c->dir);
         c->traj = fopen(path, mode);
         if (c->traj && !c->restarted_from) fprintf(c->traj, "t,id,x,y,z,vx,vy,vz,wx,wy,wz,ax,ay,az,fx,fy,fz\n");
     }
     int pvd_bad = 0;
-    if (s->vtk_on) {
+    if (s->vtk_on && writer) {
         snprintf(path, sizeof path, "%s/series.pvd", c->dir);
         c->pvd_on = sd_vtk_series_init(&c->pvd, path) == 0;
         for (int k = 0; c->pvd_on && k < rs.npvd; k++)
@@ -195,20 +243,33 @@ int sd_run_begin(sd_run *r)
     }
     const int rs_kind = rs.kind;
     if (c->restarted_from && c->dam_built) { /* a restart in the capture: its pipe loads go on */
+        char ev[1200];
         snprintf(path, sizeof path, "%s/pipes.csv", c->dir);
-        if (sd_pipe_loads_resume(&c->loads, s, &c->info, c->w, path)) pvd_bad = 1;
+        snprintf(ev, sizeof ev, "%s/events.csv", c->dir);
+        if (sd_pipe_loads_resume(&c->loads, s, &c->info, c->w, writer ? path : NULL, writer ? ev : NULL)) pvd_bad = 1;
+        c->loads.no_energy = c->sys != NULL;
     }
     sd_run_state_free(&rs);
-    if (!c->series || (s->n_traj > 0 && !c->traj) || (s->vtk_on && !c->pvd_on) || pvd_bad ||
-        (!c->restarted_from && sd_output_walls(c))) {
+    if (writer && (!c->series || (s->n_traj > 0 && !c->traj) || (s->vtk_on && !c->pvd_on) || pvd_bad ||
+                   (!c->restarted_from && sd_output_walls(c)))) {
         fprintf(o->err, "%s: cannot write output files: %s\n", c->dir, strerror(errno));
+        code = 1;
+    }
+    if (c->sys) code = sd_run_slabs_agree(c, code);
+    if (code) {
         sd_output_close(c);
         sd_pipe_loads_free(&c->loads);
+        sd_run_slabs_end(c);
         sd_world_destroy(c->w);
-        return 1;
+        return code;
     }
     const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
     const double dt = s->world.dt;
+    c->n_dam_tri = 0;
+    for (int k = 0; k < s->n_meshes; k++)
+        if (s->meshes[k].role == SD_MESH_DAM) c->n_dam_tri += s->meshes[k].n_tri;
+    for (int k = 0; k < s->n_elems; k++) /* (explicit triangles may join the dam body) */
+        c->n_dam_tri += s->elems[k].type == 2 && s->elems[k].group == SD_GROUP_DAM;
     if (!c->restarted_from) {
         for (int i = 0; i < b->n; i++) {
             if (b->fixed[i]) continue;
@@ -259,14 +320,16 @@ int sd_run_step_once(sd_run *r)
     sd_run_result *res = &r->res;
     const double dt = s->world.dt;
     sd_status st;
-    if (o->stop && *o->stop) {
+    /* (a decomposed run's ranks stop together: as they agreed after the last step) */
+    if (c->sys ? (c->sys_flags & SD_AGREE_STOP) != 0 : (o->stop && *o->stop)) {
         r->code = 130;
         r->msg = "interrupted";
         res->interrupted = 1;
         return 1;
     }
-    if (sd_output_failed(c)) { /* a full disk: stop, with an error, not a run that says done */
-        fprintf(o->err, "%s/%s: cannot write: %s\n", c->dir, c->out_file, strerror(c->out_errno));
+    if (c->sys ? (c->sys_flags & SD_AGREE_OUTPUT) != 0 : sd_output_failed(c) != 0) {
+        /* a full disk: stop, with an error, not a run that says done */
+        if (c->rank == 0) fprintf(o->err, "%s/%s: cannot write: %s\n", c->dir, c->out_file, strerror(c->out_errno));
         r->code = 1;
         r->msg = "output failed";
         return 1;
@@ -276,8 +339,14 @@ int sd_run_step_once(sd_run *r)
     if (c->flow_ended && !c->dam_built) {
         /* the branch point: a flow-end checkpoint holds the state of exactly this moment, and
          * a restart from it comes in here, so both go through capture_start alike */
+        if (c->sys && (st = sd_run_slabs_sync(c))) {
+            r->code = 1;
+            r->msg = sd_status_message(st);
+            return 1;
+        }
         if (o->checkpoint_flow_end && !c->flow_ckpt_written) {
             st = sd_run_state_checkpoint(c, o->checkpoint_flow_end);
+            if (c->sys) st = (sd_status)sd_run_slabs_agree(c, st);
             if (st) {
                 fprintf(o->err, "%s: cannot write the flow-end checkpoint: %s (%s)\n", o->checkpoint_flow_end,
                         sd_status_message(st), strerror(errno));
@@ -303,7 +372,12 @@ int sd_run_step_once(sd_run *r)
         }
     }
     set_fluid(c);
-    st = sd_world_step(c->w);
+    if (c->sys) {
+        c->sys_flags = (o->stop && *o->stop ? SD_AGREE_STOP : 0) | (sd_output_failed(c) ? SD_AGREE_OUTPUT : 0);
+        st = sd_run_slabs_step(c, &c->sys_flags);
+    } else {
+        st = sd_world_step(c->w);
+    }
     if (st) {
         fprintf(o->err, "%s: step %ld, t = %.6f s: %s\n", s->path, sd_world_step_count(c->w), sd_world_time(c->w), sd_status_message(st));
         r->code = 1;
@@ -312,6 +386,15 @@ int sd_run_step_once(sd_run *r)
     }
     long step = sd_world_step_count(c->w);
     if (c->loads.n) c->dam_force_now = sd_pipe_loads_step(&c->loads, c->w, sd_world_time(c->w), dt);
+    if (c->n_dam_tri) dam_mesh_step(c, dt);
+    /* a decomposed run's copy of the system, refreshed where the driver reads it */
+    if (c->sys && ((s->flume_on && step % 100 == 0) || step % r->log_every == 0 ||
+                   (s->n_traj > 0 && step % r->traj_every == 0) || (r->snap_every && step % r->snap_every == 0)) &&
+        (st = sd_run_slabs_sync(c))) {
+        r->code = 1;
+        r->msg = sd_status_message(st);
+        return 1;
+    }
     int next = c->phase;
     if (s->flume_on && step % 100 == 0) {
         int before = c->n_passed;
@@ -346,6 +429,11 @@ int sd_run_step_once(sd_run *r)
         if (fx >= s->x_dam || tph >= s->flow_limit) next = PH_CAPTURE;
     }
     if (next != c->phase) {
+        if (c->sys && step % 100 != 0 && (st = sd_run_slabs_sync(c))) {
+            r->code = 1;
+            r->msg = sd_status_message(st);
+            return 1;
+        }
         c->phase_end[c->phase] = sd_world_time(c->w);
         c->phase_wall[c->phase] = sd_now() - c->phase_w0;
         c->phase_w0 = sd_now();
@@ -355,6 +443,7 @@ int sd_run_step_once(sd_run *r)
         if (c->phase == PH_PACK) {
             sd_trap_speed_stats(c, c->pack_speed);
             sd_world_set_group_active(c->w, SD_GROUP_GATE, 0);
+            if (c->sys) sd_run_slabs_group_active(c, SD_GROUP_GATE, 0);
             sd_output_snapshot(c, "packed");
             c->phase_t0 = sd_world_time(c->w);
             c->phase = next;
@@ -370,7 +459,9 @@ int sd_run_step_once(sd_run *r)
     if (step % r->log_every == 0) {
         sd_output_series_row(c);
         if (c->loads.n && sd_pipe_loads_sample(&c->loads, c->w, sd_world_time(c->w)))
-            sd_output_note_failure(c, "pipes.csv", errno);
+            sd_output_note_failure(c, c->loads.ev_csv_bad || (c->loads.ev_csv && ferror(c->loads.ev_csv)) ? "events.csv"
+                                                                                                      : "pipes.csv",
+                                   errno);
     }
     if (c->traj && step % r->traj_every == 0) sd_output_traj(c);
     if (r->snap_every && step % r->snap_every == 0) {
@@ -381,8 +472,16 @@ int sd_run_step_once(sd_run *r)
     if (step % r->progress_every == 0) sd_output_progress(c, r->t_end_est);
     /* after this step's outputs: a restart from it goes on at the top of the loop, as this run
      * does */
-    if (r->ckpt_every && step % r->ckpt_every == 0 && c->phase != PH_DONE && !sd_output_failed(c)) {
-        st = sd_run_state_periodic(c);
+    if (r->ckpt_every && step % r->ckpt_every == 0) c->ckpt_pending = 1;
+    /* a decomposed run's checkpoint waits for a step after which the pairs are remade (one comes
+     * within t_reset): a restart remakes them at its first step, so it goes on as this run does */
+    const int ckpt_now = c->ckpt_pending && (!c->sys || sd_run_slabs_rebuilds_next(c));
+    const int out_failed = c->sys ? (c->sys_flags & SD_AGREE_OUTPUT) != 0 : sd_output_failed(c) != 0;
+    if (ckpt_now && c->phase != PH_DONE && !out_failed) {
+        c->ckpt_pending = 0;
+        st = c->sys && c->sys_synced_step != step ? sd_run_slabs_sync(c) : SD_OK;
+        if (!st) st = sd_run_state_periodic(c);
+        if (c->sys) st = (sd_status)sd_run_slabs_agree(c, st);
         if (st) {
             fprintf(o->err, "%s/checkpoint_%010ld.ckpt: cannot write: %s; the checkpoints written before are kept\n",
                     c->dir, step, st == SD_ERR_IO ? strerror(errno) : sd_status_message(st));
@@ -402,6 +501,15 @@ void sd_run_end(sd_run *r)
     const sd_run_opts *o = c->o;
     sd_run_result *res = &r->res;
     if (o->log && o->progress_tty) fputc('\n', o->log);
+    if (c->sys) { /* the final outputs read the whole system */
+        const sd_status st = sd_run_slabs_sync(c);
+        if (st && !r->code) {
+            r->code = 1;
+            r->msg = sd_status_message(st);
+        }
+        c->sys_hash = sd_run_slabs_hash(c);
+        sd_run_slabs_stats(c);
+    }
     if (res->stopped_at_flow_end) {
         /* a shared flow: its outputs end at the checkpoint, which the branches continue */
         sd_output_close(c);
@@ -417,7 +525,7 @@ void sd_run_end(sd_run *r)
         if (c->loads.n) {
             if (sd_pipe_loads_sample(&c->loads, c->w, sd_world_time(c->w))) sd_output_note_failure(c, "pipes.csv", errno);
             sd_pipe_loads_finish(&c->loads, c->capture_cut || c->phase == PH_CAPTURE);
-            if (sd_pipe_loads_close(&c->loads)) sd_output_note_failure(c, "pipes.csv", errno);
+            if (sd_pipe_loads_close(&c->loads)) sd_output_note_failure(c, "pipes.csv or events.csv", errno);
         }
         sd_output_snapshot(c, "final");
         if (s->flume_on && r->code == 0) sd_output_picture(c, "final", "side_final.png", s->x_dam - 1.0, s->x_end);
@@ -442,7 +550,8 @@ void sd_run_end(sd_run *r)
     memcpy(res->pictures, c->plots, (size_t)c->n_plots * sizeof c->plots[0]);
     res->flow_wall = c->flow_wall;
     res->restarted = c->restarted_from != NULL;
-    res->state_hash = sd_world_state_hash(c->w);
+    res->state_hash = c->sys ? c->sys_hash : sd_world_state_hash(c->w);
+    sd_run_slabs_end(c);
     for (int k = 0; k < 4; k++)
         res->phase_end[k] = c->phase_end[k];
     r->finished = 1;

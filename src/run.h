@@ -8,6 +8,20 @@
 
 #include "scenario.h"
 
+/* The transport between the processes of one decomposed run (docs/decomposition.md): the
+ * program's MPI (app/ranks_mpi.c; the library has none). Every function is collective: each
+ * rank calls it, in the same order; 0 on success. */
+typedef struct sd_run_comm {
+    int rank, size;
+    void *ctx;
+    /* len bytes from every rank (the same len everywhere) into all (size * len bytes), in rank order */
+    int (*allgather)(void *ctx, const void *mine, size_t len, void *all);
+    /* each rank's own length: *all malloc'ed (the caller frees it), lens[r] bytes from rank r, in rank order */
+    int (*allgatherv)(void *ctx, const void *mine, size_t len, void **all, size_t *lens);
+    /* out[r] (outlen[r] bytes) to rank r; *in malloc'ed, inlen[r] bytes from rank r, in rank order */
+    int (*alltoallv)(void *ctx, const void *const *out, const size_t *outlen, void **in, size_t *inlen);
+} sd_run_comm;
+
 typedef struct {
     const char *outdir;          /* output directory (created) */
     int progress_tty;            /* 1: live progress line; 0: plain log lines */
@@ -29,6 +43,12 @@ typedef struct {
     int overwrite;                   /* 1: an outdir holding another run's files is cleared, not
                                       * refused (a restart into its checkpoint's directory continues
                                       * there either way) */
+    /* The run over slabs along x (docs/decomposition.md): one slab a rank of comm (NULL: one
+     * slab in this process), the fixed grid, the diagnostics from the whole system gathered in
+     * a fixed order; the same bits, outputs and checkpoints on any count of ranks. Rank 0 writes
+     * the files. */
+    int decompose;
+    const sd_run_comm *comm;
 } sd_run_opts;
 
 /* A side view the run asks its caller to draw (the driver starts no program): the snapshot's
@@ -68,5 +88,8 @@ int sd_run_scenario(const sd_scenario *s, const sd_run_opts *o, sd_run_result *r
  * checksum, driver state, scenario fingerprint); 0 if so, else -1 and msg names the file and
  * what is wrong. */
 int sd_run_check_restart(const sd_scenario *s, const char *path, char *msg, size_t msglen);
+/* The version of the driver's state that a run's checkpoints carry ("SDRUNv3"): a checkpoint
+ * of another is refused. */
+const char *sd_run_state_version(void);
 
 #endif

@@ -6,12 +6,15 @@
 #include "core/status.h"
 #include "run_ctx.h"
 #include "sabodem_run.h"
+#include "sd_build_id.h" /* (generated at each build: scripts/build_id.cmake) */
 
 #ifndef SD_VERSION
 #error "SD_VERSION (the project's version) comes from CMakeLists.txt"
 #endif
 
 const char *sd_version(void) { return SD_VERSION; }
+
+const char *sd_build_id(void) { return SD_BUILD_ID; }
 
 void sd_free(void *p) { free(p); }
 

@@ -21,6 +21,16 @@ static inline const char *sd_run_phase_name(int phase)
     return names[phase];
 }
 
+/* a decomposed run's numbers at its end, summed over the ranks */
+typedef struct {
+    int ranks;
+    double ghost_width;                 /* m */
+    long redistributions, migrations;   /* the pairs remade (each with the bodies' new owners), owners changed */
+    long boundary_moves;                /* inner boundaries moved (by the counted work) */
+    double bytes;                       /* records and springs sent between the ranks */
+    double bounds[65];                  /* the inner boundaries at the end, x, m: bounds[1 .. ranks-1] */
+} sd_run_slabs_report;
+
 typedef struct {
     const sd_scenario *s;
     const sd_run_opts *o;
@@ -40,6 +50,11 @@ typedef struct {
     double progress_wall; /* when the last progress line was written (sd_now) */
     long progress_lines;  /* how many */
     double dam_force_now;
+    /* the dam body of meshes (role dam, group SD_GROUP_DAM): its triangles, the largest |F| of
+     * a step and when, and the impulses ∫|F| dt and ∫F dt */
+    int n_dam_tri;
+    double mesh_dam_peak, mesh_dam_t_peak, mesh_dam_impulse;
+    sd_vec3 mesh_dam_impulse_vec;
     double phase_end[4];
     int pack_at_rest;      /* the packing ended at rest (else at phases.packing_time) */
     double pack_speed[3];  /* the moving elements' speeds at the packing end: max, p99, mean, m/s */
@@ -67,6 +82,21 @@ typedef struct {
     /* the side views asked for so far (the arrival's, the end's), for the caller to draw */
     int n_plots;
     sd_run_picture plots[SD_RUN_PICTURES];
+    /* A decomposed run (run_slabs.c): the slabs step, and c->w is the whole system's copy that
+     * the driver reads, never stepped, its bodies refreshed from their owners (sd_run_slabs_sync)
+     * whenever the driver reads more than the clock, the front and the pipes. NULL: c->w steps. */
+    struct sd_run_slabs *sys;
+    int rank;               /* this process among the run's (0 writes the files) */
+    long sys_contacts;      /* at the last refresh: the contact points */
+    sd_vec3 sys_wall;       /* the walls' forces on the bodies, N, summed in gid order */
+    sd_vec3 sys_bed;        /* of those, the bed's triangles' */
+    double sys_front;       /* the front after the last step (the maximum over the slabs) */
+    int sys_front_stale;    /* bodies removed since: the front is the copy's */
+    uint64_t sys_hash;      /* the state hash at the end */
+    int sys_flags;          /* SD_AGREE_* as agreed after the last step */
+    long sys_synced_step;   /* the step of the last refresh */
+    int ckpt_pending;       /* a periodic checkpoint is due (a decomposed run's waits for a rebuild) */
+    sd_run_slabs_report sys_report; /* at the end, for summary.json */
 } run_ctx;
 
 /* what a checkpoint's driver state holds beside run_ctx's fields */
@@ -99,7 +129,7 @@ void sd_run_end(sd_run *r);
 
 typedef struct {
     int kind; /* SD_CKPT_FLOW_END or SD_CKPT_PERIODIC */
-    long series_len, traj_len, pipes_len; /* the outputs' lengths at the checkpoint (-1: none) */
+    long series_len, traj_len, pipes_len, events_len; /* the outputs' lengths at the checkpoint (-1: none) */
     double wall_before;   /* wall time of the run(s) before the checkpoint, s */
     double phase_wall_in; /* of that, in the phase the checkpoint was taken in */
     int npvd;
@@ -174,6 +204,39 @@ sd_status sd_run_state_checkpoint(run_ctx *c, const char *path);
  * then every older periodic checkpoint but the newest one is deleted (the last two are kept).
  * On failure the file is not there (the older ones are untouched) and errno says why. */
 sd_status sd_run_state_periodic(run_ctx *c);
+
+/* run_slabs.c: the decomposed run (c->o->decompose; docs/decomposition.md). Every function is
+ * collective (each rank calls it at the same point of the same run). */
+/* Slabs over c->w (built or read from a checkpoint, the same on every rank); 0, or an exit code. */
+int sd_run_slabs_begin(run_ctx *c);
+void sd_run_slabs_end(run_ctx *c);
+/* the world the step moves and the water pushes: this rank's slab's, or c->w */
+sd_world *sd_run_slabs_world(run_ctx *c);
+/* One step of the system and what every rank agrees on after it: *flags (in: this rank's
+ * SD_AGREE_* bits; out: the OR over the ranks), the step's status (the worst), c->sys_front,
+ * c->w's clock and its pipes' states. */
+enum { SD_AGREE_STOP = 1, SD_AGREE_OUTPUT = 2 };
+sd_status sd_run_slabs_step(run_ctx *c, int *flags);
+/* c->w's bodies from their owners, c->sys_contacts, sys_wall, sys_bed */
+sd_status sd_run_slabs_sync(run_ctx *c);
+/* the system's changes between steps, made in c->w too by the caller: a body removed; a body
+ * added to c->w (gid) handed to the slabs; a group of triangles switched; the pairs remade at
+ * the next step */
+sd_status sd_run_slabs_remove(run_ctx *c, int gid);
+sd_status sd_run_slabs_add(run_ctx *c, int gid);
+sd_status sd_run_slabs_group_active(run_ctx *c, int group, int active);
+void sd_run_slabs_request_rebuild(run_ctx *c);
+/* whether the next step remakes the pairs (the same answer on every rank) */
+int sd_run_slabs_rebuilds_next(const run_ctx *c);
+/* the largest v over the ranks */
+int sd_run_slabs_agree(run_ctx *c, int v);
+/* the whole system as one world with its springs, for a checkpoint (on rank 0; NULL elsewhere,
+ * and *out NULL) */
+sd_status sd_run_slabs_whole(run_ctx *c, sd_world **out);
+/* sd_world_state_hash_canonical of the whole system (on every rank) */
+uint64_t sd_run_slabs_hash(run_ctx *c);
+/* c->sys_report filled */
+void sd_run_slabs_stats(run_ctx *c);
 
 /* run_dir.c: a run's output directory */
 /* Create dir and make it this run's. A directory holding files already is refused (-1, why in

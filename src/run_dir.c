@@ -14,8 +14,8 @@
 /* The names of the files a run (or a sweep, for its run: result.csv) writes. */
 static int is_run_file(const char *name, size_t n)
 {
-    static const char *const exact[] = {"summary.json", "series.csv", "series.pvd", "trajectories.csv",
-                                        "walls.vtp",    "result.csv", "flow_end.ckpt"};
+    static const char *const exact[] = {"summary.json", "series.csv", "series.pvd", "trajectories.csv", "walls.vtp",
+                                        "result.csv",   "flow_end.ckpt", "pipes.csv", "events.csv"};
     static const struct {
         const char *pre, *suf;
     } pattern[] = {{"spheres_", ".vtp"}, {"cylinders_", ".vtp"}, {"side_", ".png"}, {"checkpoint_", ".ckpt"}};

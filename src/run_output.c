@@ -38,10 +38,13 @@ void sd_output_series_row(run_ctx *c)
      * the bed's triangles */
     sd_vec3 rough, tri_bed;
     sd_trap_fixed_loads(c, &rough, &tri_bed);
-    fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d,%.6e,%.6e,%.6e,%.6e\n", sd_world_time(c->w),
-            sd_run_phase_name(c->phase), sd_world_body_count(c->w) ? sd_trap_front_x(c) : 0.0, up,
-            sd_world_kinetic_energy(c->w), sd_world_contact_count(c->w), c->dam_force_now, pv, c->h_d,
-            sd_world_body_count(c->w), c->n_passed, rough.x, rough.z, tri_bed.x, tri_bed.z);
+    /* and on the dam body of meshes (role dam) */
+    const sd_vec3 mesh_dam = c->n_dam_tri ? sd_world_group_force(c->w, SD_GROUP_DAM) : v3(0.0, 0.0, 0.0);
+    fprintf(c->series, "%.6f,%s,%.6f,%.9e,%.9e,%ld,%.6e,%.6f,%.6f,%d,%d,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e\n",
+            sd_world_time(c->w), sd_run_phase_name(c->phase), sd_world_body_count(c->w) ? sd_trap_front_x(c) : 0.0, up,
+            sd_world_kinetic_energy(c->w), c->sys ? c->sys_contacts : sd_world_contact_count(c->w), c->dam_force_now, pv, c->h_d,
+            sd_world_body_count(c->w), c->n_passed, rough.x, rough.z, tri_bed.x, tri_bed.z, mesh_dam.x, mesh_dam.y,
+            mesh_dam.z);
     if (ferror(c->series)) out_failed(c, "series.csv", errno);
 }
 
@@ -61,7 +64,7 @@ void sd_output_traj(run_ctx *c)
 
 int sd_output_snapshot(run_ctx *c, const char *name)
 {
-    if (!c->s->vtk_on) return 0;
+    if (!c->s->vtk_on || c->rank != 0) return 0; /* (a decomposed run's rank 0 writes the whole copy) */
     const sd_body_view bv = sd_world_bodies(c->w), *b = &bv;
     size_t cap = (size_t)(b->n + 1);
     sd_vec3 *pos = malloc(cap * sizeof(sd_vec3)), *vel = malloc(cap * sizeof(sd_vec3)),
@@ -115,7 +118,7 @@ int sd_output_snapshot(run_ctx *c, const char *name)
 
 int sd_output_walls(run_ctx *c)
 {
-    if (!c->s->vtk_on) return 0;
+    if (!c->s->vtk_on || c->rank != 0) return 0;
     const int nt = sd_world_triangle_count(c->w);
     char f[1200];
     snprintf(f, sizeof f, "%s/walls.vtp", c->dir);
@@ -175,12 +178,20 @@ void sd_output_progress(run_ctx *c, double t_end_est)
 static int add_num(cJSON *o, const char *key, double v) { return cJSON_AddNumberToObject(o, key, v) ? 0 : -1; }
 static int add_str(cJSON *o, const char *key, const char *v) { return cJSON_AddStringToObject(o, key, v) ? 0 : -1; }
 static cJSON *add_obj(cJSON *o, const char *key) { return cJSON_AddObjectToObject(o, key); }
+static int add_xyz(cJSON *o, const char *key, sd_vec3 v)
+{
+    const double xyz[3] = {v.x, v.y, v.z};
+    cJSON *a = cJSON_CreateDoubleArray(xyz, 3);
+    if (a && cJSON_AddItemToObject(o, key, a)) return 0;
+    cJSON_Delete(a);
+    return -1;
+}
 
 /* what ran, how it ended, how long it took */
 static int summary_run(run_ctx *c, cJSON *o, int status_code, const char *status_msg)
 {
     char hash[32];
-    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)sd_world_state_hash(c->w));
+    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)(c->sys ? c->sys_hash : sd_world_state_hash(c->w)));
     int bad = add_str(o, "scenario", c->s->path) | add_str(o, "status", status_msg) |
               add_num(o, "exit_code", status_code) | add_num(o, "simulated_time_s", sd_world_time(c->w)) |
               add_num(o, "steps", (double)sd_world_step_count(c->w)) | add_num(o, "wall_time_s", sd_now() - c->wall0) |
@@ -194,22 +205,34 @@ static int summary_run(run_ctx *c, cJSON *o, int status_code, const char *status
 static int summary_engine(run_ctx *c, cJSON *o)
 {
     static const char *const simd_names[] = {"auto", "scalar", "avx2", "avx512"};
-    int bad = add_str(o, "simd_kernels", simd_names[sd_world_simd_level(c->w)]);
+    const sd_world *sw = sd_run_slabs_world(c); /* (a decomposed run: rank 0's slab) */
+    int bad = add_str(o, "simd_kernels", simd_names[sd_world_simd_level(sw)]);
     /* the front prefetch and, in auto mode, the last trial's verdict and its time on over off */
     double pf_ratio = 0.0;
     int pf_trial = -1;
-    const int pf_on = sd_world_prefetch(c->w, &pf_trial, &pf_ratio) == SD_PREFETCH_ON;
+    const int pf_on = sd_world_prefetch(sw, &pf_trial, &pf_ratio) == SD_PREFETCH_ON;
     char pf[64];
-    if (sd_world_definition(c->w)->tuning.prefetch != SD_PREFETCH_AUTO)
+    if (sd_world_definition(sw)->tuning.prefetch != SD_PREFETCH_AUTO)
         snprintf(pf, sizeof pf, "%s (set)", pf_on ? "on" : "off");
     else if (pf_trial < 0)
         snprintf(pf, sizeof pf, "%s (no trial)", pf_on ? "on" : "off");
     else
         snprintf(pf, sizeof pf, "%s (trial: on/off %.3f)", pf_trial ? "on" : "off", pf_ratio);
     bad |= add_str(o, "front_prefetch", pf);
-    const sd_world_timers tm = sd_world_get_timers(c->w);
+    const sd_world_timers tm = sd_world_get_timers(sw);
     cJSON *t = add_obj(o, "timers_s");
     if (!t) return -1;
+    if (c->sys) { /* the slabs (docs/decomposition.md); the timers are rank 0's */
+        const sd_run_slabs_report *r = &c->sys_report;
+        cJSON *d = add_obj(o, "decomposition");
+        cJSON *xb = cJSON_AddArrayToObject(d, "bounds_m");
+        if (!d || !xb) return -1;
+        for (int k = 1; k < r->ranks; k++)
+            if (!cJSON_AddItemToArray(xb, cJSON_CreateNumber(r->bounds[k]))) bad = 1;
+        bad |= add_num(d, "ranks", r->ranks) | add_num(d, "ghost_width_m", r->ghost_width) |
+               add_num(d, "redistributions", (double)r->redistributions) | add_num(d, "migrations", (double)r->migrations) |
+               add_num(d, "boundary_moves", (double)r->boundary_moves) | add_num(d, "bytes_sent", r->bytes);
+    }
     return bad | add_num(t, "rebuild", tm.rebuild) | add_num(t, "contacts", tm.contacts) | add_num(t, "moves", tm.moves) |
            add_num(t, "checks", tm.checks) | add_num(t, "rebuilds", (double)tm.rebuilds);
 }
@@ -287,7 +310,8 @@ static int summary_pipes(run_ctx *c, cJSON *o)
 {
     cJSON *pipes = cJSON_AddArrayToObject(o, "pipes");
     if (!pipes) return -1;
-    int bad = add_str(o, "pipe_support", c->s->dam_support ? "fixed ends" : "simply supported");
+    int bad = add_str(o, "pipe_support", c->s->dam_support ? "fixed ends" : "simply supported") |
+              add_num(o, "event_threshold_N", c->loads.ev_threshold) | add_num(o, "event_time_s", c->loads.ev_time);
     for (int k = 0; k < c->loads.n; k++) {
         const sd_pipe_load *L = &c->loads.p[k];
         cJSON *p = cJSON_CreateObject();
@@ -301,15 +325,45 @@ static int summary_pipes(run_ctx *c, cJSON *o)
             cJSON_Delete(sv);
             return -1;
         }
-        bad |= add_num(p, "gid", L->gid) | add_str(p, "kind", L->is_column ? "column" : "beam") |
-               add_num(p, L->is_column ? "y_m" : "z_axis_m", L->coord) | add_num(p, "span_m", L->span) |
+        bad |= add_num(p, "gid", L->gid) | add_str(p, "kind", sd_build_pipe_kind_name(L->kind));
+        if (L->kind == SD_PIPE_MEMBER) {
+            /* (the run-driver state's reader made sure the index names a member) */
+            const sd_dam_member *m = &c->s->members[(int)L->coord];
+            bad |= add_num(p, "member", L->coord) | add_xyz(p, "from_m", m->from) | add_xyz(p, "to_m", m->to) |
+                   add_num(p, "diameter_m", m->diameter);
+        } else
+            bad |= add_num(p, L->kind == SD_PIPE_COLUMN ? "y_m" : "z_axis_m", L->coord);
+        bad |= add_num(p, "span_m", L->span) |
                add_num(p, "peak_force_N", L->peak) | add_num(p, "peak_time_s", L->t_peak) |
                add_num(p, "impulse_Ns", L->impulse) | add_num(p, "impulse_x_Ns", L->impulse_vec.x) |
                add_num(p, "peak_moment_Nm", L->m_peak) | add_num(p, "peak_moment_time_s", L->t_m_peak) |
                add_num(p, "peak_moment_at_m", L->s_at_m_peak) |
                (cJSON_AddBoolToObject(p, "rising_at_end", L->rising) ? 0 : -1);
+        cJSON *ev = add_obj(p, "events");
+        if (!ev) return -1;
+        bad |= add_num(ev, "count", L->n_events) | add_num(ev, "largest_peak_N", L->ev_peak) |
+               add_num(ev, "largest_impulse_Ns", L->ev_impulse) | (c->loads.no_energy ? (cJSON_AddNullToObject(ev, "largest_energy_J") ? 0 : -1)
+                                   : add_num(ev, "largest_energy_J", L->ev_energy));
     }
     return bad;
+}
+
+/* the dam body of meshes (docs/meshes.md): its triangles, the peak of its load and when, the
+ * impulses, the load at the end */
+static int summary_dam_mesh(run_ctx *c, cJSON *o)
+{
+    cJSON *d = add_obj(o, "dam_mesh");
+    if (!d) return -1;
+    const sd_vec3 f = sd_world_group_force(c->w, SD_GROUP_DAM);
+    const double fe[3] = {f.x, f.y, f.z};
+    cJSON *fv = cJSON_CreateDoubleArray(fe, 3);
+    if (!fv || !cJSON_AddItemToObject(d, "final_force_N", fv)) {
+        cJSON_Delete(fv);
+        return -1;
+    }
+    return add_num(d, "triangles", c->n_dam_tri) | add_num(d, "peak_force_N", c->mesh_dam_peak) | add_num(d, "peak_time_s", c->mesh_dam_t_peak) |
+           add_num(d, "impulse_Ns", c->mesh_dam_impulse) | add_num(d, "impulse_x_Ns", c->mesh_dam_impulse_vec.x) |
+           add_num(d, "impulse_z_Ns", c->mesh_dam_impulse_vec.z);
 }
 
 /* where the debris ended (docs/loads.md): held at the dam, in the channel, passed; how the
@@ -331,12 +385,58 @@ static int summary_debris(run_ctx *c, cJSON *o, sd_run_result *res)
                                                                  : "settled");
 }
 
+static int add_range(cJSON *o, const char *key, double lo, double mean, double sd, double hi)
+{
+    cJSON *r = add_obj(o, key);
+    return r ? add_num(r, "min", lo) | add_num(r, "mean", mean) | add_num(r, "sd", sd) | add_num(r, "max", hi) : -1;
+}
+
+/* the debris a flume run releases (docs/scenario.md "Debris as designers give it"): the sphere
+ * classes with their counts, and the mass fractions asked and got when a grading made them; the
+ * logs' count and sizes */
+static int summary_released(run_ctx *c, cJSON *o)
+{
+    const sd_scenario *s = c->s;
+    cJSON *d = add_obj(o, "debris_released");
+    if (!d) return -1;
+    static const char *const source[] = {"spheres.counts", "spheres.grading", "spheres.distribution"};
+    int bad = add_str(d, "classes_from", source[s->class_source]);
+    if (s->class_source != SD_CLASSES_COUNTS) bad |= add_num(d, "volume_asked_m3", s->sphere_volume);
+    double vs = 0.0;
+    for (int k = 0; k < s->n_classes; k++)
+        vs += s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+    cJSON *cls = cJSON_AddArrayToObject(d, "spheres");
+    if (!cls) return -1;
+    for (int k = 0; k < s->n_classes; k++) {
+        cJSON *e = cJSON_CreateObject();
+        if (!e || !cJSON_AddItemToArray(cls, e)) {
+            cJSON_Delete(e);
+            return -1;
+        }
+        const double v = s->class_count[k] * M_PI / 6.0 * pow(s->class_diam[k], 3);
+        bad |= add_num(e, "diameter_m", s->class_diam[k]) | add_num(e, "count", s->class_count[k]) |
+               add_num(e, "volume_m3", v) | add_num(e, "mass_fraction", vs > 0 ? v / vs : 0.0);
+        if (s->class_source != SD_CLASSES_COUNTS) bad |= add_num(e, "mass_fraction_asked", s->class_target[k]);
+    }
+    sd_log_stats ls;
+    sd_build_log_stats(s, &ls);
+    cJSON *lg = add_obj(d, "logs");
+    if (!lg) return -1;
+    bad |= add_num(lg, "count", ls.n) | add_num(lg, "volume_m3", ls.volume) |
+           (cJSON_AddBoolToObject(lg, "sizes_drawn", sd_build_log_sizes_vary(s)) ? 0 : -1) |
+           add_range(lg, "length_m", ls.len_min, ls.len_mean, ls.len_sd, ls.len_max) |
+           add_range(lg, "diameter_m", ls.d_min, ls.d_mean, ls.d_sd, ls.d_max);
+    return bad;
+}
+
 char *sd_output_summary_text(run_ctx *c, sd_run_result *res, int status_code, const char *status_msg)
 {
     cJSON *o = cJSON_CreateObject();
     if (!o) return NULL;
     int bad = summary_run(c, o, status_code, status_msg) | summary_engine(c, o) | summary_elements(c, o);
-    if (c->s->flume_on) bad |= summary_trap(c, o, res) | summary_debris(c, o, res) | summary_pipes(c, o);
+    if (c->s->flume_on)
+        bad |= summary_released(c, o) | summary_trap(c, o, res) | summary_debris(c, o, res) | summary_pipes(c, o);
+    if (c->n_dam_tri) bad |= summary_dam_mesh(c, o);
     /* the materials and the springs of each pair that can meet (or is given) */
     cJSON *mat = sd_scenario_materials_json(c->s);
     for (int k = 0; k < 2 && mat; k++) {
@@ -370,6 +470,10 @@ int sd_output_summary(run_ctx *c, sd_run_result *res, int status_code, const cha
     if (!text) {
         errno = ENOMEM;
         return -1;
+    }
+    if (c->rank != 0) { /* (a decomposed run's rank 0 writes it) */
+        cJSON_free(text);
+        return 0;
     }
     FILE *f = fopen(tmp, "w");
     if (!f) {

@@ -19,7 +19,9 @@
  * world keeps the ids and the pairs' springs), which a restart's scenario must declare alike. The output timers are the world's
  * step count (saved with the world). The build's random numbers are spent before the first
  * step; the driver draws none later, so there is no rng state to carry. */
-#define BLOB_MAGIC "SDRUNv4"
+#define BLOB_MAGIC "SDRUNv6"
+
+const char *sd_run_state_version(void) { return BLOB_MAGIC; }
 
 static long file_len(FILE *f)
 {
@@ -27,7 +29,8 @@ static long file_len(FILE *f)
     return ftell(f);
 }
 
-static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series_len, long traj_len, long pipes_len)
+static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series_len, long traj_len, long pipes_len,
+                       long events_len)
 {
     const double now = sd_now();
     sd_bin_put(b, BLOB_MAGIC, 8);
@@ -54,7 +57,7 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series
     sd_bin_put_i32(b, c->info.n_pipes);
     for (int k = 0; k < c->info.n_pipes; k++) {
         sd_bin_put_i32(b, c->info.pipe_gid[k]);
-        sd_bin_put_i32(b, c->info.pipe_is_column[k]);
+        sd_bin_put_i32(b, c->info.pipe_kind[k]);
         sd_bin_put_f64(b, c->info.pipe_coord[k]);
     }
     sd_pipe_loads_pack(&c->loads, b);
@@ -69,6 +72,12 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series
     sd_bin_put_f64(b, c->last_cross_time);
     sd_bin_put_f64(b, c->ke_peak);
     sd_bin_put_f64(b, c->dam_force_now);
+    sd_bin_put_f64(b, c->mesh_dam_peak);
+    sd_bin_put_f64(b, c->mesh_dam_t_peak);
+    sd_bin_put_f64(b, c->mesh_dam_impulse);
+    sd_bin_put_f64(b, c->mesh_dam_impulse_vec.x);
+    sd_bin_put_f64(b, c->mesh_dam_impulse_vec.y);
+    sd_bin_put_f64(b, c->mesh_dam_impulse_vec.z);
     for (int k = 0; k < 4; k++)
         sd_bin_put_f64(b, c->phase_end[k]);
     for (int k = 0; k < 4; k++)
@@ -86,6 +95,7 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series
     sd_bin_put_f64(b, now - c->wall0);
     sd_bin_put_f64(b, now - c->phase_w0);
     sd_bin_put_i64(b, pipes_len);
+    sd_bin_put_i64(b, events_len);
     sd_bin_put_i64(b, series_len);
     sd_bin_put_i64(b, traj_len);
     /* the VTK series so far (file names relative to the output directory) */
@@ -154,9 +164,10 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     if (r->kind == SD_CKPT_FLOW_END && branch != sd_scenario_branch_hash(c->s)) {
         snprintf(msg, msglen,
                  "was written for other scenario parameters than %s (a restart may change only the capture-phase keys:"
-                 " dam.l_h, dam.l_v, dam.top_beam, dam.columns, dam.beams, dam.fixed_ends, dam.material,"
-                 " phases.capture_limit, phases.quiet_time, phases.ke_fraction, water.probe, water.h_d_floating,"
-                 " water.capture_length, water.capture_end)",
+                 " dam.l_h, dam.n_columns, dam.columns, dam.l_v, dam.beam_axes, dam.beam_gaps, dam.top_beam, dam.beams,"
+                 " dam.members, dam.fixed_ends, dam.material, phases.capture_limit, phases.quiet_time,"
+                 " phases.ke_fraction, water.probe, water.h_d_floating, water.capture_length, water.capture_end,"
+                 " dam.event_threshold, dam.event_time)",
                  c->s->path);
         return -1;
     }
@@ -179,14 +190,22 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     c->info.n_logs = sd_bin_get_i32(&b);
     c->info.first_moving_gid = sd_bin_get_i32(&b);
     c->info.n_pipes = sd_bin_get_i32(&b);
-    if (b.bad || c->info.n_pipes < 0 || c->info.n_pipes > 2 * SD_MAX_PIPES) {
+    if (b.bad || c->info.n_pipes < 0 || c->info.n_pipes > SD_MAX_DAM_PIPES) {
         snprintf(msg, msglen, "run-driver state is truncated or malformed");
         return -1;
     }
     for (int k = 0; k < c->info.n_pipes; k++) {
         c->info.pipe_gid[k] = sd_bin_get_i32(&b);
-        c->info.pipe_is_column[k] = sd_bin_get_i32(&b);
+        c->info.pipe_kind[k] = sd_bin_get_i32(&b);
         c->info.pipe_coord[k] = sd_bin_get_f64(&b);
+        /* a member's coordinate is its index in dam.members (the outputs look it up) */
+        const int kind = c->info.pipe_kind[k];
+        const double co = c->info.pipe_coord[k];
+        if (kind < SD_PIPE_BEAM || kind > SD_PIPE_MEMBER ||
+            (kind == SD_PIPE_MEMBER && !(co >= 0 && co < c->s->n_members && co == (int)co))) {
+            snprintf(msg, msglen, "run-driver state: pipe %d is of an unknown kind, or names no member of dam.members", k);
+            return -1;
+        }
     }
     if (sd_pipe_loads_unpack(&c->loads, &b) || (c->loads.n != 0 && c->loads.n != c->info.n_pipes)) {
         snprintf(msg, msglen, "run-driver state: the pipe loads are malformed");
@@ -203,6 +222,12 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     c->last_cross_time = sd_bin_get_f64(&b);
     c->ke_peak = sd_bin_get_f64(&b);
     c->dam_force_now = sd_bin_get_f64(&b);
+    c->mesh_dam_peak = sd_bin_get_f64(&b);
+    c->mesh_dam_t_peak = sd_bin_get_f64(&b);
+    c->mesh_dam_impulse = sd_bin_get_f64(&b);
+    c->mesh_dam_impulse_vec.x = sd_bin_get_f64(&b);
+    c->mesh_dam_impulse_vec.y = sd_bin_get_f64(&b);
+    c->mesh_dam_impulse_vec.z = sd_bin_get_f64(&b);
     for (int k = 0; k < 4; k++)
         c->phase_end[k] = sd_bin_get_f64(&b);
     for (int k = 0; k < 4; k++)
@@ -220,6 +245,7 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     r->wall_before = sd_bin_get_f64(&b);
     r->phase_wall_in = sd_bin_get_f64(&b);
     r->pipes_len = (long)sd_bin_get_i64(&b);
+    r->events_len = (long)sd_bin_get_i64(&b);
     r->series_len = (long)sd_bin_get_i64(&b);
     r->traj_len = (long)sd_bin_get_i64(&b);
     int np = sd_bin_get_i32(&b);
@@ -258,7 +284,7 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
         sd_run_state_free(r);
         return -1;
     }
-    int ok = c->n_passed >= 0 && c->n_snap >= 0 && r->series_len >= 0 && r->traj_len >= -1 && r->pipes_len >= -1 && isfinite(c->phase_t0) &&
+    int ok = c->n_passed >= 0 && c->n_snap >= 0 && r->series_len >= 0 && r->traj_len >= -1 && r->pipes_len >= -1 && r->events_len >= -1 && isfinite(c->phase_t0) &&
              isfinite(c->h_d) && isfinite(r->wall_before) && isfinite(r->phase_wall_in) && isfinite(c->flow_wall);
     if (ok && r->kind == SD_CKPT_FLOW_END)
         ok = c->phase == PH_FLOW && c->flow_ended == 1 && c->dam_built == 0;
@@ -352,6 +378,11 @@ int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg
         snprintf(b, sizeof b, "%s/pipes.csv", c->dir);
         if (copy_prefix(a, b, r->pipes_len, msg, msglen)) return -1;
     }
+    if (r->events_len >= 0) {
+        snprintf(a, sizeof a, "%s/events.csv", src);
+        snprintf(b, sizeof b, "%s/events.csv", c->dir);
+        if (copy_prefix(a, b, r->events_len, msg, msglen)) return -1;
+    }
     if (c->s->n_traj > 0 && r->traj_len >= 0) {
         snprintf(a, sizeof a, "%s/trajectories.csv", src);
         snprintf(b, sizeof b, "%s/trajectories.csv", c->dir);
@@ -370,18 +401,40 @@ int sd_run_state_restore_outputs(run_ctx *c, const sd_run_restored *r, char *msg
     return 0;
 }
 
+static sd_status write_world(run_ctx *c, const sd_world *w, const char *path, int kind);
+
 static sd_status write_state(run_ctx *c, const char *path, int kind)
 {
+    /* a decomposed run: the whole system gathered into one world (rank 0 writes it), taken
+     * where the pairs are remade at the next step (run.c), as a restart from it remakes them at
+     * its first */
+    sd_world *whole = NULL;
+    if (c->sys) {
+        sd_status st = sd_run_slabs_whole(c, &whole);
+        if (st || c->rank != 0) {
+            sd_world_destroy(whole);
+            return st;
+        }
+    }
+    const sd_status st = write_world(c, whole ? whole : c->w, path, kind);
+    sd_world_destroy(whole);
+    return st;
+}
+
+static sd_status write_world(run_ctx *c, const sd_world *w, const char *path, int kind)
+{
     long sl = file_len(c->series), tl = c->traj ? file_len(c->traj) : -1, pl = c->loads.csv ? file_len(c->loads.csv) : -1;
-    if (sl < 0 || (c->traj && tl < 0) || (c->loads.csv && pl < 0)) return SD_ERR_IO;
+    long el = c->loads.ev_csv ? file_len(c->loads.ev_csv) : -1;
+    if (sl < 0 || (c->traj && tl < 0) || (c->loads.csv && pl < 0) || (c->loads.ev_csv && el < 0)) return SD_ERR_IO;
     /* the rows the checkpoint counts are on the disk before the checkpoint that counts them */
     if (kind == SD_CKPT_PERIODIC && (fsync(fileno(c->series)) || (c->traj && fsync(fileno(c->traj))) ||
-                                     (c->loads.csv && fsync(fileno(c->loads.csv)))))
+                                     (c->loads.csv && fsync(fileno(c->loads.csv))) ||
+                                     (c->loads.ev_csv && fsync(fileno(c->loads.ev_csv)))))
         return SD_ERR_IO;
     sd_bin_writer b;
     sd_bin_writer_init(&b);
-    state_pack(c, &b, kind, sl, tl, pl);
-    sd_status st = b.err ? SD_ERR_NOMEM : sd_checkpoint_write(path, c->w, b.p, b.n);
+    state_pack(c, &b, kind, sl, tl, pl, el);
+    sd_status st = b.err ? SD_ERR_NOMEM : sd_checkpoint_write(path, w, b.p, b.n);
     sd_bin_writer_fini(&b);
     return st;
 }
@@ -389,6 +442,7 @@ static sd_status write_state(run_ctx *c, const char *path, int kind)
 sd_status sd_run_state_checkpoint(run_ctx *c, const char *path)
 {
     c->flow_ckpt_written = 1; /* (a restart from it does not write it again) */
+    if (c->sys) sd_run_slabs_request_rebuild(c); /* (the dam's pipes go in next anyway, if any) */
     return write_state(c, path, SD_CKPT_FLOW_END);
 }
 
@@ -412,7 +466,7 @@ sd_status sd_run_state_periodic(run_ctx *c)
     char path[1400];
     snprintf(path, sizeof path, "%s/checkpoint_%010ld.ckpt", c->dir, step);
     sd_status st = write_state(c, path, SD_CKPT_PERIODIC);
-    if (st) return st;
+    if (st || c->rank != 0) return st;
     /* keep this one and the newest before it */
     DIR *d = opendir(c->dir);
     if (!d) return SD_OK;

@@ -6,18 +6,22 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "debris.h"
 #include "sabodem.h"
 #include "sabodem_run.h"
 
-#define SD_MAX_CLASSES 8
+#define SD_MAX_CLASSES 16
 #define SD_MAX_IDS 64
 #define SD_MAX_PIPES 32
+/* The most arbitrary dam members (dam.members). */
+#define SD_MAX_MEMBERS 32
 /* Every coordinate and size in a scenario lies within this many metres of the origin. */
 #define SD_MAX_EXTENT 1.0e4
 
 /* The choices of the scenario's enumerated keys (their index is the stored value). */
 enum { SD_BUOYANCY_VERTICAL = 0, SD_BUOYANCY_BED_NORMAL = 1 };
 enum { SD_CAPTURE_END_TRAP_PLANE = 0, SD_CAPTURE_END_DAM_FACE = 1 };
+enum { SD_CLASSES_COUNTS = 0, SD_CLASSES_GRADING = 1, SD_CLASSES_CURVE = 2 };
 enum { SD_SCENE_WATER_NONE = 0, SD_SCENE_WATER_FLOW = 1, SD_SCENE_WATER_UNIFORM = 2, SD_SCENE_WATER_STILL = 3 };
 
 typedef struct {
@@ -28,6 +32,31 @@ typedef struct {
     sd_vec3 v[3];
     int line;
 } sd_elem_def;
+
+/* A dam member (dam.members): a fixed steel pipe from one point to another, any orientation. */
+typedef struct {
+    sd_vec3 from, to; /* the ends of its axis, m (the flume frame) */
+    double diameter;  /* m */
+    int line, col;    /* where it was given (the file's, or the --set's) */
+} sd_dam_member;
+/* A mesh's role: the wall group its triangles join (build.h: SD_GROUP_BED, _WALLS, _DAM). */
+enum { SD_MESH_BED = 0, SD_MESH_WALL = 1, SD_MESH_DAM = 2 };
+/* The most entries of meshes: */
+#define SD_MAX_MESHES 64
+
+/* One entry of meshes: (docs/meshes.md): an STL file's triangles, read and transformed when the
+ * scenario is loaded (corner' = R (scale corner) + translate, R = Rz Ry Rx of rotate_deg). */
+typedef struct {
+    char file[1024]; /* the path read: relative paths are taken from the scenario file's directory */
+    int role;        /* SD_MESH_* */
+    double scale;
+    sd_vec3 translate, rotate_deg;
+    sd_vec3 (*tri)[3]; /* the triangles, transformed, m */
+    int n_tri;
+    int binary;   /* the file was binary STL */
+    int material; /* its triangles' material (an id) */
+    int line;     /* the entry's line in the scenario */
+} sd_mesh_def;
 
 /* Materials (scenario_materials.c): names by id, id 0 the implicit "default" of everything not
  * given one; a pair's springs (contact_pairs) give some of the five constants of contact.*, in
@@ -58,6 +87,9 @@ typedef struct sd_scenario {
     /* explicit elements */
     sd_elem_def *elems;
     int n_elems;
+    /* STL meshes as fixed walls */
+    sd_mesh_def *meshes;
+    int n_meshes;
     /* box of triangles (open top) */
     int box_on;
     sd_vec3 box_min, box_max;
@@ -69,6 +101,7 @@ typedef struct sd_scenario {
     sd_vec3 pile_min, pile_max;
     /* flume (SPEC §8); on when flume.on */
     int flume_on;
+    int flume_bed; /* the flume's flat bed (0: a mesh with role bed replaces it) */
     double slope_deg, width, wall_height, x_gate, x_dam, x_end;
     int roughness_on;
     double rough_dmin, rough_dmax, rough_coverage;
@@ -76,17 +109,40 @@ typedef struct sd_scenario {
     double class_diam[SD_MAX_CLASSES];
     int class_count[SD_MAX_CLASSES];
     double sphere_density;
+    /* the classes as designers give them (debris.h), resolved by the loader into class_diam and
+     * class_count above: a grading by mass fractions, or a continuous curve cut into classes,
+     * with the solid volume to release */
+    int n_grading_diam, n_grading_frac; /* the two lists' lengths */
+    double grading_diam[SD_MAX_CLASSES], grading_frac[SD_MAX_CLASSES];
+    sd_grading_curve curve;             /* curve.type SD_GRADING_NONE: none */
+    double sphere_volume;               /* spheres.volume, m^3 (0: the counts are given) */
+    int class_source;                   /* derived: SD_CLASSES_COUNTS, _GRADING or _CURVE */
+    double class_target[SD_MAX_CLASSES]; /* derived: each class's mass fraction asked for */
+    sd_size_dist log_length_dist, log_diam_dist; /* type SD_SIZE_FIXED: log_length, log_diam */
     int log_count;
     double log_kw; /* woody volume ratio; used when >= 0 and log_count < 0 */
     double log_diam, log_length, log_density;
     double pack_x0, pack_height; /* packing box: x from pack_x0 to x_gate, up to pack_height */
-    /* grid dam */
+    double volume_factor;        /* the counts above as loaded are the file's times this factor */
+    /* grid dam: the columns from one of dam.columns, dam.n_columns, dam.l_h (in that order of
+     * precedence; the loader lets only one be given); the beams from one of dam.beams (every
+     * beam), dam.beam_axes, dam.beam_gaps, dam.l_v (each with the top beam unless
+     * dam.top_beam is false); then the members */
     int dam_on;
     double pipe_diam, l_h, l_v, top_beam;
+    int top_beam_on;  /* 0: dam.top_beam: false (no top beam) */
     int n_columns, n_beams;
+    int column_count; /* dam.n_columns: -1 not given */
     int dam_support; /* bending moments: 0 simple supports, 1 fixed ends (pipe_loads.h) */
+    double event_threshold; /* a pipe's impact event: |F| this far above its baseline, N (0: auto) */
+    double event_time;      /* the baseline's time constant and the longest event, s */
     double column_y[SD_MAX_PIPES];
     double beam_z[SD_MAX_PIPES]; /* underside heights */
+    int n_beam_axes, n_beam_gaps;
+    double beam_axis_z[SD_MAX_PIPES]; /* dam.beam_axes: axis heights above the bed */
+    double beam_gap[SD_MAX_PIPES];    /* dam.beam_gaps: clear gaps, bed to the lowest beam, then beam to beam */
+    int n_members;
+    sd_dam_member members[SD_MAX_MEMBERS];
     /* water */
     int water_on;
     double water_u, water_h, water_rho, water_cd, water_probe;
@@ -115,6 +171,8 @@ typedef struct {
     double bytes;   /* memory: the elements with their contacts, the placement grids */
     double steps;   /* time steps to the end (a flume: to the sum of its phases' limits) */
     double seconds; /* wall time on one core, at SD_COST_S_PER_ELEMENT_STEP */
+    double flow_steps, flow_seconds; /* of those, the packing's and the flow's (a flume; else 0):
+                                      * what the runs a sweep branches from one flow share */
 } sd_scenario_cost;
 
 /* Limits a scenario's estimate must keep to (the command line's --max-memory, --max-steps). */
@@ -132,6 +190,15 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c);
  * which keys and which option change it. */
 int sd_scenario_check_cost(const sd_scenario *s, const sd_scenario_cost *c, const sd_scenario_limits *lim, FILE *err);
 sd_scenario_limits sd_scenario_limits_default(void);
+/* Seconds as whole milliseconds, the unit in which a sweep adds estimates up (exact in a double
+ * below 2^53 ms, 285,000 years), and such a count as text, "12.345 s". */
+double sd_scenario_ms(double seconds);
+void sd_scenario_ms_text(double ms, char *buf, size_t n);
+/* A time in seconds in words: "38 s", "12 min", "3.2 h", "41 days". */
+void sd_scenario_human_time(double seconds, char *buf, size_t n);
+/* `check`'s line: "time estimate: 12.345 s on one core (packing and flow 8.230 s, capture
+ * 4.115 s)", in whole milliseconds, the numbers a sweep's estimate adds up. */
+void sd_scenario_print_time(FILE *f, const sd_scenario *s, const sd_scenario_cost *c);
 
 void sd_scenario_default(sd_scenario *s);
 /* Load a scenario file and apply "key=value" overrides. Errors are printed to err as
@@ -153,7 +220,8 @@ const char *sd_scenario_param_key(int i);
 struct cJSON;
 struct cJSON *sd_scenario_params_json(const sd_scenario *s);
 /* 1 for the keys that act only from the capture phase on: the dam layout (dam.l_h, dam.l_v,
- * dam.top_beam, dam.columns, dam.beams, dam.material) and the capture-phase settings (phases.capture_limit,
+ * dam.top_beam, dam.columns, dam.beams, dam.n_columns, dam.beam_axes, dam.beam_gaps,
+ * dam.members, dam.material) and the capture-phase settings (phases.capture_limit,
  * quiet_time, ke_fraction, water.probe, water.h_d_floating, water.capture_length,
  * water.capture_end). Runs that differ only in these
  * share their packing and flow, bit for bit: a sweep branches them from one flow-end
@@ -163,6 +231,8 @@ int sd_scenario_is_capture_key(const char *key);
  * equal for two scenarios whose packing and flow are identical. Stored in a flow-end
  * checkpoint; a restart with a scenario of another fingerprint is refused. */
 uint64_t sd_scenario_branch_hash(const sd_scenario *s);
+/* 1 for the keys that sd_scenario_branch_hash counts (the explicit elements aside). */
+int sd_scenario_in_branch_hash(const char *key);
 /* The same with the capture keys too: equal for two scenarios whose whole runs are identical
  * (neither counts solver.threads or output.checkpoint_interval, which change no bit). Stored in
  * a periodic checkpoint. */
@@ -192,7 +262,7 @@ sd_contact_def sd_scenario_pair_contact(const sd_scenario *s, int a, int b, int 
 sd_status sd_scenario_apply_materials(const sd_scenario *s, sd_world *w);
 /* What uses each material: bit k of the result for id m is set when the scene's part k
  * (SD_MATERIAL_USES order) has material m. */
-#define SD_MATERIAL_USES "spheres", "logs", "dam", "bed", "walls", "roughness", "gate", "pile", "box", "elements"
+#define SD_MATERIAL_USES "spheres", "logs", "dam", "bed", "walls", "roughness", "gate", "pile", "box", "elements", "meshes"
 void sd_scenario_material_uses(const sd_scenario *s, unsigned uses[SD_MATERIALS_MAX]);
 /* The largest stable time step of the scene (sd_world_stable_dt's rule on the scenario's
  * masses): *a, *b the pair that sets it, *mmin its lightest moving mass (kg). */

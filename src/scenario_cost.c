@@ -22,9 +22,9 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c)
     if (s->pile_n_classes > 0) {
         for (int k = 0; k < s->pile_n_classes && k < s->pile_n_counts; k++)
             bodies += s->pile_count[k];
-        bytes += placer_bytes(s->pile_min, s->pile_max, SD_PLACER_CELL);
+        bytes += placer_bytes(s->pile_min, s->pile_max, sd_build_placer_cell(s, 1));
     }
-    double duration = s->duration;
+    double duration = s->duration, flow_duration = 0.0;
     if (s->flume_on) {
         double vs = 0.0;
         for (int k = 0; k < s->n_classes && k < s->n_class_counts; k++) {
@@ -34,7 +34,7 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c)
         if (s->log_count >= 0)
             bodies += s->log_count;
         else if (s->log_kw > 0.0)
-            bodies += s->log_kw * vs / (1.0 - s->log_kw) / (M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length);
+            bodies += s->log_kw * vs / (1.0 - s->log_kw) / sd_build_log_mean_volume(s, 0);
         const double L = s->x_end, W = s->width;
         if (s->roughness_on) {
             const double r = 0.5 * s->rough_dmin;
@@ -42,25 +42,25 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c)
             const double dm = s->rough_dmax;
             bytes += placer_bytes(v3(0, 0, -dm), v3(L, W, dm), dm);
         }
-        if (s->dam_on) bodies += 2 * SD_MAX_PIPES;
-        bytes += placer_bytes(v3(0, 0, 0), v3(s->x_gate, W, s->pack_height), SD_PLACER_CELL);
+        if (s->dam_on) bodies += 2 * SD_MAX_PIPES + s->n_members;
+        bytes += placer_bytes(v3(0, 0, 0), v3(s->x_gate, W, s->pack_height), sd_build_placer_cell(s, 0));
         bytes += 4.0 * (ceil(L / 0.25) + 2) * 512.0; /* the walls' triangles */
-        duration = s->packing_time + s->flow_limit + s->capture_limit;
+        flow_duration = s->packing_time + s->flow_limit;
+        duration = flow_duration + s->capture_limit;
     }
+    for (int k = 0; k < s->n_meshes; k++) /* the meshes' triangles, as the flume's walls' */
+        bytes += s->meshes[k].n_tri * 512.0;
     bytes += bodies * SD_BYTES_PER_ELEMENT;
     c->bodies = bodies;
     c->bytes = bytes;
     c->steps = ceil(duration / s->world.dt);
     c->seconds = c->steps * fmax(bodies, 1.0) * SD_COST_S_PER_ELEMENT_STEP;
-}
-
-sd_scenario_limits sd_scenario_limits_default(void)
-{
-    return (sd_scenario_limits){SD_DEFAULT_MAX_MEMORY, SD_DEFAULT_MAX_STEPS};
+    c->flow_steps = fmin(ceil(flow_duration / s->world.dt), c->steps);
+    c->flow_seconds = c->flow_steps * fmax(bodies, 1.0) * SD_COST_S_PER_ELEMENT_STEP;
 }
 
 /* "3.2 h", "41 days", "2e+09 years" */
-static void human_time(double t, char *buf, size_t n)
+void sd_scenario_human_time(double t, char *buf, size_t n)
 {
     if (t < 120)
         snprintf(buf, n, "%.0f s", t);
@@ -72,6 +72,37 @@ static void human_time(double t, char *buf, size_t n)
         snprintf(buf, n, "%.0f days", t / 86400);
     else
         snprintf(buf, n, "%.3g years", t / (365.25 * 86400));
+}
+
+double sd_scenario_ms(double seconds) { return round(seconds * 1000.0); }
+
+void sd_scenario_ms_text(double ms, char *buf, size_t n)
+{
+    if (!(ms < 9.0e15)) { /* (past the exact integers of a double, or infinite) */
+        snprintf(buf, n, "%.4g s", ms / 1000.0);
+        return;
+    }
+    const double whole = floor(ms / 1000.0);
+    snprintf(buf, n, "%.0f.%03.0f s", whole, ms - 1000.0 * whole);
+}
+
+void sd_scenario_print_time(FILE *f, const sd_scenario *s, const sd_scenario_cost *c)
+{
+    char all[48], flow[48], capture[48];
+    const double ms = sd_scenario_ms(c->seconds), flow_ms = sd_scenario_ms(c->flow_seconds);
+    sd_scenario_ms_text(ms, all, sizeof all);
+    if (!s->flume_on) {
+        fprintf(f, "time estimate: %s on one core\n", all);
+        return;
+    }
+    sd_scenario_ms_text(flow_ms, flow, sizeof flow);
+    sd_scenario_ms_text(ms - flow_ms, capture, sizeof capture);
+    fprintf(f, "time estimate: %s on one core (packing and flow %s, capture %s)\n", all, flow, capture);
+}
+
+sd_scenario_limits sd_scenario_limits_default(void)
+{
+    return (sd_scenario_limits){SD_DEFAULT_MAX_MEMORY, SD_DEFAULT_MAX_STEPS};
 }
 
 /* "512 KiB", "8 GiB", "76.3 GiB" */
@@ -101,7 +132,7 @@ int sd_scenario_check_cost(const sd_scenario *s, const sd_scenario_cost *c, cons
     }
     if (!(c->steps <= lim->max_steps)) {
         char t[64];
-        human_time(c->seconds, t, sizeof t);
+        sd_scenario_human_time(c->seconds, t, sizeof t);
         fprintf(err,
                 "%s: the run takes %.4g time steps (solver.dt = %g s over %g s simulated), about %s on one core; "
                 "more than the limit of %.3g steps: lengthen solver.dt, shorten the run, or raise the limit with "

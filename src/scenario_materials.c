@@ -231,7 +231,7 @@ static void scan(const sd_scenario *s, unsigned uses[SD_MATERIALS_MAX], double m
         uses[m] = 0;
         mmin[m] = INFINITY;
     }
-    enum { U_SPHERES, U_LOGS, U_DAM, U_BED, U_WALLS, U_ROUGH, U_GATE, U_PILE, U_BOX, U_ELEMENTS };
+    enum { U_SPHERES, U_LOGS, U_DAM, U_BED, U_WALLS, U_ROUGH, U_GATE, U_PILE, U_BOX, U_ELEMENTS, U_MESHES };
     for (int i = 0; i < s->n_elems; i++) {
         const sd_elem_def *d = &s->elems[i];
         uses[d->material] |= 1u << U_ELEMENTS;
@@ -240,6 +240,8 @@ static void scan(const sd_scenario *s, unsigned uses[SD_MATERIALS_MAX], double m
                                       : d->density * M_PI * d->radius * d->radius * d->length;
         mmin[d->material] = fmin(mmin[d->material], m);
     }
+    for (int k = 0; k < s->n_meshes; k++)
+        uses[s->meshes[k].material] |= 1u << U_MESHES;
     if (s->box_on) uses[s->box_mat] |= 1u << U_BOX;
     for (int k = 0; k < s->pile_n_classes; k++)
         if (s->pile_count[k] > 0) {
@@ -247,7 +249,7 @@ static void scan(const sd_scenario *s, unsigned uses[SD_MATERIALS_MAX], double m
             mmin[s->pile_mat] = fmin(mmin[s->pile_mat], sphere_mass(s->pile_diam[k], s->pile_density));
         }
     if (!s->flume_on) return;
-    uses[s->bed_mat] |= 1u << U_BED;
+    if (s->flume_bed) uses[s->bed_mat] |= 1u << U_BED;
     uses[s->wall_mat] |= 1u << U_WALLS;
     uses[s->gate_mat] |= 1u << U_GATE;
     if (s->roughness_on) uses[s->rough_mat] |= 1u << U_ROUGH;
@@ -258,10 +260,11 @@ static void scan(const sd_scenario *s, unsigned uses[SD_MATERIALS_MAX], double m
             uses[m] |= 1u << U_SPHERES;
             mmin[m] = fmin(mmin[m], sphere_mass(s->class_diam[k], s->sphere_density));
         }
-    if (has_logs(s)) {
+    if (has_logs(s)) { /* the smallest log the distributions can draw */
+        const double d = s->log_diam_dist.type ? s->log_diam_dist.min : s->log_diam;
+        const double l = s->log_length_dist.type ? s->log_length_dist.min : s->log_length;
         uses[s->log_mat] |= 1u << U_LOGS;
-        mmin[s->log_mat] =
-            fmin(mmin[s->log_mat], s->log_density * M_PI * 0.25 * s->log_diam * s->log_diam * s->log_length);
+        mmin[s->log_mat] = fmin(mmin[s->log_mat], s->log_density * M_PI * 0.25 * d * d * l);
     }
 }
 

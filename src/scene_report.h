@@ -7,17 +7,20 @@
 #include "build.h"
 #include "scenario.h"
 
-/* The dam's members and clear openings: what `check` prints and what `check --png` draws. */
+/* The dam's pipes and clear openings: what `check` prints and what `check --png` draws. */
 typedef struct {
-    int n_col, n_beam;
-    double col_y[SD_MAX_PIPES];  /* column axes across the flume, m (the wall at y = 0) */
+    int n_col, n_beam, n_member;
+    double col_y[SD_MAX_PIPES];  /* column axes across the flume, m (the wall at y = 0), ascending */
     double beam_z[SD_MAX_PIPES]; /* beam axes above the bed, m, lowest first */
     double gap_y[SD_MAX_PIPES + 1]; /* clear gaps across: wall–column, column–column, ..., column–wall */
-    double gap_z[SD_MAX_PIPES + 1]; /* clear gaps up: bed–beam, beam–beam, ..., top beam–wall top */
+    double gap_z[SD_MAX_PIPES + 1]; /* clear gaps up: bed–beam, beam–beam, ..., highest beam–wall top */
+    int top_beam;                /* 1: the highest beam is dam.top_beam's */
+    double col_top;              /* the columns reach from the bed to here, m */
     double d_max;                /* the largest sphere diameter */
+    sd_dam_member member[SD_MAX_MEMBERS]; /* dam.members */
 } sd_dam_report;
 
-/* The dam of a flume scenario (n_col = n_beam = 0 without one). */
+/* The dam of a flume scenario (no pipe without one). */
 void sd_dam_report_make(const sd_scenario *s, sd_dam_report *d);
 
 /* The woody volume ratio K_w = V_logs / (V_spheres + V_logs) of a flume scenario (model.md
@@ -31,8 +34,9 @@ void sd_scene_report(FILE *f, const sd_scenario *s, const sd_build_info *info, i
 
 /* The data `check --png` draws (scripts/plot_design.py), as three CSV files in dir:
  * design.csv (key,value: the flume, the debris sizes, the dam's pipe diameter), members.csv
- * (kind,axis_m: column y or beam z) and bodies.csv (the built scene's bodies). 0, or -1 with
- * a message on err. */
+ * (every pipe of the dam: kind,axis_m,x0,y0,z0,x1,y1,z1,diameter_m: its kind, a column's y or a
+ * beam's axis z (empty for a member), the ends of its axis, its diameter) and bodies.csv (the
+ * built scene's bodies). 0, or -1 with a message on err. */
 int sd_scene_write_design(const char *dir, const sd_scenario *s, const sd_world *w, FILE *err);
 
 #endif

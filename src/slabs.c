@@ -181,14 +181,8 @@ sd_status sd_slab_create(const sd_world *whole, const sd_grid_def *g, const sd_s
         int group, active;
         sd_world_triangle(whole, t, c, &group, &active);
         if (sd_world_add_triangle(s->w, c[0], c[1], c[2], group) != t) st = SD_ERR_ARG;
-        if (!st) st = sd_world_set_triangle_material(s->w, t, sd_world_triangle_material(whole, t));
     }
-    /* the springs of the pairs of materials that have their own */
-    for (int a = 0; a < SD_MATERIALS_MAX && !st; a++)
-        for (int b = a; b < SD_MATERIALS_MAX && !st; b++) {
-            sd_contact_def cd;
-            if (sd_world_pair_contact(whole, a, b, &cd) == 1) st = sd_world_set_pair_contact(s->w, a, b, &cd);
-        }
+    if (!st) st = sd_world_copy_materials(s->w, whole);
     for (int t = 0; t < nt && !st; t++) {
         sd_vec3 c[3];
         int group, active;
@@ -513,6 +507,29 @@ sd_status sd_slab_state(const sd_slab *s, void **recs, int *nb, sd_spring **spri
     *springs = sp;
     *ns = q;
     return SD_OK;
+}
+
+sd_status sd_slab_add_body(sd_slab *s, const void *rec, double x)
+{
+    if (slab_of(s, x) != s->k) return SD_OK;
+    sd_status st = sd_world_body_put(s->w, rec, 0);
+    if (!st) s->nowned++;
+    return st;
+}
+
+int sd_slab_owns(const sd_slab *s, int gid) { return owned_here(s, gid); }
+
+long sd_slab_contacts(const sd_slab *s)
+{
+    const int m = sd_world_springs(s->w, NULL, 0);
+    sd_spring *sp = malloc((size_t)(m + 1) * sizeof(sd_spring));
+    if (!sp) return -1;
+    sd_world_springs(s->w, sp, m);
+    long n = 0;
+    for (int k = 0; k < m; k++)
+        n += owned_here(s, sp[k].gid_a);
+    free(sp);
+    return n;
 }
 
 sd_world *sd_slab_world(sd_slab *s) { return s->w; }

@@ -61,6 +61,16 @@ sd_status sd_slab_step_world(sd_slab *s);
 /* the owned bodies' records and the springs of their pairs (whose first body it owns), for the
  * state hash (sd_state_hash_records over every slab's) */
 sd_status sd_slab_state(const sd_slab *s, void **recs, int *nb, sd_spring **springs, int *ns);
+/* A body new to the system (a record made elsewhere, say the dam's pipes built into a copy of
+ * the whole world; x its centre's): put in by the slab that owns it by x, left to the others; the pairs are
+ * remade at the next step, which hands it to the slabs that hold it as a ghost. */
+sd_status sd_slab_add_body(sd_slab *s, const void *rec, double x);
+/* 1 when the slab owns the body gid (it moves it, or holds it fixed, and others take its ghosts from it) */
+int sd_slab_owns(const sd_slab *s, int gid);
+/* the contact points of the last step of the pairs whose first body the slab owns (a body-body
+ * pair's first body in key order, sd_spring; a wall pair's body): summed over the slabs, the one
+ * world's sd_world_contact_count */
+long sd_slab_contacts(const sd_slab *s);
 sd_world *sd_slab_world(sd_slab *s);
 const sd_slabs_stats *sd_slab_stats(const sd_slab *s);
 int sd_slab_owned(const sd_slab *s);

@@ -81,7 +81,13 @@ double sd_trap_capture_depth(const sd_scenario *s, const sd_world *w)
 }
 
 /* The front: the farthest downstream surface of any moving element (kept by the step). */
-double sd_trap_front_x(const run_ctx *c) { return sd_world_front_x(c->w); }
+double sd_trap_front_x(const run_ctx *c)
+{
+    /* a decomposed run: the slabs' fronts after the step (the copy's bodies are refreshed only
+     * now and then), or the copy's own once bodies were removed since */
+    if (c->sys && !c->sys_front_stale) return c->sys_front;
+    return sd_world_front_x(c->w);
+}
 
 double sd_trap_upstream_ke(const run_ctx *c)
 {
@@ -137,7 +143,15 @@ void sd_trap_fixed_loads(const run_ctx *c, sd_vec3 *roughness, sd_vec3 *bed)
         if (!b->fixed[i]) r = v3_sub(r, b->force[i]);
         else if (b->shape[i] == SD_SHAPE_CYLINDER)
             r = v3_sub(r, b->force[i]);
-    int top = SD_GROUP_BOX; /* the builders' groups, and the scenario's triangles' */
+    if (c->sys) {
+        /* a decomposed run: the walls' forces on the bodies at the last refresh, summed over the
+         * bodies in gid order (each body's wall pairs in their order), the same on any count of
+         * ranks; the forces on the triangles are their opposite */
+        *roughness = v3_add(r, c->sys_wall);
+        *bed = v3_scale(c->sys_bed, -1.0);
+        return;
+    }
+    int top = SD_GROUP_DAM; /* the builders' groups (the meshes' too), and the scenario's triangles' */
     for (int k = 0; k < c->s->n_elems; k++)
         if (c->s->elems[k].type == 2 && c->s->elems[k].group > top) top = c->s->elems[k].group;
     for (int g = 0; g <= top; g++)
@@ -231,7 +245,7 @@ void sd_trap_split(const run_ctx *c, double *held, double *channel, double *pass
     double dmax = 0.0;
     for (int k = 0; k < s->n_classes; k++)
         if (s->class_count[k] > 0) dmax = fmax(dmax, s->class_diam[k]);
-    if (dmax <= 0.0) dmax = s->log_diam;
+    if (dmax <= 0.0) dmax = s->log_diam_dist.type != SD_SIZE_FIXED ? s->log_diam_dist.max : s->log_diam;
     const double xt = sd_trap_plane_x(c), bin = 2.0 * dmax, x0 = 0.0; /* the upstream end of the flume */
     const int nb = (int)ceil((xt - x0) / bin) + 1;
     double *vol = calloc((size_t)nb, sizeof *vol);

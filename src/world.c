@@ -288,6 +288,17 @@ int sd_world_pair_contact(const sd_world *w, int a, int b, sd_contact_def *c)
     return w->mat_set[sd_mat_pair(a, b)];
 }
 
+sd_status sd_world_copy_materials(sd_world *dst, const sd_world *src)
+{
+    if (!dst || !src || dst->w.n != src->w.n) return SD_ERR_ARG;
+    memcpy(dst->mat_pair, src->mat_pair, sizeof dst->mat_pair);
+    memcpy(dst->mat_set, src->mat_set, sizeof dst->mat_set);
+    if (src->w.n > 0) memcpy(dst->w.mat, src->w.mat, (size_t)src->w.n);
+    dst->mat_version++;
+    dst->checked = 0;
+    return SD_OK;
+}
+
 sd_status sd_world_remove_body(sd_world *w, int gid)
 {
     if (gid < 0 || gid >= w->next_gid || w->gid_map[gid] < 0) return SD_ERR_NOTFOUND;
@@ -419,6 +430,10 @@ sd_status sd_world_step(sd_world *w)
     if (!w->checked) {
         if ((st = sd_world_check(w))) return st;
         w->checked = 1;
+    }
+    if (w->ghost_drift > 0.0) { /* (a decomposition's ghosts moved by their owners, decomp.c) */
+        w->near_drift += w->ghost_drift;
+        w->ghost_drift = 0.0;
     }
     double t0 = sd_now();
     if (sd_neighbor_needs_rebuild(w)) {

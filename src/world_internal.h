@@ -438,6 +438,9 @@ struct sd_world {
     sd_grid_def fgrid;
     uint8_t *ghost;
     int ghost_cap;
+    /* the largest surface move of a ghost put in place since the last step: its owner moved it,
+     * so this world's drift bounds (near_drift) must count it too (sd_world_step adds it) */
+    double ghost_drift;
 };
 
 /* The near skin as a fraction of the margin. Any skin gives the same bits; 0.05-0.1 ran

@@ -91,6 +91,7 @@ expect restart-junk 2 "junk.ckpt: not a sabodem checkpoint" run "$src_dir/exampl
 [ ! -e "$tmp/rs-out" ] && pass=$((pass + 1)) || { echo "FAIL bad restart left an output directory"; fail=$((fail + 1)); }
 expect restart-check 2 "unknown or incomplete option '--restart'" check "$src_dir/examples/flume_small.yaml" --restart "$tmp/junk.ckpt"
 # the paper's Table 2 matrix: 60 runs from 15 shared flows, listed without running
+expect designer-debris 0 "logs: [0-9]+, solid volume .* sizes drawn per log" check "$src_dir/examples/debris_designer.yaml"
 expect table2-dry-run 0 "branching on dam.l_v: 15 shared flows" sweep "$src_dir/examples/shibuya2009-table2.yaml" --dry-run -o "$tmp/t2"
 [ "$(grep -c '^run case' "$tmp/out")" -eq 60 ] && [ ! -e "$tmp/t2" ] && pass=$((pass + 1)) || { echo "FAIL table2 dry run"; fail=$((fail + 1)); }
 expect sweep-parallel-bad 2 "--parallel: expected a positive integer" sweep "$src_dir/examples/shibuya2009-table2.yaml" --parallel 0
@@ -140,9 +141,10 @@ expect yaml-duplicate 2 "dup.yaml:4:3: duplicate key 'dt'" check "$tmp/dup.yaml"
 expect restart-device 2 "/dev/zero: not a regular file" run "$src_dir/examples/flume_small.yaml" --restart /dev/zero -o "$tmp/rz-out"
 
 # the side views of the arrival and the end, drawn together when the run ends: both PNGs there
-# (with Debian's python3-matplotlib, which scripts/setup.sh installs), or the note for each
+# (with Debian's python3-matplotlib, which scripts/setup.sh installs), or the note for each.
+# The dam has a member too (a strut behind it, 56 deg up, 72.1 mm long: its loads below)
 "$bin" run "$src_dir/examples/flume_small.yaml" -o "$tmp/png" --set output.png=true --set phases.capture_limit=0.05 \
-  >"$tmp/png.log" 2>&1
+  --set 'dam.members=[{from: [0.84, 0.06, 0.0], to: [0.88, 0.06, 0.06], diameter: 0.012}]' >"$tmp/png.log" 2>&1
 code=$?
 if /usr/bin/python3 -c "import matplotlib" 2>/dev/null; then
   png_ok=1
@@ -179,6 +181,17 @@ expect check-no-beam 0 "no intermediate beam: bed to the top beam 118.0 mm = 5.9
 expect check-materials 0 "materials: default \(unused\), rock \(spheres, roughness\), wood \(logs\), steel \(dam, gate\), concrete \(bed, walls\)" check "$src_dir/examples/flume_materials.yaml"
 for pat in " rock-rock +10000 +4000 +0.2 +0.404 +0$" "\*rock-steel +20000 +8000 +0.2 +0.3 +0$" "\*wood-steel +10000 +4000 +0.3 +0.25 +0$"; do
   if grep -Eq -- "$pat" "$tmp/out"; then pass=$((pass + 1)); else echo "FAIL check materials: no '$pat'"; cat "$tmp/out"; fail=$((fail + 1)); fi
+done
+# the dam of examples/shibuya2009-members.yaml: 5 columns at 44 + 53 k mm (clear gaps (300 -
+# 5 x 18)/6 = 35 mm), beams by their gaps 30 and 40 mm (axes 30 + 9 = 39, 30 + 18 + 40 + 9 = 97
+# mm) under the top beam (127 mm), a strut of sqrt(160^2 + 110^2) = 194.2 mm at atan(110/160) =
+# 34.5 deg
+expect check-members 0 "5 columns, axes at y = 44.0, 97.0, 150.0, 203.0, 256.0 mm, from the bed to 136.0 mm" check "$src_dir/examples/shibuya2009-members.yaml"
+for pat in "clear gaps across \(wall, between columns, wall\): 35.0, 35.0, 35.0, 35.0, 35.0, 35.0 mm" \
+           "3 beams, axes at z = 39.0, 97.0, 127.0 mm above the bed \(undersides 30.0, 88.0, 118.0 mm; the top beam at dam.top_beam\)" \
+           "clear gaps up \(bed, between beams, above the top beam to the wall top\): 30.0, 40.0, 12.0, 364.0 mm" \
+           "0: from \[4.2000, 0.1500, 0.0000\] to \[4.0400, 0.1500, 0.1100\] m, d = 18.0 mm, length 194.2 mm, 34.5 deg from the bed plane"; do
+  if grep -Eq -- "$pat" "$tmp/out"; then pass=$((pass + 1)); else echo "FAIL check report: no '$pat'"; cat "$tmp/out"; fail=$((fail + 1)); fi
 done
 expect check-png-noflume 2 "has no flume" check "$tmp/good.yaml" --png "$tmp/x.png"
 # check --png: the design drawn (a PNG), or, without matplotlib, exit 1 saying so; its
@@ -227,7 +240,7 @@ complete_words() { # words of the command line being completed (the last one is 
     _ "$tmp/sabodem.bash" "$@" | sort
 }
 comp_ok=1
-[ "$(complete_words sabodem run x.yaml --set '' | sed 's/=$//')" = "$(sort "$tmp/keys")" ] || { echo "completion: --set keys"; comp_ok=0; }
+[ "$(complete_words sabodem run x.yaml --set '' | sed 's/=$//' | sort)" = "$(sort "$tmp/keys")" ] || { echo "completion: --set keys"; comp_ok=0; }
 [ "$(complete_words sabodem run x.yaml --set solver.d | tr '\n' ' ')" = "solver.dt= solver.duration= " ] || { echo "completion: solver.d"; comp_ok=0; }
 [ "$(complete_words sabodem sweep x.yaml --d)" = "--dry-run" ] || { echo "completion: sweep --d"; comp_ok=0; }
 [ "$(complete_words sabodem ch)" = "check" ] || { echo "completion: ch"; comp_ok=0; }
@@ -248,7 +261,13 @@ assert abs((v["held_at_dam"] + v["in_channel"]) / total - s["trap_ratio"]) <= 2e
 assert s["capture"] == "cut by its time limit", s["capture"]
 rows = list(csv.DictReader(open(d + "/pipes.csv")))
 n = len(s["pipes"])
-assert n == 4 and len(rows) % n == 0 and len(rows) >= 2 * n, (n, len(rows))
+assert n == 5 and len(rows) % n == 0 and len(rows) >= 2 * n, (n, len(rows))
+# the member: last, its ends and span (its length), no axis coordinate in pipes.csv
+m = s["pipes"][4]
+assert m["kind"] == "member" and m["member"] == 0 and m["from_m"] == [0.84, 0.06, 0.0] and m["to_m"] == [0.88, 0.06, 0.06], m
+assert abs(m["span_m"] - (0.04 ** 2 + 0.06 ** 2) ** 0.5) < 1e-15 and m["diameter_m"] == 0.012, m
+assert all(r["kind"] == "member" and r["axis_m"] == "" for r in rows if r["pipe"] == "4"), rows[4]
+assert [p["kind"] for p in s["pipes"][:4]] == ["column", "column", "beam", "beam"], s["pipes"]
 for r in rows:
     span = s["pipes"][int(r["pipe"])]["span_m"]
     assert 0.0 <= float(r["s_m"]) <= span and float(r["m_bend_Nm"]) >= 0.0, r
@@ -257,8 +276,26 @@ for r in rows:
 # every step's force goes into some sample's interval peak: the largest is the run's peak
 pk, ipk = max(p["peak_force_N"] for p in s["pipes"]), max(float(r["f_peak_interval_N"]) for r in rows)
 assert pk > 0 and abs(pk - ipk) <= 1e-6 * pk, (pk, ipk)
+# impact events: events.csv has a row per event of summary.json's counts, their largest peaks,
+# impulses and energies, each peak at least the threshold and at most the pipe's peak
+ev = list(csv.DictReader(open(d + "/events.csv")))
+T = s["event_threshold_N"]
+assert T > 0 and sum(p["events"]["count"] for p in s["pipes"]) == len(ev) > 0, (T, len(ev))
+for k, p in enumerate(s["pipes"]):
+    mine = [r for r in ev if int(r["pipe"]) == k]
+    assert len(mine) == p["events"]["count"], (k, len(mine))
+    for key, col in (("largest_peak_N", "peak_N"), ("largest_impulse_Ns", "impulse_Ns"), ("largest_energy_J", "energy_J")):
+        got = max((float(r[col]) for r in mine), default=0.0)
+        assert abs(got - p["events"][key]) <= 1e-6 * max(got, 1e-12), (k, key, got, p["events"][key])
+    for r in mine:
+        assert T < float(r["peak_N"]) <= p["peak_force_N"] * (1 + 1e-6) and float(r["duration_s"]) > 0, r
+        assert r["end"] in ("fell", "sustained", "run_end") and float(r["energy_J"]) >= 0, r
+# the debris released: the classes' counts as spheres.counts, the logs' count as the run's
+rel = s["debris_released"]
+assert [c["count"] for c in rel["spheres"]] == s["parameters"]["spheres.counts"], rel
+assert rel["classes_from"] == "spheres.counts" and rel["logs"]["count"] == s["elements"]["logs"], rel
 PY
-then pass=$((pass + 1)); else echo "FAIL debris account / pipe loads in summary.json, pipes.csv"; fail=$((fail + 1)); fi
+then pass=$((pass + 1)); else echo "FAIL debris account / pipe loads / events in summary.json, pipes.csv, events.csv"; fail=$((fail + 1)); fi
 
 # docs/scenario.md carries the same table the loader checks
 "$bin" params --markdown > "$tmp/params.md"

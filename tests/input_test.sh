@@ -57,6 +57,98 @@ y wide 'flume: {on: true, width: 3, x_gate: 0.1, pack_height: 0.05}
 spheres: {counts: [1, 1, 1, 1]}'
 expect too-many-columns 2 "wide.yaml:1:[0-9]+: flume.width = 3 m with dam.l_h = 0.05 m needs 44 columns, more than 32" check "$tmp/wide.yaml"
 
+# the dam's keys: one way to give the columns, the beams, the top beam (a --set overrides the
+# file's); columns that fit; beams below the top beam; members inside the flume, long, apart
+y ncl 'flume: {on: true}
+dam: {n_columns: 5, l_h: 0.04}'
+expect columns-two-keys 2 "ncl.yaml:2:[0-9]+: dam.n_columns and dam.l_h both give the columns: give one of dam.columns, dam.n_columns, dam.l_h" check "$tmp/ncl.yaml"
+expect columns-set-overrides 0 "5 columns, axes at y = 44.0, 97.0, 150.0, 203.0, 256.0 mm" check "$tmp/cols.yaml" --set dam.n_columns=5
+expect columns-set-two 2 "--set:2:[0-9]+: dam.columns and dam.n_columns both give the columns" check "$tmp/ncl.yaml" --set dam.n_columns=3 --set "dam.columns=[0.1]"
+y bax 'flume: {on: true}
+dam:
+  l_v: 0.03
+  beam_axes: [0.05]'
+expect beams-two-keys 2 "bax.yaml:4:[0-9]+: dam.beam_axes and dam.l_v both give the beams" check "$tmp/bax.yaml"
+y btop 'flume: {on: true}
+dam: {beams: [0.04, 0.1], top_beam: 0.118}'
+expect beams-and-top 2 "btop.yaml:2:[0-9]+: dam.beams and dam.top_beam both give the top beam: dam.beams lists every beam, the top one included" check "$tmp/btop.yaml"
+y ncw 'flume: {on: true}
+dam: {n_columns: 20}'
+expect columns-do-not-fit 2 "ncw.yaml:2:[0-9]+: dam.n_columns: 20 columns of 0.018 m do not fit across the 0.3 m flume" check "$tmp/ncw.yaml"
+y lvtop 'flume: {on: true}
+dam: {l_v: 0.2}'
+expect beam-above-top 2 "lvtop.yaml:2:[0-9]+: dam.l_v: the beam with its underside at 0.2 m is above the top beam \(underside 0.118 m\)" check "$tmp/lvtop.yaml"
+y gaps 'flume: {on: true}
+dam: {beam_gaps: [0.05, 0.06]}'
+expect gaps-above-top 2 "gaps.yaml:2:[0-9]+: dam.beam_gaps: the beam with its underside at 0.128 m is above the top beam \(underside 0.118 m\): lower it, raise dam.top_beam, or remove the top beam \(dam.top_beam: false\)" check "$tmp/gaps.yaml"
+expect gaps-no-top 0 "2 beams, axes at z = 59.0, 137.0 mm above the bed \(undersides 50.0, 128.0 mm; no top beam\)" check "$tmp/gaps.yaml" --set dam.top_beam=false
+y axlow 'flume: {on: true}
+dam: {beam_axes: [0.005]}'
+expect beam-into-bed 2 "axlow.yaml:2:[0-9]+: dam.beam_axes: the beam with its axis at 0.005 m reaches into the bed" check "$tmp/axlow.yaml"
+y topf 'flume: {on: true}
+dam: {top_beam: ture}'
+expect top-beam-word 2 "topf.yaml:2:[0-9]+: dam.top_beam: expected a number or false" check "$tmp/topf.yaml"
+y none 'flume: {on: true}
+dam: {n_columns: 0, l_v: 0, top_beam: false}'
+expect dam-empty 2 "none.yaml:2:[0-9]+: the dam has no pipe \(no column, no beam, no member\): give it some, or dam.on: false" check "$tmp/none.yaml"
+y mem 'flume: {on: true}
+dam:
+  members:
+    - {from: [4.05, 0.15, 0.0], to: [4.2, 0.15, 0.1], diameter: 0.018}
+    - {from: [4.1, 0.1, 0.1], to: [4.1, 0.1, 0.1], diameter: 0.018}'
+expect member-zero-length 2 "mem.yaml:5:7: dam.members: member 1 has no length: from and to are the same point" check "$tmp/mem.yaml"
+y mem2 'flume: {on: true}
+dam:
+  members:
+    - {from: [3.9, 0.15, 0.0], to: [4.2, 0.15, 0.1], diameter: 0.018}'
+expect member-upstream 2 "mem2.yaml:4:7: dam.members: member 0 \(from \[3.9, 0.15, 0\] to \[4.2, 0.15, 0.1\], diameter 0.018 m\) reaches upstream of the dam face flume.x_dam = 4 m" check "$tmp/mem2.yaml"
+y mem3 'flume: {on: true}
+dam:
+  members:
+    - {from: [4.05, 0.35, 0.0], to: [4.2, 0.15, 0.1], diameter: 0.018}'
+expect member-outside 2 "mem3.yaml:4:7: dam.members: member 0 .* reaches through the wall at y = 0.3 m \(its axis to y = 0.35 m\)" check "$tmp/mem3.yaml"
+y mem4 'flume: {on: true}
+dam:
+  members:
+    - {from: [4.01, 0.05, 0.02], to: [4.01, 0.25, 0.1], diameter: 0.018}'
+expect member-overlaps-column 2 "mem4.yaml:4:7: dam.members: member 0 .* overlaps the column at y = 0.048 m: their axes come 0.00223607 m apart, less than the radii.s sum 0.018 m" check "$tmp/mem4.yaml"
+y mem5 'flume: {on: true}
+dam:
+  members:
+    - {from: [4.05, 0.1, 0.0], to: [4.05, 0.1, 0.2], diameter: 0.02}
+    - {from: [4.065, 0.1, 0.0], to: [4.065, 0.1, 0.2], diameter: 0.02}'
+expect members-overlap 2 "mem5.yaml:5:7: dam.members: member 1 .* overlaps the member 0: their axes come 0.015 m apart, less than the radii.s sum 0.02 m" check "$tmp/mem5.yaml"
+y mem6 'flume: {on: true}
+dam:
+  members:
+    - {from: [4.05, 0.1, 0.0], to: [4.1, 0.1, 0.2], diameter: -0.02, lenght: 3}
+    - {from: [4.05, 0.1], to: [4.1, 0.1, 0.2]}
+    - 7'
+expect member-diameter 2 "mem6.yaml:4:63: dam.members: diameter of member 0: must be > 0 and <= 1 \(m\)" check "$tmp/mem6.yaml"
+expect member-unknown-key 2 "mem6.yaml:4:70: dam.members: unknown key 'lenght' in member 0 \(from, to, diameter\)" check "$tmp/mem6.yaml"
+expect member-vector 2 "mem6.yaml:5:14: dam.members: from of member 1: expected \[x, y, z\]" check "$tmp/mem6.yaml"
+expect member-no-diameter 2 "mem6.yaml:5:7: dam.members: member 1 has no 'diameter'" check "$tmp/mem6.yaml"
+expect member-not-map 2 "mem6.yaml:6:7: dam.members: each member is a mapping" check "$tmp/mem6.yaml"
+expect member-set 2 "--set:1:[0-9]+: dam.members: member 0 has no length" check "$tmp/cols.yaml" --set "dam.members=[{from: [4.1, 0.1, 0.1], to: [4.1, 0.1, 0.1], diameter: 0.01}]"
+
+# debris as designers give it: fractions that sum to 1, one way to give the classes, drawn log
+# sizes with a range (docs/scenario.md)
+y grading 'flume: {on: true}
+spheres:
+  grading: {diameters: [0.02, 0.01], mass_fractions: [0.6, 0.5]}
+  volume: 0.002'
+expect grading-sum 2 "grading.yaml:3:[0-9]+: spheres.grading.mass_fractions sum to 1.1, not 1 \(within 1e-6\)" run "$tmp/grading.yaml" -o "$tmp/gr-out"
+[ ! -e "$tmp/gr-out" ] && pass=$((pass + 1)) || { echo "FAIL grading-sum left an output directory"; fail=$((fail + 1)); }
+y grading2 'flume: {on: true}
+spheres:
+  diameters: [0.02, 0.01]
+  grading: {diameters: [0.02, 0.01], mass_fractions: [0.5, 0.5]}
+  volume: 0.002'
+expect grading-and-diameters 2 "grading2.yaml:3:[0-9]+: spheres.diameters conflicts with spheres.grading" check "$tmp/grading2.yaml"
+y loglen 'flume: {on: true}
+logs: {k_w: 0.1, length: {type: lognormal, mean: 0.1, sd: 0.02, min: 0.12, max: 0.2}}'
+expect log-mean-outside 2 "loglen.yaml:2:[0-9]+: logs.length.mean = 0.1 m must lie in \[logs.length.min, logs.length.max\]" check "$tmp/loglen.yaml"
+
 # list lengths: one count per diameter
 y lists 'flume: {on: true}
 spheres: {diameters: [0.02, 0.01, 0.005], counts: [10, 20, 30, 40]}'

@@ -4,8 +4,8 @@
 #  1. periodic checkpoints change no bit (the same state hash with and without them);
 #  2. kill loop: the run is killed with SIGKILL at seeded simulated instants in packing, flow
 #     and capture, and restarted each time from its newest checkpoint, into its own directory;
-#     the end equals the uninterrupted run: state hash, series.csv, trajectories.csv, series.pvd,
-#     the final snapshot, and the summary but for its wall times;
+#     the end equals the uninterrupted run: state hash, series.csv, pipes.csv, events.csv,
+#     trajectories.csv, series.pvd, the final snapshot, and the summary but for its wall times;
 #  3. what a kill -9 leaves (a series.csv cut mid-line, atomic writers' temporary files, the old
 #     summary.json) is cleaned by the restart into the same directory;
 #  4. full disk (a 400 KiB tmpfs, as root; skipped otherwise): a clear error, exit 1, no
@@ -100,7 +100,8 @@ if [ "$code" -eq 0 ] && [ "$(hash "$run_dir/summary.json")" = "$ref" ]; then ok;
 for p in packing flow capture; do
   case " $phases " in *" $p "*) ok ;; *) bad "no restart from a checkpoint in the $p phase ($phases)" ;; esac
 done
-for f in series.csv pipes.csv trajectories.csv series.pvd spheres_final.vtp cylinders_final.vtp spheres_000003.vtp cylinders_000006.vtp; do
+[ "$(wc -l < "$tmp/ref/events.csv")" -gt 1 ] && ok || bad "the uninterrupted run has no impact event in events.csv"
+for f in series.csv pipes.csv events.csv trajectories.csv series.pvd spheres_final.vtp cylinders_final.vtp spheres_000003.vtp cylinders_000006.vtp; do
   cmp -s "$tmp/ref/$f" "$run_dir/$f" && ok || bad "kill loop: $f differs from the uninterrupted run's"
 done
 [ "$(summary_core "$tmp/ref/summary.json")" = "$(summary_core "$run_dir/summary.json")" ] && ok \

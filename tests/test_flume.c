@@ -145,9 +145,9 @@ static void test_reduced_flume(void)
 
     /* every element accounted for at every output row: remaining + passed is constant, but for
      * the dam pipes, which join the world when the capture phase starts (docs/physics.md §10) */
-    double col_y[SD_MAX_PIPES], beam_z[SD_MAX_PIPES];
-    int n_col, n_beam;
-    sd_build_dam_layout(&s, col_y, &n_col, beam_z, &n_beam);
+    sd_dam_grid grid;
+    sd_build_dam_grid(&s, &grid);
+    const int n_col = grid.n_col, n_beam = grid.n_beam;
     char path[512];
     snprintf(path, sizeof path, "%s/series.csv", dir);
     FILE *f = fopen(path, "r");
@@ -306,9 +306,10 @@ static void test_dam_layout(void)
     double lv[4] = {0.030, 0.040, 0.050, 0.0};
     for (int k = 0; k < 4; k++) {
         s.l_v = lv[k];
-        double y[SD_MAX_PIPES], z[SD_MAX_PIPES];
-        int nc, nb;
-        sd_build_dam_layout(&s, y, &nc, z, &nb);
+        sd_dam_grid g;
+        sd_build_dam_grid(&s, &g);
+        const double *y = g.col_y, *z = g.beam_z;
+        const int nc = g.n_col, nb = g.n_beam;
         CHECK(nc == 4);
         const double want[4] = {0.048, 0.116, 0.184, 0.252};
         for (int i = 0; i < 4 && i < nc; i++)

@@ -461,6 +461,29 @@ static void test_checkpoint(void)
     printf("checkpoint of the chute with %d ordered pairs set: restart hash %016llx, straight %016llx\n", pairs,
            (unsigned long long)h_restart, (unsigned long long)h_straight);
     CHECK(h_restart == h_straight);
+    /* the materials copied to a world of the same triangles (slabs.c's worlds), and refused
+     * to one of other triangles */
+    sd_world *c = NULL;
+    CHECK(sd_world_create(sd_world_definition(w), &c) == SD_OK);
+    CHECK(sd_world_copy_materials(c, w) == SD_ERR_ARG);
+    for (int t = 0; t < sd_world_triangle_count(w); t++) {
+        sd_vec3 q[3];
+        int group;
+        CHECK(sd_world_triangle(w, t, q, &group, NULL) == SD_OK);
+        CHECK(sd_world_add_triangle(c, q[0], q[1], q[2], group) == t);
+    }
+    CHECK(sd_world_copy_materials(c, w) == SD_OK);
+    same = 1;
+    for (int a = 0; a < SD_MATERIALS_MAX; a++)
+        for (int b = 0; b < SD_MATERIALS_MAX; b++) {
+            sd_contact_def c1, c2;
+            const int s1 = sd_world_pair_contact(w, a, b, &c1), s2 = sd_world_pair_contact(c, a, b, &c2);
+            same &= s1 == s2 && !memcmp(&c1, &c2, sizeof c1);
+        }
+    for (int t = 0; t < sd_world_triangle_count(w); t++)
+        same &= sd_world_triangle_material(c, t) == sd_world_triangle_material(w, t);
+    CHECK(same);
+    sd_world_destroy(c);
     sd_world_destroy(r);
     sd_world_destroy(w);
     unlink(path);

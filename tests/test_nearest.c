@@ -35,5 +35,16 @@ int main(void)
     static const char *const two[] = {"--dry-run", "--dry-spell"};
     CHECK(sd_nearest_word("--dr", two, 2) == NULL);
     CHECK(sd_nearest_word("x", keys, 0) == NULL);
+    /* a long mangled word: none near (the length difference settles it), and a long word one
+     * edit from a long candidate is still found past the bound of the earlier candidates */
+    static char big[20001];
+    memset(big, 'd', sizeof big - 1);
+    CHECK(sd_nearest_word(big, keys, n) == NULL);
+    char c[101];
+    memcpy(c, a, sizeof a);
+    c[7] = 'z';
+    const char *const longs[] = {"solver.dt", b, a};
+    CHECK(sd_nearest_word(c, longs, 3) == a); /* 2 edits from b, then 1 from a: a is offered */
+    CHECK(sd_edit_distance(c, b) == 2 && sd_edit_distance(c, a) == 1);
     return check_report("test_nearest");
 }

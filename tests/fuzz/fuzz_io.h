@@ -16,7 +16,7 @@ static char fuzz_dir_path[64];
 
 static inline void fuzz_dir_remove(void)
 {
-    static const char *const names[] = {"input.yaml", "base.yaml", "input.ckpt", "fixed.yaml", NULL};
+    static const char *const names[] = {"input.yaml", "base.yaml", "input.ckpt", "fixed.yaml", "input.stl", NULL};
     char p[128];
     for (int k = 0; names[k]; k++) {
         snprintf(p, sizeof p, "%s/%s", fuzz_dir_path, names[k]);
