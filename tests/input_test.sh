@@ -243,7 +243,7 @@ elements:
 expect mat-dt 2 "matdt.yaml:4:5: solver.dt = 1e-05 is unstable: it must be at most 2.769.*e-06 s .*k_n = 1e\+07 N/m, k_s = 4000 N/m of the pair rock-steel" check "$tmp/matdt.yaml"
 expect mat-dt-ok 0 "ok \(2 elements" check "$tmp/matdt.yaml" --set solver.dt=2.5e-6
 expect mat-set 2 "--set:1:15: logs.material: unknown material 'wod' \(did you mean 'wood'\?\)" check "$tmp/mat.yaml" --set logs.material=wod
-expect mat-classes 2 "spheres.materials has 2 names and spheres.diameters 4: give one material, or one per class" check "$src_dir/examples/flume_materials.yaml" --set 'spheres.materials=[rock, wood]' --set 'spheres.diameters=[0.02, 0.015, 0.01, 0.005]' --set 'spheres.counts=[1, 1, 1, 1]'
+expect mat-classes 2 "spheres.materials has 2 names and the spheres 4 size classes: give one material, or one per class" check "$src_dir/examples/flume_materials.yaml" --set 'spheres.materials=[rock, wood]' --set 'spheres.diameters=[0.02, 0.015, 0.01, 0.005]' --set 'spheres.counts=[1, 1, 1, 1]'
 
 # files are read with a limit: 4 MiB, 500,000 values
 python3 -c "print('#' + 'x' * (4 * 1024 * 1024))" > "$tmp/big.yaml"
