@@ -8,7 +8,8 @@
  *     fixed log of its size, the crossing angle swept 0–90° (by 0.001° where the points of the
  *     line contact come and go): the total normal stiffness, the total normal damping and the
  *     force at the depth m g / K_n are those of one contact, continuous in the angle; after
- *     0.15 s at rest the normal force is the weight and the overlap m g / K_n at every angle.
+ *     0.15 s at rest the normal force is the weight and the overlap m g / K_n at every angle
+ *     but 0-0.0031 deg on the log, where the one crossing point rocks (test_crossing_sweep).
  * Paper values (K_n = 1e4 N/m, K_s = 4e3 N/m, h = 0.2, Δt = 1e-5 s). Deterministic. */
 #include <string.h>
 
@@ -289,17 +290,20 @@ static void sweep_print(const char *what, const char *on, const sweep_stat *s)
            on, s->n, what, s->lo, s->at_lo, s->hi, s->at_hi, s->step, s->at_step);
 }
 
-/* Stiffness, damping and the static force of the line contact at every angle (0-2 deg by
- * 0.001 deg, where the points of the line contact come and go; then to 90 deg by 0.25 deg),
- * from single steps at the settled depth m g / K_n: one step per configuration, no settling. */
+/* Stiffness, damping and the static force of the line contact at every angle (0-0.6 deg by
+ * 0.001 deg, where the points of the line contacts come and go; to 2 deg by 0.01 deg, then to
+ * 90 deg by 0.5 deg), from single steps at the settled depth m g / K_n: one step per
+ * configuration, no settling. */
 static void test_crossing_springs(void)
 {
-    static double ang[2400];
+    static double ang[1024];
     int na = 0;
-    for (int i = 0; i <= 2000; i++)
+    for (int i = 0; i <= 600; i++)
         ang[na++] = 0.001 * i;
-    for (int i = 1; i <= 352; i++)
-        ang[na++] = 2.0 + 0.25 * i;
+    for (int i = 1; i <= 140; i++)
+        ang[na++] = 0.6 + 0.01 * i;
+    for (int i = 1; i <= 176; i++)
+        ang[na++] = 2.0 + 0.5 * i;
     const double m = log_mass(), d0 = m * G / KN, h = 1e-8, u = 1e-3;
     const double c_n = 2.0 * sd_world_def_default().contact.damping * sqrt(m * KN);
     for (int pipe = 1; pipe >= 0; pipe--) {
@@ -315,11 +319,10 @@ static void test_crossing_springs(void)
             const double k = (across_once(rb, lb, ang[i], d0 + h, 0.0, 0.404, NULL) -
                               across_once(rb, lb, ang[i], d0 - h, 0.0, 0.404, NULL)) /
                              (2.0 * h * KN);
-            /* the total normal damping: the force moving down at u less the force at rest,
-             * frictionless (no tangential spring or dashpot), over c_n u */
-            const double c =
-                (across_once(rb, lb, ang[i], d0, u, 0.0, NULL) - across_once(rb, lb, ang[i], d0, 0.0, 0.0, NULL)) /
-                (c_n * u);
+            /* the total normal damping: the force moving down at u, frictionless (no tangential
+             * spring or dashpot), less the force at rest (in the first step of a contact at rest
+             * friction adds nothing), over c_n u */
+            const double c = (across_once(rb, lb, ang[i], d0, u, 0.0, NULL) - f * m * G) / (c_n * u);
             sweep_add(&sk, ang[i], k);
             sweep_add(&sc, ang[i], c);
             sweep_add(&sf, ang[i], f);
@@ -345,44 +348,69 @@ static void test_crossing_springs(void)
     }
 }
 
-/* The settled overlap and the normal force after 0.15 s at rest, the angle swept (0.4-0.6 deg
- * by 0.001 deg around the angle where the end points of a log on the pipe leave, 0.477 deg). */
+/* The settled overlap and the normal force after 0.15 s at rest, the angle swept: on the pipe
+ * 0.45-0.50 deg by 0.001 deg around the angle where its end points leave (0.477 deg), on the
+ * log 0-0.006 deg by 0.0005 deg (its end points leave at once: the crossing point alone
+ * carries the log beyond 0 deg).
+ *
+ * Measured on the log, the crossing point alone: between 0 and theta_c = dt sqrt(m g h / (4
+ * I_tr)) = 0.0031 deg (h = r + r_log, the axes' distance) the log does not come to rest. Its
+ * one contact point lies where the axes cross, and a pitch phi of the log moves it along the
+ * axis by h phi / theta^2: a rocking stiffness m g h / theta^2 whose frequency passes 2 / dt
+ * (the leapfrog's limit) below theta_c, so the pitch keeps a period-2 oscillation, the force
+ * within 4 % of the weight, the overlap 0.9896-0.9923 (and the yaw grows out of the band, by 1.57
+ * in 0.15 s). Parallel (2 points) and from theta_c on, the log rests exactly. */
 static void test_crossing_sweep(void)
 {
-    static double ang[512];
-    int na = 0;
-    static const double coarse[] = {0.0, 0.005, 0.01, 0.02, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.6,
-                                    0.75, 1.0,  1.25, 1.5,  1.75, 2.0, 2.5,  3.0, 5.0,  10., 20., 45., 90.};
-    for (int i = 0; i < (int)(sizeof(coarse) / sizeof(coarse[0])); i++) {
-        ang[na++] = coarse[i];
-        if (coarse[i] == 0.4)
-            for (int k = 1; k < 200; k++)
-                ang[na++] = 0.4 + 0.001 * k;
-    }
+    static const double coarse[] = {0.0,  0.005, 0.01, 0.02, 0.05, 0.1, 0.15, 0.2,  0.25, 0.3, 0.35, 0.4, 0.45,
+                                    0.5,  0.6,   0.75, 1.0,  1.25, 1.5, 1.75, 2.0, 2.5,  3.0, 5.0, 10., 20.,
+                                    45., 90.};
+    const double m = log_mass(), i_tr = m * (3.0 * LOG_R * LOG_R + LOG_LEN * LOG_LEN) / 12.0;
+    const double theta_c = 1e-5 * sqrt(m * G * 2.0 * LOG_R / (4.0 * i_tr)) * 180.0 / M_PI;
     for (int pipe = 1; pipe >= 0; pipe--) {
         const char *on = pipe ? "pipe" : "log";
-        sweep_stat so = {0}, sf = {0};
+        static double ang[128];
+        int na = 0;
+        for (int i = 0; i < (int)(sizeof(coarse) / sizeof(coarse[0])); i++) {
+            ang[na++] = coarse[i];
+            if (pipe && coarse[i] == 0.45)
+                for (int k = 1; k < 50; k++)
+                    ang[na++] = 0.45 + 0.001 * k;
+            if (!pipe && coarse[i] == 0.0)
+                for (int k = 1; k <= 12; k++)
+                    ang[na++] = 0.0005 * k;
+        }
+        sweep_stat so = {0}, sf = {0}, bo = {0}, bf = {0};
         long pts_prev = -1;
         for (int i = 0; i < na; i++) {
             double ov, f;
             long pts;
             rest_across(pipe ? 0.009 : 0.005, pipe ? 0.5 : 0.1, ang[i], &ov, &f, &pts);
-            if (pts != pts_prev || i % 25 == 0)
-                printf("2 log on a %s at %6.3f deg, after 0.15 s: overlap / (m g / K_n) %.7f, F_n / m g - 1 %+.1e, %ld "
+            if (pts != pts_prev || i % 10 == 0 || (!pipe && ang[i] < 0.01))
+                printf("2 log on a %s at %6.4f deg, after 0.15 s: overlap / (m g / K_n) %.7f, F_n / m g - 1 %+.1e, %ld "
                        "contact points\n",
                        on, ang[i], ov, f - 1.0, pts);
             pts_prev = pts;
-            sweep_add(&so, ang[i], ov);
-            sweep_add(&sf, ang[i], f - 1.0);
+            /* (on the log, the band 0 < theta <= 1.05 theta_c apart) */
+            const int band = !pipe && ang[i] > 0.0 && ang[i] <= 1.05 * theta_c;
+            sweep_add(band ? &bo : &so, ang[i], ov);
+            sweep_add(band ? &bf : &sf, ang[i], f - 1.0);
         }
+        if (!pipe) printf("2 log on a log: theta_c = %.5f deg\n", theta_c);
         sweep_print("settled overlap / (m g / K_n)", on, &so);
         sweep_print("F_n / m g - 1 after 0.15 s", on, &sf);
-        /* the weight, and one contact's overlap at every angle: measured 0.99993-1.00000,
-         * steps <= 7.9e-7 per 0.001 deg (the springs weighted by the shares alone: 1.00-1.37,
-         * a step of 0.33 at 0.477 deg); the end points lean (above), and their friction holds
-         * a little of the weight */
+        /* the weight, and one contact's overlap at every angle: measured 0.99993-1.00000 on the
+         * pipe, steps <= 5.9e-7 per 0.001 deg (the springs weighted by the shares alone:
+         * 1.00-1.37, a step of 0.33 at 0.477 deg); the end points lean (above), and their
+         * friction holds a little of the weight */
         CHECK(sf.lo > -1e-8 && sf.hi < 1e-8);
         CHECK(so.lo > 0.9999 && so.hi < 1.0 + 1e-6 && so.step < 5e-6);
+        if (!pipe) {
+            sweep_print("in the band, settled overlap / (m g / K_n)", on, &bo);
+            sweep_print("in the band, F_n / m g - 1 after 0.15 s", on, &bf);
+            CHECK(fabs(theta_c - 0.0031) < 5e-5);
+            CHECK(bo.n == 6 && bo.lo > 0.989 && bo.hi < 0.994 && bf.lo > -0.04 && bf.hi < 0.04);
+        }
     }
 }
 
