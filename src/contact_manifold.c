@@ -62,7 +62,7 @@ void sd_manifold_shares(sd_manifold *ms, int nm)
      * of points, and continuous as points come and go (a point that appears or leaves at any
      * depth only moves the load among the points). Weighting the springs by the shares alone
      * (K_n sum(s_j d_j) / S) softened a line contact as a shallower point joined it: a log
-     * across a pipe near parallel settled up to 1.36 times deeper than crossed, and jumped back
+     * across a pipe near parallel settled up to 1.37 times deeper than crossed, and jumped back
      * as the end points left (docs/physics.md §16). One point: exactly its own overlap. */
     int i = 0;
     for (int p = 0; p < nm; p++)

@@ -222,7 +222,7 @@ int sd_geom_cyl_tri(const sd_cyl *a, const sd_tri *t, sd_manifold *m)
      * its end face tilted: the plate point over the rim point is outside the log). The point:
      * where the axis crosses the plane, else the deepest point lifted to the plane (inside the
      * log when the face is tilted); neither inside by more than tol (a face flat on the plane
-     * only just below it): no test, as before. */
+     * only just below it): no test, the face contacts stand. */
     if (best_k < 0 && fm.n > 0) {
         const double s_ax = fabs(sg) > 1e-12 ? -sc / sg : INFINITY;
         sd_vec3 z = v3_madd(a->c, a->a, s_ax);
