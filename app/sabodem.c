@@ -395,8 +395,9 @@ int main(int argc, char **argv)
             fprintf(stderr, "%s: %s\n", file, sd_status_message(st));
             return 2;
         }
-        printf("%s: ok (%d elements, %d triangles; estimate: %.3g MB, %.4g steps, about %.3g s on one core)\n", file,
-               n, t, cost.bytes / 1e6, cost.steps, cost.seconds);
+        printf("%s: ok (%d elements, %d triangles; estimate: %.3g MB, %.4g steps expected (at most %.4g), about %.3g s "
+               "on one core)\n",
+               file, n, t, cost.bytes / 1e6, cost.expected_steps, cost.steps, cost.seconds);
         sd_scenario_print_time(stdout, &s, &cost);
         sd_scene_report(stdout, &s, &info, n, t);
         int code = 0;

@@ -124,8 +124,10 @@ int sd_manifold_apply(const sd_world *w, const sd_law *law, const sd_manifold *m
 /* The shares of the points of nm manifolds (one pair's, or a log's wall pairs' after the mesh
  * rule) made weights: each raw share over the sum of the raw shares of the points whose
  * normals agree with its own (within 10 deg fully, fading out to 30 deg), so that the points
- * of one flat or line contact share K_n, the dashpot and K_s with weights summing to 1. At most
- * SD_SHARE_MAX points are shared; a log with more wall contacts gets each at full weight. */
+ * of one flat or line contact share the dashpot and K_s with weights summing to 1; and each
+ * point's overlap made the one its spring sees, so that the weighted springs sum to K_n times
+ * the deepest overlap among those points (contact_manifold.c). At most SD_SHARE_MAX points are
+ * shared; a log with more wall contacts gets each at full weight and its own overlap. */
 #define SD_SHARE_MAX 64
 void sd_manifold_shares(sd_manifold *ms, int nm);
 /* The springs of a log-log pair's contacts whose feature changed (seed[k], zero if none): an

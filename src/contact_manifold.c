@@ -43,7 +43,7 @@ static double share_kernel(double cn)
 
 void sd_manifold_shares(sd_manifold *ms, int nm)
 {
-    double sum[SD_SHARE_MAX];
+    double sum[SD_SHARE_MAX], scale[SD_SHARE_MAX];
     int nt = 0;
     for (int p = 0; p < nm; p++)
         nt += ms[p].n;
@@ -54,20 +54,36 @@ void sd_manifold_shares(sd_manifold *ms, int nm)
                 ms[p].share[k] = 1.0;
         return;
     }
-    /* every sum from the raw shares first, then the weights in place */
+    /* Every sum from the raw shares first, then the weights and the springs' overlaps in place.
+     * Among points whose normals agree (kernel 1), a point's weight is w_k = s_k / S (S = sum
+     * of the raw shares s_j, so the dashpots add up to one contact's), and its spring sees the
+     * overlap d_k M S / Q (M = the deepest overlap d_j, Q = sum of s_j d_j), so the springs add
+     * up to K_n M: one contact's spring on the depth of the pair's overlap, whatever the number
+     * of points, and continuous as points come and go (a point that appears or leaves at any
+     * depth only moves the load among the points). Weighting the springs by the shares alone
+     * (K_n sum(s_j d_j) / S) softened a line contact as a shallower point joined it: a log
+     * across a pipe near parallel settled up to 1.37 times deeper than crossed, and jumped back
+     * as the end points left (docs/physics.md §16). One point: exactly its own overlap. */
     int i = 0;
     for (int p = 0; p < nm; p++)
         for (int k = 0; k < ms[p].n; k++, i++) {
-            double s = 0.0;
-            for (int q = 0; q < nm; q++)
-                for (int j = 0; j < ms[q].n; j++)
-                    s += ms[q].share[j] * share_kernel(v3_dot(ms[p].normal[k], ms[q].normal[j]));
+            double s = 0.0, q = 0.0, deep = 0.0;
+            for (int r = 0; r < nm; r++)
+                for (int j = 0; j < ms[r].n; j++) {
+                    const double kn = share_kernel(v3_dot(ms[p].normal[k], ms[r].normal[j]));
+                    s += ms[r].share[j] * kn;
+                    q += ms[r].share[j] * ms[r].overlap[j] * kn;
+                    deep = fmax(deep, ms[r].overlap[j] * kn);
+                }
             sum[i] = s;
+            scale[i] = q > 0.0 ? deep * s / q : 1.0;
         }
     i = 0;
     for (int p = 0; p < nm; p++)
-        for (int k = 0; k < ms[p].n; k++, i++)
+        for (int k = 0; k < ms[p].n; k++, i++) {
             ms[p].share[k] = sum[i] > 0.0 ? ms[p].share[k] / sum[i] : 1.0;
+            ms[p].overlap[k] *= scale[i];
+        }
 }
 
 int sd_manifold_carry_cc(const sd_manifold *m, const sd_hist *slots, int cap, sd_vec3 *seed)
@@ -110,7 +126,8 @@ int sd_manifold_carry_cc(const sd_manifold *m, const sd_hist *slots, int cap, sd
 /* Apply the law to every point of a manifold, matching history slots by feature; a point with
  * no slot of its feature starts from seed[k] (a spring carried from another feature or pair,
  * or zero; NULL: zero). weighted: the point's force is its share (m->share, normalised) of
- * the one-point law's, the spring kept as the one-point law's. */
+ * the one-point law's on m->overlap (the spring's overlap, after sd_manifold_shares), the
+ * spring kept as the one-point law's. */
 int sd_manifold_apply(const sd_world *w, const sd_law *law, const sd_manifold *m, int ia, int ib, int b_is_static,
                       double sqm, sd_hist *slots, int cap, const sd_vec3 *seed, int weighted, sd_pair_out *out)
 {

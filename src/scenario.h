@@ -169,9 +169,12 @@ typedef struct sd_scenario {
 typedef struct {
     double bodies;  /* elements the scene can hold at most (roughness at its smallest size) */
     double bytes;   /* memory: the elements with their contacts, the placement grids */
-    double steps;   /* time steps to the end (a flume: to the sum of its phases' limits) */
-    double seconds; /* wall time on one core, at SD_COST_S_PER_ELEMENT_STEP */
-    double flow_steps, flow_seconds; /* of those, the packing's and the flow's (a flume; else 0):
+    double steps;   /* time steps to the end at most (a flume: to the sum of its phases' limits) */
+    double expected_steps; /* time steps expected (a flume's flow: the front at 0.8 water.u) */
+    double moving;  /* of the bodies, those that move (not roughness, pipes or fixed elements) */
+    double seconds; /* wall time on one core over the expected steps, at SD_COST_S_PER_MOVING_STEP a
+                     * moving element and SD_COST_S_PER_FIXED_STEP a fixed one */
+    double flow_steps, flow_seconds; /* of the expected, the packing's and the flow's (a flume; else 0):
                                       * what the runs a sweep branches from one flow share */
 } sd_scenario_cost;
 
@@ -183,7 +186,13 @@ typedef struct {
 #define SD_DEFAULT_MAX_MEMORY (8.0 * 1024 * 1024 * 1024) /* bytes */
 #define SD_DEFAULT_MAX_STEPS 1.0e8 /* the paper's run takes 0.9e6 */
 #define SD_BYTES_PER_ELEMENT 2048.0 /* an element with its contacts; ~1 KB measured on the paper's flume */
-#define SD_COST_S_PER_ELEMENT_STEP 5.0e-8 /* one core, the paper's settled bed (docs/performance.md) */
+/* one core, per element and step: the paper's run (examples/shibuya2009.yaml: 4769 moving
+ * elements, 6438 roughness spheres, 1.17e6 steps, ~450 s of one core; docs/performance.md) */
+#define SD_COST_S_PER_MOVING_STEP 8.0e-8
+#define SD_COST_S_PER_FIXED_STEP 2.0e-9
+/* the flow front's mean speed over the flume, a fraction of water.u (the paper's run: 3.65 m in
+ * 3.7 s at U = 1.2 m/s) */
+#define SD_COST_FRONT_SPEED_OF_U 0.8
 
 void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c);
 /* 0 when c keeps to lim; otherwise -1 and a message to err that gives the estimate and says

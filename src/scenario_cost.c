@@ -18,13 +18,15 @@ static double placer_bytes(sd_vec3 lo, sd_vec3 hi, double cell)
 
 void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c)
 {
-    double bodies = s->n_elems, bytes = 0.0;
+    double bodies = s->n_elems, fixed = 0.0, bytes = 0.0;
+    for (int k = 0; k < s->n_elems; k++)
+        fixed += s->elems[k].fixed || s->elems[k].type == 2;
     if (s->pile_n_classes > 0) {
         for (int k = 0; k < s->pile_n_classes && k < s->pile_n_counts; k++)
             bodies += s->pile_count[k];
         bytes += placer_bytes(s->pile_min, s->pile_max, sd_build_placer_cell(s, 1));
     }
-    double duration = s->duration, flow_duration = 0.0;
+    double duration = s->duration, flow_duration = 0.0, expected = s->duration;
     if (s->flume_on) {
         double vs = 0.0;
         for (int k = 0; k < s->n_classes && k < s->n_class_counts; k++) {
@@ -38,25 +40,39 @@ void sd_scenario_estimate(const sd_scenario *s, sd_scenario_cost *c)
         const double L = s->x_end, W = s->width;
         if (s->roughness_on) {
             const double r = 0.5 * s->rough_dmin;
-            bodies += ceil(s->rough_coverage * L * W / (M_PI * r * r));
+            const double n_rough = ceil(s->rough_coverage * L * W / (M_PI * r * r));
+            bodies += n_rough;
+            fixed += n_rough;
             const double dm = s->rough_dmax;
             bytes += placer_bytes(v3(0, 0, -dm), v3(L, W, dm), dm);
         }
-        if (s->dam_on) bodies += 2 * SD_MAX_PIPES + s->n_members;
+        if (s->dam_on) {
+            bodies += 2 * SD_MAX_PIPES + s->n_members;
+            fixed += 2 * SD_MAX_PIPES + s->n_members;
+        }
         bytes += placer_bytes(v3(0, 0, 0), v3(s->x_gate, W, s->pack_height), sd_build_placer_cell(s, 0));
         bytes += 4.0 * (ceil(L / 0.25) + 2) * 512.0; /* the walls' triangles */
-        flow_duration = s->packing_time + s->flow_limit;
-        duration = flow_duration + s->capture_limit;
+        duration = s->packing_time + s->flow_limit + s->capture_limit; /* (at most) */
+        /* expected: the front at SD_COST_FRONT_SPEED_OF_U of the water's speed from the gate to
+         * the dam, within the flow's limit */
+        double t_flow = s->flow_limit;
+        if (s->water_on && s->water_u > 0.0)
+            t_flow = fmin(t_flow, fmax(s->x_dam - s->x_gate, 0.0) / (SD_COST_FRONT_SPEED_OF_U * s->water_u));
+        flow_duration = s->packing_time + t_flow;
+        expected = flow_duration + s->capture_limit;
     }
     for (int k = 0; k < s->n_meshes; k++) /* the meshes' triangles, as the flume's walls' */
         bytes += s->meshes[k].n_tri * 512.0;
     bytes += bodies * SD_BYTES_PER_ELEMENT;
     c->bodies = bodies;
     c->bytes = bytes;
+    c->moving = fmax(bodies - fixed, 0.0);
+    const double per_step = fmax(c->moving, 1.0) * SD_COST_S_PER_MOVING_STEP + fixed * SD_COST_S_PER_FIXED_STEP;
     c->steps = ceil(duration / s->world.dt);
-    c->seconds = c->steps * fmax(bodies, 1.0) * SD_COST_S_PER_ELEMENT_STEP;
-    c->flow_steps = fmin(ceil(flow_duration / s->world.dt), c->steps);
-    c->flow_seconds = c->flow_steps * fmax(bodies, 1.0) * SD_COST_S_PER_ELEMENT_STEP;
+    c->expected_steps = fmin(ceil(expected / s->world.dt), c->steps);
+    c->seconds = c->expected_steps * per_step;
+    c->flow_steps = fmin(ceil(flow_duration / s->world.dt), c->expected_steps);
+    c->flow_seconds = c->flow_steps * per_step;
 }
 
 /* "3.2 h", "41 days", "2e+09 years" */
@@ -134,7 +150,8 @@ int sd_scenario_check_cost(const sd_scenario *s, const sd_scenario_cost *c, cons
         char t[64];
         sd_scenario_human_time(c->seconds, t, sizeof t);
         fprintf(err,
-                "%s: the run takes %.4g time steps (solver.dt = %g s over %g s simulated), about %s on one core; "
+                "%s: the run takes up to %.4g time steps (solver.dt = %g s over %g s simulated; about %s on one core "
+                "expected); "
                 "more than the limit of %.3g steps: lengthen solver.dt, shorten the run, or raise the limit with "
                 "--max-steps\n",
                 s->path, c->steps, s->world.dt, c->steps * s->world.dt, t, lim->max_steps);

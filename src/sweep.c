@@ -157,9 +157,9 @@ static int resume_point(const sd_scenario *s, const char *dir, char *path, size_
         if (strlen(name) != 26 || strncmp(name, "checkpoint_", 11) || strcmp(name + 21, ".ckpt")) continue;
         if (strcmp(name, best[0]) > 0) {
             memcpy(best[1], best[0], sizeof best[0]);
-            snprintf(best[0], sizeof best[0], "%s", name);
+            snprintf(best[0], sizeof best[0], "%.26s", name);
         } else if (strcmp(name, best[1]) > 0)
-            snprintf(best[1], sizeof best[1], "%s", name);
+            snprintf(best[1], sizeof best[1], "%.26s", name);
     }
     closedir(d);
     for (int k = 0; k < 2 && best[k][0]; k++) {
@@ -571,7 +571,7 @@ static int name_groups(const sd_sweep_file *f, const run_item *items, int total,
         const int seed = items[groups[g].first].seed;
         if (len + 16 < sizeof k) snprintf(k + len, sizeof k - len, "seed%d", seed);
         if (len + 16 >= sizeof k || strlen(k) > 160) snprintf(k, sizeof k, "b%03d_seed%d", g, seed);
-        snprintf(groups[g].key, sizeof groups[g].key, "%s", k);
+        snprintf(groups[g].key, sizeof groups[g].key, "%.200s", k); /* (at most 160: above) */
         order[g] = &groups[g];
     }
     qsort((void *)order, (size_t)ng, sizeof *order, cmp_group_name);

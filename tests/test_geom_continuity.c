@@ -7,8 +7,9 @@
  * 1e-4 rad rotation; the bound `disp` is computed per step), so the true penetration depth
  * cannot change by more than `disp` from one step to the next. Per step the kernel's manifold
  * gives the deepest overlap and the total normal force K_n sum_k overlap_k (K_n = 1e4 N/m, the
- * default linear law); the largest step-to-step jumps are recorded with the configuration
- * (before / after, feature ids) that produced them.
+ * default linear law, a full spring per point as in the paper), and the engine's normal spring
+ * force (its points sharing one contact's, sd_manifold_shares); the largest step-to-step jumps
+ * are recorded with the configuration (before / after, feature ids) that produced them.
  *
  * Paths are steered (kernel-independently, along the line between the closest points of the
  * axis segments) towards a target depth of 0-3 mm that varies smoothly along the path, while
@@ -69,6 +70,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "contact_internal.h"
 #include "core/rng.h"
 #include "geom/geom.h"
 #include "geom_ref.h"
@@ -90,6 +92,14 @@ static const double PIPE_R = 0.009, PIPE_HL = 0.15; /* pipe phi 18 mm across the
 #define KNOWN_FACE_JUMP 3e-3
 #define KNOWN_FALLBACK_JUMP 5e-3
 #define KNOWN_COUNT_JUMP 7e-3
+/* The engine's normal spring force of the pair (m_engine: the points' springs sum to K_n times
+ * the deepest overlap where their normals agree) jumps with the deepest overlap on the random
+ * paths (seen: 1.93 / 2.06 mm, at 3x the paths with seed 12345 2.91 / 2.99 mm), and only by
+ * the merging of near-duplicates' shares for a log lying along the pipe, its yaw through
+ * parallel (0.048 mm at 2.7 mm deep; 0.060 mm at 3x; the sum of the points' own overlaps
+ * jumps by 2.67 mm there). */
+#define KNOWN_ENGINE_JUMP 5e-3
+#define KNOWN_ENGINE_JUMP_YAW 1e-4
 
 static sd_rng rng = {0x6a09e667f3bcc909ULL}; /* the engine's splitmix64 (core/rng.h) */
 static double urand(void) { return sd_rng_uniform(&rng); }
@@ -232,6 +242,8 @@ typedef struct {
     double max_disp;
     double max_ratio;           /* largest (jump of the deepest overlap - 1e-12 m) / disp */
     event worst_max, worst_sum; /* largest jumps, any class */
+    event worst_eng;            /* largest jump of the engine's normal spring force (in jsum, m) */
+    long eng_jumps;             /* steps where it jumps by more than 2 disp + 1 nm */
     event deepest;              /* deepest overlap the kernel reported anywhere */
     long cls_count[J_NCLASS];
     event cls_worst[J_NCLASS]; /* largest jump of the sum per class */
@@ -255,6 +267,17 @@ static double m_sum(const sd_manifold *m)
     double x = 0.0;
     for (int k = 0; k < m->n; k++) x += m->overlap[k];
     return x;
+}
+/* The normal spring force the engine puts on A for this manifold, over K_n (m): the points'
+ * shares made weights and their springs' overlaps (sd_manifold_shares, model.md §4), summed
+ * along their normals. */
+static sd_vec3 m_engine(const sd_manifold *m0)
+{
+    sd_manifold m = *m0;
+    sd_manifold_shares(&m, 1);
+    sd_vec3 f = v3(0.0, 0.0, 0.0);
+    for (int k = 0; k < m.n; k++) f = v3_madd(f, m.normal[k], m.share[k] * m.overlap[k]);
+    return f;
 }
 static unsigned m_set(const sd_manifold *m)
 {
@@ -345,6 +368,9 @@ static void record(stats *st, const snap *before, const snap *after, double disp
         set_event(&st->deepest, m_max(&after->m), 0.0, disp, family, path, step, -1, before, after);
     if (jmax > st->worst_max.jmax) set_event(&st->worst_max, jmax, jsum, disp, family, path, step, -1, before, after);
     if (jsum > st->worst_sum.jsum) set_event(&st->worst_sum, jmax, jsum, disp, family, path, step, -1, before, after);
+    const double jeng = v3_norm(v3_sub(m_engine(&after->m), m_engine(&before->m)));
+    if (jeng > 2.0 * disp + 1e-9) st->eng_jumps++;
+    if (jeng > st->worst_eng.jsum) set_event(&st->worst_eng, jmax, jeng, disp, family, path, step, -1, before, after);
     /* what a continuous kernel stays within */
     if (jmax <= 2.0 * disp + 1e-9 && jsum <= 2.0 * SD_MANIFOLD_MAX * disp + 1e-9) return;
     int f, cls = classify(before, after, &f);
@@ -415,6 +441,10 @@ static void print_stats(const stats *st)
            st->worst_max.jmax * 1e3, st->worst_max.jmax * K_N, st->worst_sum.jsum * K_N, st->worst_sum.jsum * 1e3,
            st->deepest.jmax * 1e3);
     printf("  largest jump of the deepest overlap / step motion: %.3f\n", st->max_ratio);
+    printf("  the engine's normal spring force (points sharing one contact's, model.md 4): largest jump %.2f N "
+           "(%.4f mm of overlap), %ld steps with a jump beyond 2 x the step motion\n",
+           st->worst_eng.jsum * K_N, st->worst_eng.jsum * 1e3, st->eng_jumps);
+    if (st->eng_jumps) print_event("largest jump of the engine's force (as 'total force')", &st->worst_eng);
     printf("  steps with a jump beyond the continuity bound: %ld (", st->jumps);
     for (int c = 0; c < J_NCLASS; c++)
         printf("%s %s %ld%s", c ? "," : "", class_name[c], st->cls_count[c], c + 1 < J_NCLASS ? "" : ")\n");
@@ -734,8 +764,9 @@ static void init_stats(stats *st, const char *name)
 }
 
 /* the allowed levels of the known discontinuity classes of the cylinder-cylinder kernel */
-static void check_cc(const stats *st, double hlB)
+static void check_cc(const stats *st, double hlB, double engine_jump)
 {
+    CHECK(st->worst_eng.jsum <= engine_jump);
     CHECK(st->steps > 0 && st->in_contact > st->steps / 2);
     CHECK(st->max_disp <= 20e-6);
     /* never a jump of the overlap of one and the same contact */
@@ -779,9 +810,9 @@ int main(int argc, char **argv)
     print_stats(&yaw);
     print_stats(&sph);
 
-    check_cc(&log_pipe, PIPE_HL);
-    check_cc(&log_log, LOG_HL);
-    check_cc(&yaw, PIPE_HL);
+    check_cc(&log_pipe, PIPE_HL, KNOWN_ENGINE_JUMP);
+    check_cc(&log_log, LOG_HL, KNOWN_ENGINE_JUMP);
+    check_cc(&yaw, PIPE_HL, KNOWN_ENGINE_JUMP_YAW);
     /* sphere-cylinder: continuous, 1-Lipschitz in the sphere's motion */
     CHECK(sph.steps > 0 && sph.in_contact > sph.steps / 2);
     CHECK(sph.jumps == 0);

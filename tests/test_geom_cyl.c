@@ -560,6 +560,47 @@ static void test_cyl_tri(void)
     }
 }
 
+/* An end face tilted 25 deg from the plane, its disk centre 4 mm through it: on the floor the
+ * four rim points (depths dd + r sin, dd, dd - r sin, dd); a small triangle under the +v rim
+ * point alone, clear of the plane's section of the log (the plate point over the rim point is
+ * outside the log by sqrt(r^2 + (dd sin)^2) - r = 0.28 mm; every point of the triangle is
+ * 0.10 mm or more from it), touches nothing: no contact (the kernel gave the rim point, 4 mm).
+ * (Run last: its random motions would shift the random stream of the tests above.) */
+static void test_cyl_tri_clear_section(void)
+{
+    const double r = 0.005, hl = 0.05;
+    sd_tri floor;
+    sd_tri_init(&floor, v3(-1, -1, 0), v3(1, -1, 0), v3(0, 1, 0));
+    expect e;
+    const double al = 25.0 * M_PI / 180.0, dd = 0.004, sa = sin(al), ca = cos(al);
+    const sd_vec3 ax = v3(sa, 0, ca), ce = v3(0, 0, -dd); /* the lower end's centre */
+    const sd_cyl a = mkcyl(v3_madd(ce, ax, hl), ax, r, hl);
+    const sd_vec3 dir[4] = {v3(ca, 0, -sa), v3(0, 1, 0), v3(-ca, 0, sa), v3(0, -1, 0)};
+    e.n = 4;
+    for (int i = 0; i < 4; i++) {
+        const sd_vec3 x = v3_madd(ce, dir[i], r);
+        e.feature[i] = CTF(i ? 4 + i : 1, SD_TRI_FACE);
+        e.normal[i] = v3(0, 0, 1);
+        e.overlap[i] = -x.z;
+        e.point[i] = v3(x.x, x.y, 0.5 * x.z);
+    }
+    ct_case("end face tilted 25 deg, 4 mm through a floor", a, &floor, &e);
+    sd_tri small;
+    sd_tri_init(&small, v3(-0.001, r - 1e-4, 0), v3(0.0003, r - 1e-4, 0), v3(-0.00035, r + 0.003, 0));
+    double gap = INFINITY; /* the triangle's nearest point to the log, sampled */
+    for (int i = 0; i <= 400; i++)
+        for (int j = 0; i + j <= 400; j++) {
+            const sd_vec3 p = v3_add(small.v[0], v3_add(v3_scale(v3_sub(small.v[1], small.v[0]), i / 400.0),
+                                                        v3_scale(v3_sub(small.v[2], small.v[0]), j / 400.0)));
+            gap = fmin(gap, sdf_cyl(&a, p));
+        }
+    printf("tilted end face beside a small triangle: the triangle's points at least %.4f mm from the log\n",
+           gap * 1e3);
+    CHECK(gap > 1e-4); /* (0.1012 mm) */
+    e = none();
+    ct_case("end face tilted 25 deg, 4 mm deep, beside a small triangle", a, &small, &e);
+}
+
 /* random configurations: finite, and invariant under rigid motions */
 static void test_random_invariance(void)
 {
@@ -868,5 +909,6 @@ int main(void)
     test_cyl_cyl_sep_axis();
     test_cyl_cyl_gjk();
     test_cyl_cyl_rim_crossing();
+    test_cyl_tri_clear_section();
     return check_report("test_geom_cyl");
 }

@@ -214,6 +214,31 @@ int sd_geom_cyl_tri(const sd_cyl *a, const sd_tri *t, sd_manifold *m)
             best_strict = pen <= dep + tol;
         }
     }
+    /* No edge reaches into the log: the triangle meets it, if at all, only with its inside, and
+     * the plane's section of the log (convex, crossed by no edge) then lies wholly inside the
+     * triangle or wholly outside it, so one point of the section decides. The face contacts
+     * alone cannot: a rim point below the plane can lie under the triangle while the section
+     * beside it misses the triangle (a log deep through the plane next to a small triangle,
+     * its end face tilted: the plate point over the rim point is outside the log). The point:
+     * where the axis crosses the plane, else the deepest point lifted to the plane (inside the
+     * log when the face is tilted); neither inside by more than tol (a face flat on the plane
+     * only just below it): no test, the face contacts stand. */
+    if (best_k < 0 && fm.n > 0) {
+        const double s_ax = fabs(sg) > 1e-12 ? -sc / sg : INFINITY;
+        sd_vec3 z = v3_madd(a->c, a->a, s_ax);
+        if (!(fabs(s_ax) < a->hl)) {
+            z = v3_madd(v3_madd(a->c, a->a, sg > 0.0 ? -a->hl : a->hl), u, a->r);
+            z = v3_madd(z, np, pen_face);
+        }
+        if (ct_depth(a, z) > tol) {
+            int inside = 1;
+            for (int j = 0; j < 3 && inside; j++) {
+                sd_vec3 vi = t->v[j], vj = t->v[(j + 1) % 3];
+                inside = v3_dot(v3_sub(z, vi), v3_cross(t->n, v3_sub(vj, vi))) >= 0.0;
+            }
+            if (!inside) return 0;
+        }
+    }
     /* Compare with the deepest face contact on this triangle, not with pen_face (the depth of
      * the whole cylinder below the infinite plane, possibly over a neighbouring triangle): on a
      * flat mesh an edge under a log lies in the plane and its separating-axis overlap ties with

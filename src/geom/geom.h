@@ -11,11 +11,12 @@
  *    (e.g. which end rim touches), stable while the configuration changes continuously,
  *    so that tangential spring history can be matched from one step to the next.
  *    Features of one manifold are distinct.
- *  - share[k] (cylinder kernels only) is the point's raw share of the pair's stiffness: its
- *    overlap, or less for a point that fades in continuously (a side-side crossing of nearly
- *    parallel logs). The engine divides the shares of the points whose normals agree by
- *    their sum (sd_manifold_shares), so that a flat or line contact has the stiffness and
- *    damping of one point in total, continuous as the points come and go (docs/geometry.md).
+ *  - share[k] (cylinder kernels only) is the point's raw share of the pair's damping: its
+ *    overlap, plus the overlaps of near-duplicate points merged into it. The engine divides
+ *    the shares of the points whose normals agree by their sum (sd_manifold_shares) and
+ *    scales their springs to sum to K_n times the deepest overlap, so that a flat or line
+ *    contact has the stiffness and damping of one point in total, continuous as the points
+ *    come and go (docs/physics.md §16).
  * No kernel may return NaN or Inf for finite input; degenerate configurations (parallel or
  * coincident axes, a sphere centre on an axis, a disk flat on a plane) give finite answers.
  */
