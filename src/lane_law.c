@@ -95,7 +95,7 @@ void sd_lane_law_ss_normal(ss_batch *restrict q, int m)
 /* The loops' lane j takes its law from table[lw[j]] when multi (several materials), else table[0]
  * for every lane: multi is a constant where these inline, so the one-law loops read no table. */
 static inline __attribute__((always_inline)) void ss_spring(const sd_lane_law *table, const int32_t *lw,
-                                                           ss_batch *restrict q, int j0, int m, const int multi)
+                                                            ss_batch *restrict q, int j0, int m, const int multi)
 {
     const sd_lane_law L = *table;
     for (int j = j0; j < m; j++) {
@@ -128,7 +128,7 @@ void sd_lane_law_ss_spring_mat(const sd_lane_law *table, const int32_t *lw, ss_b
 }
 
 static inline __attribute__((always_inline)) void sc_law(const sd_lane_law *table, const int32_t *lw,
-                                                        struct sc_lanes *restrict q, int m, const int multi)
+                                                         struct sc_lanes *restrict q, int m, const int multi)
 {
     const sd_lane_law L = *table;
     for (int j = 0; j < m; j++) {
@@ -142,8 +142,8 @@ static inline __attribute__((always_inline)) void sc_law(const sd_lane_law *tabl
                      vby = q->vby[j] + (q->wbz[j] * rbx - q->wbx[j] * rbz),
                      vbz = q->vbz[j] + (q->wbx[j] * rby - q->wby[j] * rbx);
         double sx = q->sx[j], sy = q->sy[j], sz = q->sz[j], fx, fy, fz;
-        q->redo[j] = law_lane(multi ? &table[lw[j]] : &L, q->nx[j], q->ny[j], q->nz[j], q->ov[j], vax - vbx, vay - vby, vaz - vbz, q->sqm[j],
-                              &sx, &sy, &sz, &fx, &fy, &fz);
+        q->redo[j] = law_lane(multi ? &table[lw[j]] : &L, q->nx[j], q->ny[j], q->nz[j], q->ov[j], vax - vbx, vay - vby,
+                              vaz - vbz, q->sqm[j], &sx, &sy, &sz, &fx, &fy, &fz);
         q->sx[j] = sx;
         q->sy[j] = sy;
         q->sz[j] = sz;
@@ -161,10 +161,7 @@ static inline __attribute__((always_inline)) void sc_law(const sd_lane_law *tabl
 }
 
 SD_SIMD_CLONES
-void sd_lane_law_sc(const sd_lane_law *lanes, struct sc_lanes *restrict q, int m)
-{
-    sc_law(lanes, NULL, q, m, 0);
-}
+void sd_lane_law_sc(const sd_lane_law *lanes, struct sc_lanes *restrict q, int m) { sc_law(lanes, NULL, q, m, 0); }
 
 SD_SIMD_CLONES
 void sd_lane_law_sc_mat(const sd_lane_law *table, const int32_t *lw, struct sc_lanes *restrict q, int m)
@@ -173,7 +170,7 @@ void sd_lane_law_sc_mat(const sd_lane_law *table, const int32_t *lw, struct sc_l
 }
 
 static inline __attribute__((always_inline)) void bt_law(const sd_lane_law *table, const int32_t *lw,
-                                                        bt_batch *restrict q, int m, const int multi)
+                                                         bt_batch *restrict q, int m, const int multi)
 {
     const sd_lane_law L = *table;
     for (int j = 0; j < m; j++) {
@@ -182,7 +179,8 @@ static inline __attribute__((always_inline)) void bt_law(const sd_lane_law *tabl
         const double vx = q->vx[j] + (q->wy[j] * rz - q->wz[j] * ry), vy = q->vy[j] + (q->wz[j] * rx - q->wx[j] * rz),
                      vz = q->vz[j] + (q->wx[j] * ry - q->wy[j] * rx);
         double sx = q->sx[j], sy = q->sy[j], sz = q->sz[j], fx, fy, fz;
-        q->redo[j] = law_lane(multi ? &table[lw[j]] : &L, nx, ny, nz, q->ov[j], vx, vy, vz, q->sqm[j], &sx, &sy, &sz, &fx, &fy, &fz);
+        q->redo[j] = law_lane(multi ? &table[lw[j]] : &L, nx, ny, nz, q->ov[j], vx, vy, vz, q->sqm[j], &sx, &sy, &sz,
+                              &fx, &fy, &fz);
         q->sx[j] = sx;
         q->sy[j] = sy;
         q->sz[j] = sz;
@@ -197,10 +195,7 @@ static inline __attribute__((always_inline)) void bt_law(const sd_lane_law *tabl
 }
 
 SD_SIMD_CLONES
-void sd_lane_law_bt(const sd_lane_law *lanes, bt_batch *restrict q, int m)
-{
-    bt_law(lanes, NULL, q, m, 0);
-}
+void sd_lane_law_bt(const sd_lane_law *lanes, bt_batch *restrict q, int m) { bt_law(lanes, NULL, q, m, 0); }
 
 SD_SIMD_CLONES
 void sd_lane_law_bt_mat(const sd_lane_law *table, const int32_t *lw, bt_batch *restrict q, int m)

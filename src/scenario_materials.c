@@ -23,7 +23,8 @@ const char *sd_scenario_pair_key(int k) { return k >= 0 && k < SD_PAIR_KEYS ? pa
 #if defined(__GNUC__)
 __attribute__((format(printf, 5, 6)))
 #endif
-static void say(sd_scenario_report_fn report, void *ctx, int line, int col, const char *fmt, ...)
+static void
+say(sd_scenario_report_fn report, void *ctx, int line, int col, const char *fmt, ...)
 {
     char msg[512];
     va_list ap;
@@ -83,7 +84,8 @@ void sd_scenario_parse_materials(sd_scenario *s, const sd_ynode *list, sd_scenar
             continue;
         }
         if (s->n_materials == SD_MATERIALS_MAX) {
-            say(report, ctx, nm->line, nm->col, "materials: at most %d materials besides default", SD_MATERIALS_MAX - 1);
+            say(report, ctx, nm->line, nm->col, "materials: at most %d materials besides default",
+                SD_MATERIALS_MAX - 1);
             return;
         }
         snprintf(s->material_name[s->n_materials++], SD_MATERIAL_NAME_MAX, "%s", nm->value);
@@ -162,7 +164,8 @@ void sd_scenario_parse_pairs(sd_scenario *s, const sd_ynode *list, sd_pair_value
             say(report, ctx, it->line, it->col, "contact_pairs: each entry needs pair: [material, material]");
             continue;
         }
-        if (pr->kind != SD_Y_SEQ || pr->n != 2 || pr->items[0]->kind != SD_Y_SCALAR || pr->items[1]->kind != SD_Y_SCALAR) {
+        if (pr->kind != SD_Y_SEQ || pr->n != 2 || pr->items[0]->kind != SD_Y_SCALAR ||
+            pr->items[1]->kind != SD_Y_SCALAR) {
             say(report, ctx, pr->line, pr->col, "contact_pairs.pair: expected two material names [a, b]");
             continue;
         }
@@ -220,7 +223,10 @@ sd_status sd_scenario_apply_materials(const sd_scenario *s, sd_world *w)
 /* The logs a flume gets: some unless logs.count is 0, or -1 with K_w = 0 (build.c counts them) */
 static int has_logs(const sd_scenario *s) { return s->log_count > 0 || (s->log_count < 0 && s->log_kw > 0); }
 
-static int class_mat(const sd_scenario *s, int k) { return s->n_sphere_mats == 0 ? 0 : s->sphere_mat[s->n_sphere_mats == 1 ? 0 : k]; }
+static int class_mat(const sd_scenario *s, int k)
+{
+    return s->n_sphere_mats == 0 ? 0 : s->sphere_mat[s->n_sphere_mats == 1 ? 0 : k];
+}
 
 static double sphere_mass(double d, double rho) { return rho * M_PI / 6.0 * d * d * d; }
 

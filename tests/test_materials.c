@@ -16,9 +16,9 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "scenes.h"
 #include "core/vmath.h"
 #include "sabodem.h"
+#include "scenes.h"
 
 static const double G = 9.81;
 enum { ROCK = 1, WOOD = 2, STEEL = 3, BED_A = 4, BED_B = 5, UNUSED_A = 14, UNUSED_B = 15 };
