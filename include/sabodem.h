@@ -56,6 +56,12 @@ typedef struct {
     double cohesion; /* c in the Mohr–Coulomb limit, N */
 } sd_contact_def;
 
+/* Materials: every body and triangle has a material id, 0 .. SD_MATERIALS_MAX - 1 (0 unless
+ * given), and a contact between materials a and b follows the springs set for that pair
+ * (sd_world_set_pair_contact), or the world's def.contact where none were set. With one
+ * material, or no pair set, every contact has def.contact's springs (SPEC §3). */
+#define SD_MATERIALS_MAX 16
+
 /* How the engine runs, never what it computes: every setting gives the same bits. The library
  * reads no environment; sd_tuning_from_env is the one place that does, for programs that want
  * the environment to choose (the sabodem CLI does). */
@@ -100,6 +106,7 @@ typedef struct {
     double density;  /* kg/m^3 */
     int fixed;       /* 1: never integrated (bed roughness) */
     int tag;         /* user class (size class, 0..); reported back, no physics */
+    int material;    /* material id, 0 .. SD_MATERIALS_MAX - 1 */
 } sd_sphere_def;
 
 typedef struct {
@@ -112,6 +119,7 @@ typedef struct {
     double density;  /* kg/m^3 */
     int fixed;       /* 1: dam pipe */
     int tag;
+    int material;    /* material id, 0 .. SD_MATERIALS_MAX - 1 */
 } sd_cylinder_def;
 
 sd_sphere_def sd_sphere_def_default(void);
@@ -125,6 +133,7 @@ typedef struct {
     sd_vec3 force;   /* total contact force of the last step, N */
     sd_vec3 torque;  /* total contact torque of the last step, N m */
     double radius, length, mass;
+    int material;
 } sd_body_state;
 
 typedef struct sd_world sd_world;
@@ -139,12 +148,30 @@ int sd_world_add_cylinder(sd_world *w, const sd_cylinder_def *d);
 int sd_world_add_triangle(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, int group);
 sd_status sd_world_set_group_active(sd_world *w, int group, int active);
 sd_status sd_world_remove_body(sd_world *w, int gid);
+/* Triangle i's material (0 when added). */
+sd_status sd_world_set_triangle_material(sd_world *w, int triangle, int material);
+int sd_world_triangle_material(const sd_world *w, int triangle); /* -1: no such triangle */
+/* The springs of a contact between materials a and b (and b and a) from the next step on;
+ * c NULL: def.contact again. SD_ERR_ARG for an id out of range or springs that
+ * sd_world_create would refuse in def.contact. */
+sd_status sd_world_set_pair_contact(sd_world *w, int a, int b, const sd_contact_def *c);
+/* The springs of the pair (a, b) into *c (may be NULL): 1 when set for the pair, 0 when they are
+ * def.contact, -1 for an id out of range. */
+int sd_world_pair_contact(const sd_world *w, int a, int b, sd_contact_def *c);
+/* dst takes src's springs per pair of materials and its triangles' materials (dst holds the
+ * same triangles, in the same order: SD_ERR_ARG otherwise); for a world made from another's
+ * triangles and body records, which carry the bodies' materials themselves. */
+sd_status sd_world_copy_materials(sd_world *dst, const sd_world *src);
 
 /* The largest stable time step for the springs k_n, k_s (N/m) and the smallest moving sphere
  * mass m_min (kg): 8 steps per half period of the stiffest mode of a contact between two such
  * spheres, the normal one (ω_n² = k_n/m*) or the tangential–rotational one (ω_t² = (7/2) k_s/m*),
  * m* = m_min/2 (docs/physics.md §1). INFINITY when there is no moving mass. */
 double sd_stable_dt_max(double k_n, double k_s, double m_min);
+/* The world's largest stable time step: sd_stable_dt_max for each pair of materials a, b that
+ * can meet (a of a moving body, b of any body or triangle) with the smallest moving mass of
+ * material a, the smallest of them; *a, *b (may be NULL) get the pair that sets it. */
+double sd_world_stable_dt(const sd_world *w, int *a, int *b);
 /* Validate settings against the elements present (time-step stability); called by step. */
 sd_status sd_world_check(const sd_world *w);
 sd_status sd_world_step(sd_world *w);

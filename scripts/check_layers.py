@@ -15,7 +15,7 @@ import sys
 
 LAYERS = ["core", "geom", "engine", "driver", "app"]
 DRIVER = {"scenario", "io_stl", "scene_report", "pipe_loads", "debris", "yaml_tree", "build", "run", "run_ctx", "run_output", "run_state", "run_dir", "run_api", "trap", "water", "fluid",
-          "io_vtk", "sweep", "sweep_file", "sweep_identity", "scenario_cost", "slabs", "run_slabs"}
+          "io_vtk", "sweep", "sweep_file", "sweep_identity", "scenario_cost", "scenario_materials", "slabs", "run_slabs"}
 
 
 def layer_of(rel):

@@ -12,6 +12,7 @@
     X(gid, int32_t)                                                                                                    \
     X(shape, uint8_t)                                                                                                  \
     X(fixed, uint8_t)                                                                                                  \
+    X(mat, uint8_t)                                                                                                    \
     X(tag, int32_t)                                                                                                    \
     X(pos, sd_vec3)                                                                                                    \
     X(vel, sd_vec3)                                                                                                    \

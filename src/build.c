@@ -7,7 +7,15 @@
 #include "core/vmath.h"
 #include "geom/geom.h"
 
-sd_status sd_build_box(sd_world *w, sd_vec3 lo, sd_vec3 hi, int group)
+/* a triangle of the builders, of a group and a material */
+static sd_status add_tri(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, int group, int material)
+{
+    const int t = sd_world_add_triangle(w, a, b, c, group);
+    if (t < 0) return SD_ERR_ARG;
+    return sd_world_set_triangle_material(w, t, material);
+}
+
+sd_status sd_build_box(sd_world *w, sd_vec3 lo, sd_vec3 hi, int group, int material)
 {
     sd_vec3 c[8];
     for (int k = 0; k < 8; k++)
@@ -15,14 +23,15 @@ sd_status sd_build_box(sd_world *w, sd_vec3 lo, sd_vec3 hi, int group)
     /* floor and four sides (open top): two triangles each */
     static const int q[5][4] = {{0, 1, 3, 2}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
     for (int f = 0; f < 5; f++) {
-        if (sd_world_add_triangle(w, c[q[f][0]], c[q[f][1]], c[q[f][2]], group) < 0) return SD_ERR_ARG;
-        if (sd_world_add_triangle(w, c[q[f][0]], c[q[f][2]], c[q[f][3]], group) < 0) return SD_ERR_ARG;
+        sd_status st = add_tri(w, c[q[f][0]], c[q[f][1]], c[q[f][2]], group, material);
+        if (!st) st = add_tri(w, c[q[f][0]], c[q[f][2]], c[q[f][3]], group, material);
+        if (st) return st;
     }
     return SD_OK;
 }
 
 /* Quad (a, b, c, d in order) as two triangles, split along x into pieces no longer than seg. */
-static sd_status add_quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d, int group, double seg)
+static sd_status add_quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 d, int group, int material, double seg)
 {
     double len = v3_dist(a, b);
     int n = seg > 0 ? (int)ceil(len / seg) : 1;
@@ -31,8 +40,9 @@ static sd_status add_quad(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, sd_vec3 
         double s0 = (double)k / n, s1 = (double)(k + 1) / n;
         sd_vec3 p0 = v3_add(a, v3_scale(v3_sub(b, a), s0)), p1 = v3_add(a, v3_scale(v3_sub(b, a), s1));
         sd_vec3 q0 = v3_add(d, v3_scale(v3_sub(c, d), s0)), q1 = v3_add(d, v3_scale(v3_sub(c, d), s1));
-        if (sd_world_add_triangle(w, p0, p1, q1, group) < 0) return SD_ERR_ARG;
-        if (sd_world_add_triangle(w, p0, q1, q0, group) < 0) return SD_ERR_ARG;
+        sd_status st = add_tri(w, p0, p1, q1, group, material);
+        if (!st) st = add_tri(w, p0, q1, q0, group, material);
+        if (st) return st;
     }
     return SD_OK;
 }
@@ -454,6 +464,7 @@ sd_status sd_build_dam(sd_world *w, const sd_scenario *s, sd_build_info *info)
         c.density = 7850.0;
         c.fixed = 1;
         c.tag = SD_TAG_PIPE;
+        c.material = s->pipe_mat;
         int gid = sd_world_add_cylinder(w, &c);
         if (gid < 0) return (sd_status)-gid;
         info->pipe_gid[info->n_pipes] = gid;
@@ -501,7 +512,7 @@ static sd_status build_meshes(sd_world *w, const sd_scenario *s, FILE *err)
     for (int k = 0; k < s->n_meshes; k++) {
         const sd_mesh_def *m = &s->meshes[k];
         for (int t = 0; t < m->n_tri; t++)
-            if (sd_world_add_triangle(w, m->tri[t][0], m->tri[t][1], m->tri[t][2], group[m->role]) < 0) {
+            if (add_tri(w, m->tri[t][0], m->tri[t][1], m->tri[t][2], group[m->role], m->material)) {
                 fprintf(err, "%s:%d: meshes: %s: triangle %d rejected\n", s->path, m->line, m->file, t);
                 return SD_ERR_ARG;
             }
@@ -516,13 +527,15 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
     sd_status st;
     /* bed (unless a mesh stands in for it), side walls and end wall; triangles of at most 0.25 m
      * along x */
-    if (s->flume_bed && (st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, W, 0), v3(0, W, 0), SD_GROUP_BED, 0.25)))
+    const int mw = s->wall_mat;
+    if (s->flume_bed &&
+        (st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, W, 0), v3(0, W, 0), SD_GROUP_BED, s->bed_mat, 0.25)))
         return st;
-    if ((st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, 0, H), v3(0, 0, H), SD_GROUP_WALLS, 0.25))) return st;
-    if ((st = add_quad(w, v3(0, W, 0), v3(L, W, 0), v3(L, W, H), v3(0, W, H), SD_GROUP_WALLS, 0.25))) return st;
-    if ((st = add_quad(w, v3(0, 0, 0), v3(0, W, 0), v3(0, W, H), v3(0, 0, H), SD_GROUP_END, 0))) return st;
+    if ((st = add_quad(w, v3(0, 0, 0), v3(L, 0, 0), v3(L, 0, H), v3(0, 0, H), SD_GROUP_WALLS, mw, 0.25))) return st;
+    if ((st = add_quad(w, v3(0, W, 0), v3(L, W, 0), v3(L, W, H), v3(0, W, H), SD_GROUP_WALLS, mw, 0.25))) return st;
+    if ((st = add_quad(w, v3(0, 0, 0), v3(0, W, 0), v3(0, W, H), v3(0, 0, H), SD_GROUP_END, mw, 0))) return st;
     if ((st = add_quad(w, v3(s->x_gate, 0, 0), v3(s->x_gate, W, 0), v3(s->x_gate, W, H), v3(s->x_gate, 0, H),
-                       SD_GROUP_GATE, 0)))
+                       SD_GROUP_GATE, s->gate_mat, 0)))
         return st;
 
     /* grid dam of fixed cylinders; upstream face at x_dam (a run adds it later: sd_build_dam) */
@@ -559,6 +572,7 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
             sp.density = s->sphere_density;
             sp.fixed = 1;
             sp.tag = SD_TAG_ROUGH;
+            sp.material = s->rough_mat;
             int g = sd_world_add_sphere(w, &sp);
             if (g < 0) {
                 sd_placer_destroy(pl);
@@ -605,6 +619,7 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
         c.length = len;
         c.density = s->log_density;
         c.tag = SD_TAG_LOG;
+        c.material = s->log_mat;
         int g = sd_world_add_cylinder(w, &c);
         if (g < 0) {
             sd_placer_destroy(pl);
@@ -628,6 +643,7 @@ static sd_status build_flume(sd_world *w, const sd_scenario *s, sd_build_info *i
             sp.radius = r;
             sp.density = s->sphere_density;
             sp.tag = cl;
+            sp.material = s->n_sphere_mats == 0 ? 0 : s->sphere_mat[s->n_sphere_mats == 1 ? 0 : cl];
             int g = sd_world_add_sphere(w, &sp);
             if (g < 0) {
                 sd_placer_destroy(pl);
@@ -650,6 +666,8 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
     memset(info, 0, sizeof(*info));
     info->first_moving_gid = -1;
     sd_rng rng = {(uint64_t)s->seed * 0x9E3779B97F4A7C15ULL + 12345};
+    sd_status st = sd_scenario_apply_materials(s, w);
+    if (st) return st;
     for (int i = 0; i < s->n_elems; i++) {
         const sd_elem_def *d = &s->elems[i];
         int g;
@@ -662,6 +680,7 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
             sp.density = d->density;
             sp.fixed = d->fixed;
             sp.tag = d->tag;
+            sp.material = d->material;
             g = sd_world_add_sphere(w, &sp);
         } else if (d->type == 1) {
             sd_cylinder_def c = sd_cylinder_def_default();
@@ -674,17 +693,18 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
             c.density = d->density;
             c.fixed = d->fixed;
             c.tag = d->tag;
+            c.material = d->material;
             g = sd_world_add_cylinder(w, &c);
         } else {
             g = sd_world_add_triangle(w, d->v[0], d->v[1], d->v[2], d->group);
+            if (g >= 0 && sd_world_set_triangle_material(w, g, d->material)) g = -SD_ERR_ARG;
         }
         if (g < 0) {
             fprintf(err, "%s:%d: element rejected: %s\n", s->path, d->line, sd_status_message((sd_status)-g));
             return (sd_status)-g;
         }
     }
-    sd_status st;
-    if (s->box_on && (st = sd_build_box(w, s->box_min, s->box_max, SD_GROUP_BOX))) return st;
+    if (s->box_on && (st = sd_build_box(w, s->box_min, s->box_max, SD_GROUP_BOX, s->box_mat))) return st;
     if (s->pile_n_classes > 0) {
         sd_placer *pl = sd_placer_create(s->pile_min, s->pile_max, sd_build_placer_cell(s, 1));
         if (!pl) return SD_ERR_NOMEM;
@@ -703,6 +723,7 @@ sd_status sd_build_scene_ex(sd_world *w, const sd_scenario *s, sd_build_info *in
                 sp.radius = r;
                 sp.density = s->pile_density;
                 sp.tag = cl;
+                sp.material = s->pile_mat;
                 if (sd_world_add_sphere(w, &sp) < 0) {
                     sd_placer_destroy(pl);
                     return SD_ERR_ARG;

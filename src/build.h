@@ -51,8 +51,8 @@ typedef struct {
     double length, radius; /* m */
 } sd_dam_pipe;
 
-/* Open-top box of triangles between lo and hi. */
-sd_status sd_build_box(sd_world *w, sd_vec3 lo, sd_vec3 hi, int group);
+/* Open-top box of triangles between lo and hi, of a material. */
+sd_status sd_build_box(sd_world *w, sd_vec3 lo, sd_vec3 hi, int group, int material);
 /* Put `count` spheres of diameter d at random, without overlap with anything placed so far
  * by this placer, inside [lo, hi]. */
 typedef struct sd_placer sd_placer;
@@ -66,7 +66,8 @@ int sd_placer_try_cylinder(sd_placer *p, sd_rng *rng, double r, double hl, doubl
 /* Register an existing body (sphere when hl = 0) with the placer. */
 void sd_placer_add(sd_placer *p, sd_vec3 pos, sd_vec3 axis, double r, double hl);
 
-/* The scene of a scenario: explicit elements, box, pile, flume with everything in it. */
+/* The scene of a scenario: the springs of its pairs of materials, explicit elements, box, pile,
+ * flume with everything in it, each of its material. */
 sd_status sd_build_scene(sd_world *w, const sd_scenario *s, sd_build_info *info, FILE *err);
 /* The same; with_dam = 0 leaves the grid dam's pipes out (the run driver builds the scene so
  * and adds them with sd_build_dam at the start of the capture phase, so that packing and flow

@@ -26,7 +26,7 @@ static __attribute__((noinline)) void ss_scalar(const sd_world *w, const sd_law 
     sd_vec3 vrel = v3_sub(v3_sub(b->vel[ia], b->vel[ib]), v3_cross(wsum, n));
     sd_vec3 shear = h->feature == 0 ? h->shear : v3(0, 0, 0);
     sd_vec3 f;
-    sd_contact_law(law, p->sqrt_m_eff, n, ov, vrel, w->def.dt, &shear, &f);
+    sd_contact_law(sd_law_bb(w, law, ia, ib), p->sqrt_m_eff, n, ov, vrel, w->def.dt, &shear, &f);
     h->feature = 0;
     h->shear = shear;
     out->f_a = f;
@@ -146,7 +146,13 @@ static inline void ss_gather_range(const sd_world *w, ss_batch *q, int j0, int m
 static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, int m, const int32_t *ks,
                      const soa_view *v, sd_pair_out *out, int *used)
 {
-    sd_lane_law_sc(&w->ctx.lane, q, m);
+    if (w->ctx.multi) {
+        int32_t lw[SC_CAP] = {0};
+        for (int j = 0; j < m; j++)
+            lw[j] = sd_mat_pair(w->b.mat[v->a[q->i[j]]], w->b.mat[v->b[q->i[j]]]);
+        sd_lane_law_sc_mat(w->ctx.lanes, lw, q, m);
+    } else
+        sd_lane_law_sc(&w->ctx.lane, q, m);
     long redo = 0;
     for (int j = 0; j < m; j++)
         redo += q->redo[j] != 0.0;
@@ -165,7 +171,8 @@ static void sc_flush(const sd_world *w, const sd_law *law, struct sc_lanes *q, i
             m1.point[0] = v3(q->px[j], q->py[j], q->pz[j]);
             m1.overlap[0] = q->ov[j];
             m1.feature[0] = q->feature[j];
-            used[i] = sd_manifold_apply(w, law, &m1, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap, NULL, 0, &out[i]);
+            used[i] = sd_manifold_apply(w, sd_law_bb(w, law, p->a, p->b), &m1, p->a, p->b, 0, p->sqrt_m_eff, h, p->cap,
+                                        NULL, 0, &out[i]);
             continue;
         }
         h->feature = q->feature[j];
@@ -247,11 +254,19 @@ void sd_bb_chunk(const sd_world *w, const sd_law *law, const int32_t *ks, const 
         const int j = K->ss_gather ? K->ss_gather(w, q, m) : 0;
         ss_gather_range(w, q, j, m);
     }
-    /* 4. the law, vectorized */
+    /* 4. the law, vectorized (with several materials, each lane's from the table, by the
+     * loop that the compiler vectorizes: the AVX2 loop holds one law in its registers) */
     {
         sd_lane_law_ss_normal(q, m);
-        const int j = K->ss_law_spring && w->sw[SD_SW_SS_LAW256] ? K->ss_law_spring(&w->ctx.lane, q, m) : 0;
-        sd_lane_law_ss_spring(&w->ctx.lane, q, j, m);
+        if (w->ctx.multi) {
+            int32_t lw[SS_CHUNK] = {0};
+            for (int j = 0; j < m; j++)
+                lw[j] = sd_mat_pair(w->b.mat[q->ia[j]], w->b.mat[q->ib[j]]);
+            sd_lane_law_ss_spring_mat(w->ctx.lanes, lw, q, m);
+        } else {
+            const int j = K->ss_law_spring && w->sw[SD_SW_SS_LAW256] ? K->ss_law_spring(&w->ctx.lane, q, m) : 0;
+            sd_lane_law_ss_spring(&w->ctx.lane, q, j, m);
+        }
     }
     /* 5. results and springs back */
     if (acc) {

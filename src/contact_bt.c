@@ -12,7 +12,15 @@
 static void bt_flush(sd_world *w, const sd_law *law, bt_batch *q, int m)
 {
     sd_bodies *b = &w->b;
-    sd_lane_law_bt(&w->ctx.lane, q, m);
+    if (w->ctx.multi) {
+        int32_t lw[BT_CHUNK] = {0};
+        for (int j = 0; j < m; j++) {
+            const sd_pair *p = &w->bt.p[q->k[j]];
+            lw[j] = sd_mat_pair(b->mat[p->a], w->w.mat[p->b]);
+        }
+        sd_lane_law_bt_mat(w->ctx.lanes, lw, q, m);
+    } else
+        sd_lane_law_bt(&w->ctx.lane, q, m);
     for (int j = 0; j < m; j++) {
         const int k = q->k[j];
         const sd_pair *p = &w->bt.p[k];
@@ -23,7 +31,7 @@ static void bt_flush(sd_world *w, const sd_law *law, bt_batch *q, int m)
             const sd_vec3 n = v3(q->nx[j], q->ny[j], q->nz[j]), r = v3(q->rx[j], q->ry[j], q->rz[j]);
             const sd_vec3 v = v3_add(v3(q->vx[j], q->vy[j], q->vz[j]), v3_cross(v3(q->wx[j], q->wy[j], q->wz[j]), r));
             sd_vec3 shear = h->feature == SD_TRI_FACE ? h->shear : v3(0, 0, 0), f;
-            sd_contact_law(law, q->sqm[j], n, q->ov[j], v, w->def.dt, &shear, &f);
+            sd_contact_law(sd_law_bt(w, law, p->a, p->b), q->sqm[j], n, q->ov[j], v, w->def.dt, &shear, &f);
             h->shear = shear;
             o.f_a = v3_add(v3(0, 0, 0), f);
             o.t_a = v3_add(v3(0, 0, 0), v3_cross(r, f));
@@ -232,8 +240,8 @@ long sd_bt_range(sd_world *w, const sd_law *law, const int32_t *list, int nl, bt
                         break;
                     }
             }
-            int used = sd_manifold_apply(w, law, mk, p->a, -1, 1, p->sqrt_m_eff, &w->bt.hist[p->off], p->cap,
-                                         nsnap ? seed : NULL, weighted, &o);
+            int used = sd_manifold_apply(w, sd_law_bt(w, law, p->a, p->b), mk, p->a, -1, 1, p->sqrt_m_eff,
+                                         &w->bt.hist[p->off], p->cap, nsnap ? seed : NULL, weighted, &o);
             w->bt.out[k] = o.f_a;
             w->bt.active[k] = (uint8_t)(used > 0);
             count += used;

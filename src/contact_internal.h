@@ -145,6 +145,10 @@ void sd_lane_law_ss_normal(ss_batch *restrict q, int m);
 void sd_lane_law_ss_spring(const sd_lane_law *lanes, ss_batch *restrict q, int j0, int m);
 void sd_lane_law_sc(const sd_lane_law *lanes, struct sc_lanes *restrict q, int m);
 void sd_lane_law_bt(const sd_lane_law *lanes, bt_batch *restrict q, int m);
+/* the same with several materials: lane j's law is table[lw[j]] (sd_step_ctx.lanes) */
+void sd_lane_law_ss_spring_mat(const sd_lane_law *table, const int32_t *lw, ss_batch *restrict q, int m);
+void sd_lane_law_sc_mat(const sd_lane_law *table, const int32_t *lw, struct sc_lanes *restrict q, int m);
+void sd_lane_law_bt_mat(const sd_lane_law *table, const int32_t *lw, bt_batch *restrict q, int m);
 
 /* pair_records.c: room for n records (nonzero when out of memory) */
 int sd_pair_soa_reserve(sd_pair_soa *s, int n);

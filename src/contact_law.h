@@ -53,4 +53,15 @@ static inline double sd_contact_law(const sd_law *law, double sqm, sd_vec3 n, do
     return pn;
 }
 
+/* The law of a contact between bodies ia and ib, or body ia and triangle t: law (the step's
+ * one law) unless the world has several materials (sd_step_ctx.multi), then the pair's. */
+static inline const sd_law *sd_law_bb(const sd_world *w, const sd_law *law, int ia, int ib)
+{
+    return w->ctx.multi ? &w->ctx.laws[sd_mat_pair(w->b.mat[ia], w->b.mat[ib])] : law;
+}
+static inline const sd_law *sd_law_bt(const sd_world *w, const sd_law *law, int ia, int t)
+{
+    return w->ctx.multi ? &w->ctx.laws[sd_mat_pair(w->b.mat[ia], w->w.mat[t])] : law;
+}
+
 #endif

@@ -203,6 +203,7 @@ __attribute__((noinline)) int sd_manifold_general_pair(const sd_world *w, const 
 {
     sd_manifold m;
     sd_hist *h = &w->bb.hist[p->off];
+    law = sd_law_bb(w, law, p->a, p->b);
     if (p->kind == SD_PAIR_CC) {
         /* two logs (or a log and a pipe): the axis that showed them apart last time first */
         sd_vec3 sep = h->feature == SD_HIST_SEP_AXIS ? h->shear : v3(0.0, 0.0, 0.0);

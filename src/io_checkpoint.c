@@ -23,10 +23,10 @@
  * on. */
 #if defined(__x86_64__) || defined(__aarch64__)
 /* the world's state: the fields before its first field of scratch (world_internal.h) */
-_Static_assert(offsetof(struct sd_world, nthreads) == 784, "the world's state changed: update io_checkpoint.c");
+_Static_assert(offsetof(struct sd_world, nthreads) == 11296, "the world's state changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_world_def) == 120, "sd_world_def changed: update io_checkpoint.c (its tuning is not saved)");
 /* sd_walls: its edge ids, seams and edge lines are derived (sd_walls_weld, again on load) */
-_Static_assert(sizeof(sd_walls) == 96, "sd_walls changed: update io_checkpoint.c");
+_Static_assert(sizeof(sd_walls) == 104, "sd_walls changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_pairlist) == 56, "sd_pairlist changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_pair) == 24, "sd_pair changed: update io_checkpoint.c");
 _Static_assert(sizeof(sd_hist) == 32, "sd_hist changed: update io_checkpoint.c");
@@ -96,6 +96,30 @@ static void section(sd_bin_writer *wr, const char tag[4], section_fn fn, const s
     size_t before = wr->n;
     fn(wr, w, ctx);
     if (!wr->err && wr->n - before != cnt.n) wr->err = EIO; /* cannot happen: same function */
+}
+
+/* the pairs of materials with springs of their own: a <= b, each with its five constants */
+static void sec_matl(sd_bin_writer *wr, const sd_world *w, const void *ctx)
+{
+    (void)ctx;
+    int n = 0;
+    for (int a = 0; a < SD_MATERIALS_MAX; a++)
+        for (int b = a; b < SD_MATERIALS_MAX; b++)
+            n += w->mat_set[sd_mat_pair(a, b)];
+    sd_bin_put_i32(wr, n);
+    for (int a = 0; a < SD_MATERIALS_MAX; a++)
+        for (int b = a; b < SD_MATERIALS_MAX; b++) {
+            const int k = sd_mat_pair(a, b);
+            if (!w->mat_set[k]) continue;
+            const sd_contact_def *c = &w->mat_pair[k];
+            sd_bin_put_i32(wr, a);
+            sd_bin_put_i32(wr, b);
+            sd_bin_put_f64(wr, c->k_n);
+            sd_bin_put_f64(wr, c->k_s);
+            sd_bin_put_f64(wr, c->damping);
+            sd_bin_put_f64(wr, c->tan_phi);
+            sd_bin_put_f64(wr, c->cohesion);
+        }
 }
 
 static void sec_def(sd_bin_writer *wr, const sd_world *w, const void *ctx)
@@ -168,6 +192,7 @@ static void sec_wall(sd_bin_writer *wr, const sd_world *w, const void *ctx)
         sd_bin_put(wr, wl->tri, (size_t)wl->n * sizeof(sd_tri));
         sd_bin_put(wr, wl->group, (size_t)wl->n * sizeof(int32_t));
         sd_bin_put(wr, wl->active, (size_t)wl->n);
+        sd_bin_put(wr, wl->mat, (size_t)wl->n);
         sd_bin_put(wr, wl->force, (size_t)wl->n * sizeof(sd_vec3));
     }
     sd_bin_put_i32(wr, wl->dirty);
@@ -350,6 +375,7 @@ sd_status sd_checkpoint_write_capped(const char *path, const sd_world *w, const 
 
     blob x = {extra, extra_len};
     section(&wr, "DEF ", sec_def, w, NULL);
+    section(&wr, "MATL", sec_matl, w, NULL);
     section(&wr, "BODY", sec_body, w, NULL);
     section(&wr, "GIDS", sec_gids, w, NULL);
     section(&wr, "WALL", sec_wall, w, NULL);
@@ -502,6 +528,8 @@ static sd_status check_bodies(const rd_ctx *r, const sd_bodies *b)
         else if (!(b->mass[i] > 0.0 && b->mass[i] < DBL_MAX) || !(b->inv_mass[i] >= 0.0 && b->inv_mass[i] < DBL_MAX) ||
                  !(b->inv_i_ax[i] >= 0.0 && b->inv_i_ax[i] < DBL_MAX) || !(b->inv_i_tr[i] >= 0.0 && b->inv_i_tr[i] < DBL_MAX))
             bad = "mass or inertia";
+        else if (b->mat[i] >= SD_MATERIALS_MAX)
+            bad = "material";
         if (bad) return fail(r, "body %d (gid %d): impossible %s", i, (int)b->gid[i], bad);
     }
     return SD_OK;
@@ -723,6 +751,27 @@ static sd_status parse(const rd_ctx *r, sd_bin_reader *pl, sd_world **out, void 
     if (st == SD_ERR_ARG) return fail(r, "section DEF : invalid world definition");
     if (st) return st;
 
+    /* the pairs of materials with springs of their own */
+    if ((st = open_section(r, pl, "MATL", &c))) goto out;
+    {
+        const int n = get_count(&c, 2 * sizeof(int32_t) + 5 * sizeof(double));
+        for (int k = 0; k < n && !c.bad; k++) {
+            const int a = sd_bin_get_i32(&c), b = sd_bin_get_i32(&c);
+            sd_contact_def cd;
+            cd.k_n = sd_bin_get_f64(&c);
+            cd.k_s = sd_bin_get_f64(&c);
+            cd.damping = sd_bin_get_f64(&c);
+            cd.tan_phi = sd_bin_get_f64(&c);
+            cd.cohesion = sd_bin_get_f64(&c);
+            if (c.bad) break;
+            if (a > b || sd_world_pair_contact(w, a, b, NULL) != 0 || sd_world_set_pair_contact(w, a, b, &cd)) {
+                st = fail(r, "section MATL: pair %d (materials %d, %d) is out of range, repeated or invalid", k, a, b);
+                goto out;
+            }
+        }
+        if ((st = close_section(r, &c, "MATL"))) goto out;
+    }
+
     /* bodies */
     if ((st = open_section(r, pl, "BODY", &c)) || (st = read_bodies(r, &c, w)) || (st = close_section(r, &c, "BODY")))
         goto out;
@@ -767,7 +816,7 @@ static sd_status parse(const rd_ctx *r, sd_bin_reader *pl, sd_world **out, void 
     if ((st = open_section(r, pl, "WALL", &c))) goto out;
     {
         sd_walls *wl = &w->w;
-        int nt = get_count(&c, sizeof(sd_tri) + sizeof(int32_t) + 1 + sizeof(sd_vec3));
+        int nt = get_count(&c, sizeof(sd_tri) + sizeof(int32_t) + 2 + sizeof(sd_vec3));
         if (!c.bad) {
             if (sd_walls_reserve(wl, nt + 1)) {
                 st = SD_ERR_NOMEM;
@@ -778,15 +827,16 @@ static sd_status parse(const rd_ctx *r, sd_bin_reader *pl, sd_world **out, void 
                 sd_bin_get(&c, wl->tri, (size_t)nt * sizeof(sd_tri));
                 sd_bin_get(&c, wl->group, (size_t)nt * sizeof(int32_t));
                 sd_bin_get(&c, wl->active, (size_t)nt);
+                sd_bin_get(&c, wl->mat, (size_t)nt);
                 sd_bin_get(&c, wl->force, (size_t)nt * sizeof(sd_vec3));
             }
             wl->dirty = sd_bin_get_i32(&c);
         }
         if ((st = close_section(r, &c, "WALL"))) goto out;
         for (int t = 0; t < nt; t++)
-            if (wl->active[t] > 1 || !finite3(wl->tri[t].v[0]) || !finite3(wl->tri[t].v[1]) ||
+            if (wl->active[t] > 1 || wl->mat[t] >= SD_MATERIALS_MAX || !finite3(wl->tri[t].v[0]) || !finite3(wl->tri[t].v[1]) ||
                 !finite3(wl->tri[t].v[2]) || !finite3(wl->tri[t].n) || !finite3(wl->force[t])) {
-                st = fail(r, "section WALL: triangle %d has a bad flag or non-finite vertices", t);
+                st = fail(r, "section WALL: triangle %d has a bad flag or material, or non-finite vertices", t);
                 goto out;
             }
         if (wl->dirty != 0 && wl->dirty != 1) {

@@ -1,9 +1,10 @@
 /* Checkpoint and restart: the whole state of a world in one versioned, checksummed binary
  * file, written atomically, from which a run continues bit for bit as if never stopped.
  *
- * Saved: the world definition; every body field of the field table (bodies.c), in store order,
- * with gid_map and next_gid; the triangles (vertices and normals as stored, groups, active
- * flags, the last step's wall loads, the dirty flag); the triangle grid while it is current
+ * Saved: the world definition; the springs of the pairs of materials that have their own; every
+ * body field of the field table (bodies.c, the material ids among them), in store order, with
+ * gid_map and next_gid; the triangles (vertices and normals as stored, groups, active flags,
+ * materials, the last step's wall loads, the dirty flag); the triangle grid while it is current
  * (its cell size depends on the bodies present when it was built, so it is not recomputed);
  * both candidate pair lists with their effective masses and contact history slots (the pair
  * order is the summation order); the history carried between a store change (add, remove,
@@ -32,7 +33,8 @@
  *     40 u64      FNV-1a 64 of the payload, from sabodem's basis (sd_hash, core/hash.h)
  *     48 u64[2]   zero (reserved)
  *   payload: sections in a fixed order, each u32 tag (4 ASCII chars), u32 0, u64 length,
- *   then the content: DEF, BODY (n, field count, then per field: name, element size, the n
+ *   then the content: DEF, MATL (count, then per pair of materials a <= b: a, b, k_n, k_s,
+ *   damping, tan_phi, cohesion), BODY (n, field count, then per field: name, element size, the n
  *   elements), GIDS, WALL, TGRD, PRBB, PRBT (pair lists), OLDH (carried history), TIME, XTRA.
  * Every header byte is checked by value and the payload by its checksum, so a truncated,
  * corrupted or foreign file is refused, and the content is range-checked before use. */
@@ -43,7 +45,7 @@
 
 #include "sabodem.h"
 
-#define SD_CHECKPOINT_VERSION 1u
+#define SD_CHECKPOINT_VERSION 2u
 
 /* (sd_checkpoint_write and sd_checkpoint_read: sabodem.h) */
 

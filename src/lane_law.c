@@ -92,15 +92,17 @@ void sd_lane_law_ss_normal(ss_batch *restrict q, int m)
     }
 }
 
-SD_SIMD_CLONES
-void sd_lane_law_ss_spring(const sd_lane_law *lanes, ss_batch *restrict q, int j0, int m)
+/* The loops' lane j takes its law from table[lw[j]] when multi (several materials), else table[0]
+ * for every lane: multi is a constant where these inline, so the one-law loops read no table. */
+static inline __attribute__((always_inline)) void ss_spring(const sd_lane_law *table, const int32_t *lw,
+                                                           ss_batch *restrict q, int j0, int m, const int multi)
 {
-    const sd_lane_law L = *lanes;
+    const sd_lane_law L = *table;
     for (int j = j0; j < m; j++) {
         const double nx = q->dx[j], ny = q->dy[j], nz = q->dz[j];
         double sx = q->sx[j], sy = q->sy[j], sz = q->sz[j], fx, fy, fz;
-        q->redo[j] =
-            law_lane(&L, nx, ny, nz, q->ra[j], q->vx[j], q->vy[j], q->vz[j], q->sqm[j], &sx, &sy, &sz, &fx, &fy, &fz);
+        q->redo[j] = law_lane(multi ? &table[lw[j]] : &L, nx, ny, nz, q->ra[j], q->vx[j], q->vy[j], q->vz[j], q->sqm[j],
+                              &sx, &sy, &sz, &fx, &fy, &fz);
         q->sx[j] = sx;
         q->sy[j] = sy;
         q->sz[j] = sz;
@@ -114,9 +116,21 @@ void sd_lane_law_ss_spring(const sd_lane_law *lanes, ss_batch *restrict q, int j
 }
 
 SD_SIMD_CLONES
-void sd_lane_law_sc(const sd_lane_law *lanes, struct sc_lanes *restrict q, int m)
+void sd_lane_law_ss_spring(const sd_lane_law *lanes, ss_batch *restrict q, int j0, int m)
 {
-    const sd_lane_law L = *lanes;
+    ss_spring(lanes, NULL, q, j0, m, 0);
+}
+
+SD_SIMD_CLONES
+void sd_lane_law_ss_spring_mat(const sd_lane_law *table, const int32_t *lw, ss_batch *restrict q, int m)
+{
+    ss_spring(table, lw, q, 0, m, 1);
+}
+
+static inline __attribute__((always_inline)) void sc_law(const sd_lane_law *table, const int32_t *lw,
+                                                        struct sc_lanes *restrict q, int m, const int multi)
+{
+    const sd_lane_law L = *table;
     for (int j = 0; j < m; j++) {
         const double rax = q->rax[j], ray = q->ray[j], raz = q->raz[j], rbx = q->rbx[j], rby = q->rby[j],
                      rbz = q->rbz[j];
@@ -128,7 +142,7 @@ void sd_lane_law_sc(const sd_lane_law *lanes, struct sc_lanes *restrict q, int m
                      vby = q->vby[j] + (q->wbz[j] * rbx - q->wbx[j] * rbz),
                      vbz = q->vbz[j] + (q->wbx[j] * rby - q->wby[j] * rbx);
         double sx = q->sx[j], sy = q->sy[j], sz = q->sz[j], fx, fy, fz;
-        q->redo[j] = law_lane(&L, q->nx[j], q->ny[j], q->nz[j], q->ov[j], vax - vbx, vay - vby, vaz - vbz, q->sqm[j],
+        q->redo[j] = law_lane(multi ? &table[lw[j]] : &L, q->nx[j], q->ny[j], q->nz[j], q->ov[j], vax - vbx, vay - vby, vaz - vbz, q->sqm[j],
                               &sx, &sy, &sz, &fx, &fy, &fz);
         q->sx[j] = sx;
         q->sy[j] = sy;
@@ -147,16 +161,28 @@ void sd_lane_law_sc(const sd_lane_law *lanes, struct sc_lanes *restrict q, int m
 }
 
 SD_SIMD_CLONES
-void sd_lane_law_bt(const sd_lane_law *lanes, bt_batch *restrict q, int m)
+void sd_lane_law_sc(const sd_lane_law *lanes, struct sc_lanes *restrict q, int m)
 {
-    const sd_lane_law L = *lanes;
+    sc_law(lanes, NULL, q, m, 0);
+}
+
+SD_SIMD_CLONES
+void sd_lane_law_sc_mat(const sd_lane_law *table, const int32_t *lw, struct sc_lanes *restrict q, int m)
+{
+    sc_law(table, lw, q, m, 1);
+}
+
+static inline __attribute__((always_inline)) void bt_law(const sd_lane_law *table, const int32_t *lw,
+                                                        bt_batch *restrict q, int m, const int multi)
+{
+    const sd_lane_law L = *table;
     for (int j = 0; j < m; j++) {
         const double nx = q->nx[j], ny = q->ny[j], nz = q->nz[j], rx = q->rx[j], ry = q->ry[j], rz = q->rz[j];
         /* v + w x r (the wall is still: v - 0 is v) */
         const double vx = q->vx[j] + (q->wy[j] * rz - q->wz[j] * ry), vy = q->vy[j] + (q->wz[j] * rx - q->wx[j] * rz),
                      vz = q->vz[j] + (q->wx[j] * ry - q->wy[j] * rx);
         double sx = q->sx[j], sy = q->sy[j], sz = q->sz[j], fx, fy, fz;
-        q->redo[j] = law_lane(&L, nx, ny, nz, q->ov[j], vx, vy, vz, q->sqm[j], &sx, &sy, &sz, &fx, &fy, &fz);
+        q->redo[j] = law_lane(multi ? &table[lw[j]] : &L, nx, ny, nz, q->ov[j], vx, vy, vz, q->sqm[j], &sx, &sy, &sz, &fx, &fy, &fz);
         q->sx[j] = sx;
         q->sy[j] = sy;
         q->sz[j] = sz;
@@ -168,4 +194,16 @@ void sd_lane_law_bt(const sd_lane_law *lanes, bt_batch *restrict q, int m)
         q->ty[j] = 0.0 + (rz * fx - rx * fz);
         q->tz[j] = 0.0 + (rx * fy - ry * fx);
     }
+}
+
+SD_SIMD_CLONES
+void sd_lane_law_bt(const sd_lane_law *lanes, bt_batch *restrict q, int m)
+{
+    bt_law(lanes, NULL, q, m, 0);
+}
+
+SD_SIMD_CLONES
+void sd_lane_law_bt_mat(const sd_lane_law *table, const int32_t *lw, bt_batch *restrict q, int m)
+{
+    bt_law(table, lw, q, m, 1);
 }

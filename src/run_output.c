@@ -437,6 +437,18 @@ char *sd_output_summary_text(run_ctx *c, sd_run_result *res, int status_code, co
     if (c->s->flume_on)
         bad |= summary_released(c, o) | summary_trap(c, o, res) | summary_debris(c, o, res) | summary_pipes(c, o);
     if (c->n_dam_tri) bad |= summary_dam_mesh(c, o);
+    /* the materials and the springs of each pair that can meet (or is given) */
+    cJSON *mat = sd_scenario_materials_json(c->s);
+    for (int k = 0; k < 2 && mat; k++) {
+        const char *key = k ? "contact_pairs" : "materials";
+        cJSON *item = cJSON_DetachItemFromObject(mat, key);
+        if (!item || !cJSON_AddItemToObject(o, key, item)) {
+            cJSON_Delete(item);
+            bad = 1;
+        }
+    }
+    bad |= !mat;
+    cJSON_Delete(mat);
     cJSON *par = sd_scenario_params_json(c->s);
     if (!par || !cJSON_AddItemToObject(o, "parameters", par)) {
         cJSON_Delete(par);

@@ -440,6 +440,7 @@ sd_status sd_run_slabs_whole(run_ctx *c, sd_world **out)
         sd_world_triangle(c->w, t, q, &group, &active);
         if (!active) st = sd_world_set_group_active(w, group, 0);
     }
+    if (!st) st = sd_world_copy_materials(w, c->w);
     const sd_body_view v = sd_world_bodies(c->w);
     for (int i = 0; i < v.n && !st; i++) {
         st = sd_world_body_record(c->w, v.gid[i], x->rec);

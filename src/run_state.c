@@ -15,10 +15,11 @@
 /* The driver's state in the checkpoint's extra blob: a tagged, versioned byte string with
  * everything of run_ctx that is state (not how it runs): the phase and its flags, the build's
  * element counts and pipes, the volumes, the pipe accumulators, the phase times, the flow
- * length, the time series' lengths and the VTK series so far. The output timers are the world's
+ * length, the time series' lengths and the VTK series so far; the materials' names by id (the
+ * world keeps the ids and the pairs' springs), which a restart's scenario must declare alike. The output timers are the world's
  * step count (saved with the world). The build's random numbers are spent before the first
  * step; the driver draws none later, so there is no rng state to carry. */
-#define BLOB_MAGIC "SDRUNv5"
+#define BLOB_MAGIC "SDRUNv6"
 
 const char *sd_run_state_version(void) { return BLOB_MAGIC; }
 
@@ -36,6 +37,12 @@ static void state_pack(const run_ctx *c, sd_bin_writer *b, int kind, long series
     sd_bin_put_u64(b, sd_scenario_branch_hash(c->s));
     sd_bin_put_u64(b, sd_scenario_run_hash(c->s));
     sd_bin_put_i32(b, kind);
+    sd_bin_put_i32(b, c->s->n_materials);
+    for (int m = 0; m < c->s->n_materials; m++) {
+        const int32_t len = (int32_t)strlen(c->s->material_name[m]);
+        sd_bin_put_i32(b, len);
+        sd_bin_put(b, c->s->material_name[m], (size_t)len);
+    }
     sd_bin_put_i32(b, c->phase);
     sd_bin_put_i32(b, c->flow_ended);
     sd_bin_put_i32(b, c->dam_built);
@@ -127,11 +134,38 @@ int sd_run_state_unpack(run_ctx *c, const void *blob, size_t len, sd_run_restore
     }
     const uint64_t branch = sd_bin_get_u64(&b), whole = sd_bin_get_u64(&b);
     r->kind = sd_bin_get_i32(&b);
+    {
+        /* the materials by id: the world's ids mean the scenario's names */
+        const int nm = sd_bin_get_i32(&b);
+        char names[SD_MATERIALS_MAX * SD_MATERIAL_NAME_MAX + 16] = "";
+        int same = !b.bad && nm == c->s->n_materials;
+        for (int m = 0; m < nm && m < SD_MATERIALS_MAX && !b.bad; m++) {
+            const int nl = sd_bin_get_i32(&b);
+            const char *t = nl > 0 && nl < SD_MATERIAL_NAME_MAX ? sd_bin_take(&b, (size_t)nl) : NULL;
+            if (!t) {
+                b.bad = 1;
+                break;
+            }
+            same &= m < c->s->n_materials && (int)strlen(c->s->material_name[m]) == nl &&
+                    !memcmp(t, c->s->material_name[m], (size_t)nl);
+            const size_t at = strlen(names);
+            snprintf(names + at, sizeof names - at, "%s%.*s", m ? ", " : "", nl, t);
+        }
+        if (b.bad || nm < 1 || nm > SD_MATERIALS_MAX) {
+            snprintf(msg, msglen, "run-driver state is truncated or malformed");
+            return -1;
+        }
+        if (!same) {
+            snprintf(msg, msglen, "holds the materials (%s); %s declares others: a restart keeps the materials", names,
+                     c->s->path);
+            return -1;
+        }
+    }
     if (r->kind == SD_CKPT_FLOW_END && branch != sd_scenario_branch_hash(c->s)) {
         snprintf(msg, msglen,
                  "was written for other scenario parameters than %s (a restart may change only the capture-phase keys:"
                  " dam.l_h, dam.n_columns, dam.columns, dam.l_v, dam.beam_axes, dam.beam_gaps, dam.top_beam, dam.beams,"
-                 " dam.members, dam.fixed_ends, phases.capture_limit, phases.quiet_time,"
+                 " dam.members, dam.fixed_ends, dam.material, phases.capture_limit, phases.quiet_time,"
                  " phases.ke_fraction, water.probe, water.h_d_floating, water.capture_length, water.capture_end,"
                  " dam.event_threshold, dam.event_time)",
                  c->s->path);

@@ -19,7 +19,8 @@
 
 /* P_NUM_OR_OFF: a number, or false (its int flag at count_off: 1 for a number, 0 for false);
  * P_MEMBERS: dam.members, a list of {from, to, diameter} (min, max: the diameter's range) */
-typedef enum { P_DOUBLE, P_INT, P_BOOL, P_VEC3, P_DLIST, P_ILIST, P_ENUM, P_NUM_OR_OFF, P_MEMBERS } ptype;
+/* P_MAT: a material's name, stored as its id (int); P_MLIST: a list of them */
+typedef enum { P_DOUBLE, P_INT, P_BOOL, P_VEC3, P_DLIST, P_ILIST, P_ENUM, P_NUM_OR_OFF, P_MEMBERS, P_MAT, P_MLIST } ptype;
 
 typedef struct {
     const char *key;
@@ -59,6 +60,7 @@ static const sd_param params[] = {
     {"box.on", P_BOOL, OFF(box_on), 0, 0, "-", 0, 1, 0, "add an open-top box of triangles"},
     {"box.min", P_VEC3, OFF(box_min), 0, 0, "m", -EXT, EXT, 0, "box lower corner"},
     {"box.max", P_VEC3, OFF(box_max), 0, 0, "m", -EXT, EXT, 0, "box upper corner"},
+    {"box.material", P_MAT, OFF(box_mat), 0, 0, "-", 0, 0, 0, "material of the box's triangles"},
     {"pile.diameters", P_DLIST, OFF(pile_diam), OFF(pile_n_classes), SD_MAX_CLASSES, "m", 0, 1, 1,
      "sphere diameters of the random pile"},
     {"pile.counts", P_ILIST, OFF(pile_count), OFF(pile_n_counts), SD_MAX_CLASSES, "-", 0, 1e7, 0,
@@ -66,6 +68,7 @@ static const sd_param params[] = {
     {"pile.density", P_DOUBLE, OFF(pile_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density"},
     {"pile.min", P_VEC3, OFF(pile_min), 0, 0, "m", -EXT, EXT, 0, "placement region lower corner"},
     {"pile.max", P_VEC3, OFF(pile_max), 0, 0, "m", -EXT, EXT, 0, "placement region upper corner"},
+    {"pile.material", P_MAT, OFF(pile_mat), 0, 0, "-", 0, 0, 0, "material of the pile's spheres"},
     {"flume.on", P_BOOL, OFF(flume_on), 0, 0, "-", 0, 1, 0, "build the paper's flume (SPEC §8)"},
     {"flume.bed", P_BOOL, OFF(flume_bed), 0, 0, "-", 0, 1, 0,
      "build the flume's flat bed (false: a mesh with role bed stands in for it; needs flume.roughness false; "
@@ -83,6 +86,11 @@ static const sd_param params[] = {
      "bed area fraction covered by roughness spheres (random placement stops there or when jammed)"},
     {"flume.pack_height", P_DOUBLE, OFF(pack_height), 0, 0, "m", 0, 100, 1,
      "top of the packing box above the bed (at most flume.wall_height)"},
+    {"flume.bed_material", P_MAT, OFF(bed_mat), 0, 0, "-", 0, 0, 0, "material of the bed's triangles"},
+    {"flume.wall_material", P_MAT, OFF(wall_mat), 0, 0, "-", 0, 0, 0,
+     "material of the side walls and the upstream end wall"},
+    {"flume.roughness_material", P_MAT, OFF(rough_mat), 0, 0, "-", 0, 0, 0, "material of the bed roughness spheres"},
+    {"flume.gate_material", P_MAT, OFF(gate_mat), 0, 0, "-", 0, 0, 0, "material of the gate"},
     {"flume.volume_factor", P_DOUBLE, OFF(volume_factor), 0, 0, "-", 0, 100, 1,
      "scales the debris released at the gate: each spheres.counts entry and logs.count (when >= 0) is multiplied by "
      "it and rounded when the scenario is loaded (logs from logs.k_w follow the spheres); the packing box must hold "
@@ -92,6 +100,8 @@ static const sd_param params[] = {
     {"spheres.counts", P_ILIST, OFF(class_count), OFF(n_class_counts), SD_MAX_CLASSES, "-", 0, 1e7, 0,
      "count per class (376, 891, 3010, 342)"},
     {"spheres.density", P_DOUBLE, OFF(sphere_density), 0, 0, "kg/m^3", 0, INF, 1, "sphere density (SG 1.9)"},
+    {"spheres.materials", P_MLIST, OFF(sphere_mat), OFF(n_sphere_mats), SD_MAX_CLASSES, "-", 0, 0, 0,
+     "material of each size class (one name: every class; empty: default)"},
     {"spheres.volume", P_DOUBLE, OFF(sphere_volume), 0, 0, "m^3", 0, 1e4, 0,
      "solid volume of spheres to release, split by spheres.grading or spheres.distribution (0: spheres.counts "
      "gives the counts; the mass is density × volume)"},
@@ -141,6 +151,7 @@ static const sd_param params[] = {
     {"logs.length.min", P_DOUBLE, OFF(log_length_dist.min), 0, 0, "m", 0, 10, 0, "shortest log"},
     {"logs.length.max", P_DOUBLE, OFF(log_length_dist.max), 0, 0, "m", 0, 10, 0, "longest log"},
     {"logs.density", P_DOUBLE, OFF(log_density), 0, 0, "kg/m^3", 0, INF, 1, "log density (SG 0.8)"},
+    {"logs.material", P_MAT, OFF(log_mat), 0, 0, "-", 0, 0, 0, "material of the logs"},
     {"dam.on", P_BOOL, OFF(dam_on), 0, 0, "-", 0, 1, 0, "build the dam"},
     {"dam.pipe_diameter", P_DOUBLE, OFF(pipe_diam), 0, 0, "m", 0, 1, 1, "diameter of the grid's pipes"},
     {"dam.l_h", P_DOUBLE, OFF(l_h), 0, 0, "m", 0, 1, 1,
@@ -173,6 +184,7 @@ static const sd_param params[] = {
      "walls, no nearer another pipe's axis than the two radii"},
     {"dam.fixed_ends", P_BOOL, OFF(dam_support), 0, 0, "-", 0, 1, 0,
      "pipe bending moments for spans with fixed ends (default: simply supported; docs/loads.md)"},
+    {"dam.material", P_MAT, OFF(pipe_mat), 0, 0, "-", 0, 0, 0, "material of the dam's pipes and members"},
     {"dam.event_threshold", P_DOUBLE, OFF(event_threshold), 0, 0, "N", 0, INF, 0,
      "a pipe's impact event begins when |F| exceeds its baseline by this and ends below half of it (0: four times "
      "the weight of the heaviest moving element; docs/loads.md)"},
@@ -261,6 +273,8 @@ void sd_scenario_default(sd_scenario *s)
     memset(s, 0, sizeof(*s));
     s->world = sd_world_def_default();
     s->world.gravity = v3(0.0, 0.0, -9.81);
+    s->n_materials = 1;
+    snprintf(s->material_name[0], SD_MATERIAL_NAME_MAX, "default");
     s->duration = 1.0;
     s->seed = 1;
     s->pile_density = 1900.0;
@@ -390,19 +404,40 @@ static int parse_bool(const char *txt, int *out)
     return 0;
 }
 
-static int check_range(ectx *e, const sd_param *p, double v, int line, int col)
+/* 0 when v is in p's range, else -1 with the range in buf */
+static int in_range(const sd_param *p, double v, char *buf, size_t n)
 {
     int bad = p->strict_min ? !(v > p->min) : !(v >= p->min);
-    if (bad || v > p->max) {
-        char buf[160];
-        if (p->strict_min)
-            snprintf(buf, sizeof buf, "must be > %g and <= %g (%s)", p->min, p->max, p->unit);
-        else
-            snprintf(buf, sizeof buf, "must be in [%g, %g] (%s)", p->min, p->max, p->unit);
-        report(e, line, col, "%s: %s", p->key, buf);
+    if (!bad && !(v > p->max)) return 0;
+    if (p->strict_min)
+        snprintf(buf, n, "must be > %g and <= %g (%s)", p->min, p->max, p->unit);
+    else
+        snprintf(buf, n, "must be in [%g, %g] (%s)", p->min, p->max, p->unit);
+    return -1;
+}
+
+static int check_range(ectx *e, const sd_param *p, double v, int line, int col)
+{
+    char buf[160];
+    if (!in_range(p, v, buf, sizeof buf)) return 0;
+    report(e, line, col, "%s: %s", p->key, buf);
+    return -1;
+}
+
+/* A material's name at n into *id; else reported. */
+static int material_param(ectx *e, const sd_scenario *s, const char *key, const sd_ynode *n, int line, int col,
+                          int *id)
+{
+    char hint[SD_MATERIALS_MAX * SD_MATERIAL_NAME_MAX + 64], msg[sizeof hint + 96];
+    if (n->kind != SD_Y_SCALAR) {
+        report(e, line, col, "%s: expected a material's name%s", key, "");
         return -1;
     }
-    return 0;
+    *id = sd_scenario_material_id(s, n->value, hint, sizeof hint);
+    if (*id >= 0) return 0;
+    snprintf(msg, sizeof msg, "unknown material '%s'%s", n->value, hint);
+    report(e, line, col, "%s: %s", key, msg);
+    return -1;
 }
 
 static int parse_vec3_node(const sd_ynode *n, sd_vec3 *v)
@@ -595,6 +630,28 @@ static void set_param(ectx *e, sd_scenario *s, const sd_param *p, const sd_ynode
         }
         break;
     }
+    case P_MAT: {
+        int id;
+        if (!material_param(e, s, p->key, n, tmp ? line : n->line, tmp ? col : n->col, &id)) *(int *)(base + p->off) = id;
+        break;
+    }
+    case P_MLIST: {
+        if (n->kind != SD_Y_SEQ || n->n > p->max_count) {
+            report(e, tmp ? line : n->line, tmp ? col : n->col, "%s: expected a list of material names (at most %s)",
+                   p->key, "one per size class");
+            break;
+        }
+        int ok = 1, ids[SD_MAX_CLASSES];
+        for (int k = 0; k < n->n; k++) {
+            const sd_ynode *it = n->items[k];
+            ok &= !material_param(e, s, p->key, it, tmp ? line : it->line, tmp ? col : it->col, &ids[k]);
+        }
+        if (ok) {
+            memcpy(base + p->off, ids, (size_t)n->n * sizeof(int));
+            *(int *)(base + p->count_off) = n->n;
+        }
+        break;
+    }
     case P_DLIST:
     case P_ILIST: {
         if (n->kind != SD_Y_SEQ || n->n > p->max_count) {
@@ -652,7 +709,7 @@ static int is_section(const char *prefix)
  * "elements"), else "" */
 static const char *did_you_mean(const char *key, char *buf, size_t n)
 {
-    const char *cand[2 * N_PARAMS + 2];
+    const char *cand[2 * N_PARAMS + 4];
     char sections[N_PARAMS][32];
     size_t nc = 0;
     for (int i = 0; i < N_PARAMS; i++) {
@@ -664,6 +721,8 @@ static const char *did_you_mean(const char *key, char *buf, size_t n)
         }
     }
     cand[nc++] = "elements";
+    cand[nc++] = "materials";
+    cand[nc++] = "contact_pairs";
     cand[nc++] = "meshes";
     const char *best = sd_nearest_word(key, cand, nc);
     if (best)
@@ -674,8 +733,8 @@ static const char *did_you_mean(const char *key, char *buf, size_t n)
 }
 
 /* Element list entry keys. */
-static const char *elem_keys[] = {"type",  "radius", "diameter", "length", "density",  "position", "velocity",
-                                  "omega", "axis",   "fixed",    "tag",    "vertices", "group",    NULL};
+static const char *elem_keys[] = {"type", "radius", "diameter", "length",   "density", "position", "velocity", "omega",
+                                  "axis", "fixed",  "tag",      "vertices", "group",   "material", NULL};
 
 static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
 {
@@ -764,6 +823,8 @@ static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
                 d.tag = (int)iv;
             else
                 d.group = (int)iv;
+        } else if (!strcmp(k, "material")) {
+            if (material_param(e, s, "elements.material", v, v->line, v->col, &d.material)) d.material = 0;
         } else if (!strcmp(k, "vertices")) {
             if (v->kind != SD_Y_SEQ || v->n != 3 || parse_vec3_node(v->items[0], &d.v[0]) ||
                 parse_vec3_node(v->items[1], &d.v[1]) || parse_vec3_node(v->items[2], &d.v[2]))
@@ -795,7 +856,7 @@ static void parse_element(ectx *e, sd_scenario *s, const sd_ynode *n)
 }
 
 /* meshes: entry keys */
-static const char *mesh_keys[] = {"file", "role", "scale", "translate", "rotate_deg", NULL};
+static const char *mesh_keys[] = {"file", "role", "scale", "translate", "rotate_deg", "material", NULL};
 
 /* corner' = R (scale corner) + translate, R = Rz Ry Rx (degrees, about the origin) */
 static sd_vec3 mesh_transform(const sd_mesh_def *d, sd_vec3 p)
@@ -858,6 +919,8 @@ static void parse_mesh(ectx *e, sd_scenario *s, const sd_ynode *n)
             for (int r = 0; r < 3 && v->kind == SD_Y_SCALAR; r++)
                 if (!strcmp(v->value, roles[r])) d.role = r;
             if (d.role < 0) report(e, v->line, v->col, "meshes.role: expected one of: %s%s", "bed, wall, dam", "");
+        } else if (!strcmp(k, "material")) {
+            if (material_param(e, s, "meshes.material", v, v->line, v->col, &d.material)) d.material = 0;
         } else if (!strcmp(k, "scale")) {
             if (v->kind != SD_Y_SCALAR || parse_double(v->value, &d.scale) || !(d.scale > 0) || d.scale > 1e4)
                 report(e, v->line, v->col, "meshes.scale: expected a number > 0 and <= 1e4%s%s", "", "");
@@ -956,6 +1019,21 @@ static void parse_mesh(ectx *e, sd_scenario *s, const sd_ynode *n)
     s->meshes[s->n_meshes++] = d;
 }
 
+static void report_cb(void *ctx, int line, int col, const char *msg) { report(ctx, line, col, "%s%s", msg, ""); }
+
+/* a contact_pairs constant: the number in text, in the range of its contact.* key */
+static int pair_value(int key, const char *text, double *v, char *why, size_t n)
+{
+    char k[32];
+    snprintf(k, sizeof k, "contact.%s", sd_scenario_pair_key(key));
+    const sd_param *p = find_param(k);
+    if (!text || parse_double(text, v)) {
+        snprintf(why, n, "expected a number");
+        return -1;
+    }
+    return in_range(p, *v, why, n);
+}
+
 static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefix)
 {
     for (int i = 0; i < map->n; i++) {
@@ -983,6 +1061,11 @@ static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefi
                 parse_element(e, s, v->items[k]);
             continue;
         }
+        if (!*prefix && !strcmp(key, "materials")) continue; /* (read first: load) */
+        if (!*prefix && !strcmp(key, "contact_pairs")) {
+            sd_scenario_parse_pairs(s, v, pair_value, report_cb, e);
+            continue;
+        }
         const sd_param *p = find_param(key);
         if (v->kind == SD_Y_MAP && is_section(key)) {
             walk(e, s, v, key); /* logs.length: a number, or a mapping of logs.length.* */
@@ -999,8 +1082,6 @@ static void walk(ectx *e, sd_scenario *s, const sd_ynode *map, const char *prefi
         }
     }
 }
-
-static double sphere_mass(double d, double rho) { return rho * M_PI / 6.0 * d * d * d; }
 
 /* Cross-field checks: geometry that contradicts itself, an unstable time step. */
 /* Report at where the first of the keys that was set was set (the scenario's first line when
@@ -1449,6 +1530,11 @@ static void validate(ectx *e, sd_scenario *s, origin *at)
     if (e->errors) return;
     check_lengths(e, at, "pile.diameters", s->pile_n_classes, "pile.counts", s->pile_n_counts);
     check_lengths(e, at, "spheres.diameters", s->n_classes, "spheres.counts", s->n_class_counts);
+    if (s->n_sphere_mats > 1 && s->n_sphere_mats != s->n_classes) {
+        snprintf(b, sizeof b, "spheres.materials has %d names and the spheres %d size classes: give one material, or "
+                 "one per class", s->n_sphere_mats, s->n_classes);
+        report_keys(e, at, "spheres.materials", NULL, "%s%s", b, "");
+    }
     if (e->errors) return;
     if (s->pile_n_classes > 0) {
         double dmax = 0;
@@ -1534,35 +1620,28 @@ static void validate(ectx *e, sd_scenario *s, origin *at)
                             "flume.bed = false needs a mesh with role: bed in its place (meshes:)%s%s", "", "");
         }
     }
-    /* smallest moving mass → stability of Δt */
+    /* the stiffest pair of materials that can meet, with its lightest moving mass → stability of Δt */
+    int ma = 0, mb = 0;
     double mmin = INFINITY;
-    for (int i = 0; i < s->n_elems; i++) {
-        const sd_elem_def *d = &s->elems[i];
-        if (d->fixed || d->type == 2) continue;
-        double m = d->type == 0 ? sphere_mass(2 * d->radius, d->density)
-                                : d->density * M_PI * d->radius * d->radius * d->length;
-        mmin = fmin(mmin, m);
-    }
-    for (int k = 0; k < s->pile_n_classes; k++)
-        if (s->pile_count[k] > 0) mmin = fmin(mmin, sphere_mass(s->pile_diam[k], s->pile_density));
-    if (s->flume_on) {
-        for (int k = 0; k < s->n_classes; k++)
-            if (s->class_count[k] > 0) mmin = fmin(mmin, sphere_mass(s->class_diam[k], s->sphere_density));
-        if (s->log_count != 0) { /* the smallest log the distributions can draw */
-            const double d = s->log_diam_dist.type ? s->log_diam_dist.min : s->log_diam;
-            const double l = s->log_length_dist.type ? s->log_length_dist.min : s->log_length;
-            mmin = fmin(mmin, s->log_density * M_PI * 0.25 * d * d * l);
-        }
-    }
-    if (s->world.check_dt && isfinite(mmin)) {
-        double dt_max = sd_stable_dt_max(s->world.contact.k_n, s->world.contact.k_s, mmin);
-        if (s->world.dt > dt_max) {
-            snprintf(a, sizeof a, "%g", s->world.dt);
-            snprintf(b, sizeof b,
-                     "%g s (8 steps per contact half-period for k_n = %g N/m, k_s = %g N/m and the smallest mass %g kg)",
-                     dt_max, s->world.contact.k_n, s->world.contact.k_s, mmin);
+    const double dt_max = sd_scenario_stable_dt(s, &ma, &mb, &mmin);
+    if (s->world.check_dt && isfinite(dt_max) && s->world.dt > dt_max) {
+        const sd_contact_def c = sd_scenario_pair_contact(s, ma, mb, NULL);
+        char pair[2 * SD_MATERIAL_NAME_MAX + 32] = "";
+        if (s->n_materials > 1)
+            snprintf(pair, sizeof pair, " of the pair %s-%s", s->material_name[ma], s->material_name[mb]);
+        snprintf(a, sizeof a, "%g", s->world.dt);
+        snprintf(b, sizeof b,
+                 "%g s (8 steps per contact half-period for k_n = %g N/m, k_s = %g N/m%s and the smallest mass %g kg)",
+                 dt_max, c.k_n, c.k_s, pair, mmin);
+        /* at the pair's entry where contact_pairs made it the stiffest, else at solver.dt */
+        int entry = -1;
+        for (int p = 0; p < s->n_pairs; p++)
+            if (s->pairs[p].a == (ma < mb ? ma : mb) && s->pairs[p].b == (ma < mb ? mb : ma)) entry = p;
+        if (entry >= 0 && !at[find_param("solver.dt") - params].file)
+            report(e, s->pairs[entry].line, s->pairs[entry].col, "solver.dt = %s is unstable: it must be at most %s", a,
+                   b);
+        else
             report_keys(e, at, "solver.dt", NULL, "solver.dt = %s is unstable: it must be at most %s", a, b);
-        }
     }
 }
 
@@ -1612,6 +1691,9 @@ static int load(sd_scenario *s, const char *path, const char *text, const char *
     else {
         /* flume scenes default gravity to the slope unless given */
         const sd_ynode *fl = sd_yaml_get(root, "flume");
+        /* the materials first: every other key may name them */
+        const sd_ynode *mats = sd_yaml_get(root, "materials");
+        if (mats) sd_scenario_parse_materials(s, mats, report_cb, &e);
         walk(&e, s, root, "");
         if (fl && s->flume_on && !sd_yaml_get(root, "gravity")) {
             double th = s->slope_deg * M_PI / 180.0;
@@ -1680,6 +1762,10 @@ static const char *type_name(ptype t)
         return "list of integers";
     case P_ENUM:
         return "choice";
+    case P_MAT:
+        return "material";
+    case P_MLIST:
+        return "list of materials";
     case P_NUM_OR_OFF:
         return "number or false";
     case P_MEMBERS:
@@ -1728,6 +1814,17 @@ static void print_value(FILE *f, const sd_scenario *s, const sd_param *p, int js
         fputc(']', f);
         break;
     }
+    case P_MAT:
+        fprintf(f, json ? "\"%s\"" : "%s", s->material_name[*(const int *)(base + p->off)]);
+        break;
+    case P_MLIST: {
+        const int n = *(const int *)(base + p->count_off);
+        fputc('[', f);
+        for (int k = 0; k < n; k++)
+            fprintf(f, "%s%s", k ? ", " : "", s->material_name[((const int *)(base + p->off))[k]]);
+        fputc(']', f);
+        break;
+    }
     case P_DLIST:
     case P_ILIST: {
         int n = *(const int *)(base + p->count_off);
@@ -1766,7 +1863,8 @@ void sd_scenario_print_params(FILE *f, int format)
                 char list[128];
                 choices_text(p, list, sizeof list);
                 snprintf(range, sizeof range, ", one of %s", list);
-            } else if (p->type != P_BOOL && p->type != P_VEC3 && p->type != P_MEMBERS)
+            } else if (p->type != P_BOOL && p->type != P_VEC3 && p->type != P_MEMBERS && p->type != P_MAT &&
+                       p->type != P_MLIST)
                 snprintf(range, sizeof range, ", range %s%g, %g]", p->strict_min ? "(" : "[", p->min, p->max);
             fputs(".TP\n.B ", f);
             sd_roff_puts(f, p->key);
@@ -1791,7 +1889,9 @@ void sd_scenario_print_params(FILE *f, int format)
             char list[128];
             choices_text(p, list, sizeof list);
             fprintf(f, md ? "` | %s | %s |\n" : "  [%s]  %s\n", list, p->doc);
-        } else if (p->type == P_BOOL || p->type == P_VEC3 || p->type == P_MEMBERS)
+        } else if (p->type == P_MAT || p->type == P_MLIST)
+            fprintf(f, md ? "` | a name in materials | %s |\n" : "  [a name in materials]  %s\n", p->doc);
+        else if (p->type == P_BOOL || p->type == P_VEC3 || p->type == P_MEMBERS)
             fprintf(f, md ? "` | | %s |\n" : "  %s\n", p->doc);
         else
             fprintf(f, md ? "` | %s%g, %g] | %s |\n" : "  %s%g, %g]  %s\n", p->strict_min ? "(" : "[", p->min, p->max,
@@ -1836,6 +1936,15 @@ static cJSON *param_json(const sd_scenario *s, const sd_param *p)
     case P_NUM_OR_OFF:
         return *(const int *)(base + p->count_off) ? cJSON_CreateNumber(*(const double *)(base + p->off))
                                                    : cJSON_CreateFalse();
+    case P_MAT:
+        return cJSON_CreateString(s->material_name[*(const int *)(base + p->off)]);
+    case P_MLIST: {
+        const int n = *(const int *)(base + p->count_off);
+        const char *names[SD_MAX_CLASSES];
+        for (int k = 0; k < n; k++)
+            names[k] = s->material_name[((const int *)(base + p->off))[k]];
+        return cJSON_CreateStringArray(names, n);
+    }
     case P_MEMBERS: {
         const sd_dam_member *m = (const sd_dam_member *)(base + p->off);
         cJSON *a = cJSON_CreateArray();
@@ -1882,7 +1991,7 @@ cJSON *sd_scenario_params_json(const sd_scenario *s)
 static const char *const capture_keys[] = {
     "dam.l_h",          "dam.l_v",        "dam.top_beam",       "dam.columns",          "dam.beams",
     "dam.n_columns",    "dam.beam_axes",  "dam.beam_gaps",      "dam.members",          "dam.fixed_ends",
-    "dam.event_threshold", "dam.event_time",
+    "dam.event_threshold", "dam.event_time", "dam.material",
     "phases.capture_limit", "phases.quiet_time", "phases.ke_fraction", "water.probe", "water.h_d_floating",
     "water.capture_length", "water.capture_end"};
 
@@ -1924,6 +2033,7 @@ static uint64_t scenario_hash(const sd_scenario *s, int with_capture)
             break;
         case P_BOOL:
         case P_ENUM:
+        case P_MAT:
             h = sd_hash_bytes(h, base + p->off, sizeof(int));
             break;
         case P_VEC3:
@@ -1946,7 +2056,8 @@ static uint64_t scenario_hash(const sd_scenario *s, int with_capture)
             break;
         }
         case P_DLIST:
-        case P_ILIST: {
+        case P_ILIST:
+        case P_MLIST: {
             int n = *(const int *)(base + p->count_off);
             h = sd_hash_bytes(h, &n, sizeof n);
             h = sd_hash_bytes(h, base + p->off, (size_t)n * (p->type == P_DLIST ? sizeof(double) : sizeof(int)));
@@ -1969,13 +2080,17 @@ static uint64_t scenario_hash(const sd_scenario *s, int with_capture)
         h = sd_hash_bytes(h, &d->fixed, sizeof d->fixed);
         h = sd_hash_bytes(h, &d->tag, sizeof d->tag);
         h = sd_hash_bytes(h, &d->group, sizeof d->group);
+        h = sd_hash_bytes(h, &d->material, sizeof d->material);
         h = sd_hash_bytes(h, d->v, sizeof d->v);
     }
+    /* the materials' names and the pairs' springs (the keys name materials by id) */
+    h = sd_scenario_materials_hash(s, h);
     /* the meshes as read and transformed */
     h = sd_hash_bytes(h, &s->n_meshes, sizeof s->n_meshes);
     for (int k = 0; k < s->n_meshes; k++) {
         const sd_mesh_def *m = &s->meshes[k];
         h = sd_hash_bytes(h, &m->role, sizeof m->role);
+        h = sd_hash_bytes(h, &m->material, sizeof m->material);
         h = sd_hash_bytes(h, &m->n_tri, sizeof m->n_tri);
         h = sd_hash_bytes(h, m->tri, (size_t)m->n_tri * sizeof *m->tri);
     }

@@ -28,7 +28,7 @@ typedef struct {
     int type; /* 0 sphere, 1 cylinder, 2 triangle */
     sd_vec3 pos, vel, omega, axis;
     double radius, length, density;
-    int fixed, tag, group;
+    int fixed, tag, group, material;
     sd_vec3 v[3];
     int line;
 } sd_elem_def;
@@ -53,13 +53,35 @@ typedef struct {
     sd_vec3 translate, rotate_deg;
     sd_vec3 (*tri)[3]; /* the triangles, transformed, m */
     int n_tri;
-    int binary; /* the file was binary STL */
-    int line;   /* the entry's line in the scenario */
+    int binary;   /* the file was binary STL */
+    int material; /* its triangles' material (an id) */
+    int line;     /* the entry's line in the scenario */
 } sd_mesh_def;
+
+/* Materials (scenario_materials.c): names by id, id 0 the implicit "default" of everything not
+ * given one; a pair's springs (contact_pairs) give some of the five constants of contact.*, in
+ * its order (k_n, k_s, damping, tan_phi, cohesion), the others are contact.*'s. */
+#define SD_MATERIAL_NAME_MAX 32
+#define SD_MAX_PAIRS (SD_MATERIALS_MAX * (SD_MATERIALS_MAX + 1) / 2)
+enum { SD_PAIR_KEYS = 5 };
+typedef struct {
+    int a, b;                 /* material ids, a <= b */
+    double v[SD_PAIR_KEYS];   /* the constants given */
+    unsigned given;           /* bit k: v[k] given */
+    int line, col;            /* where the entry is */
+} sd_pair_def;
 
 typedef struct sd_scenario {
     char path[1024];
     sd_world_def world;
+    /* materials: n_materials names (0: "default"), the pairs given their own springs, and the
+     * materials of what the builders make (ids) */
+    int n_materials;
+    char material_name[SD_MATERIALS_MAX][SD_MATERIAL_NAME_MAX];
+    int n_pairs;
+    sd_pair_def pairs[SD_MAX_PAIRS];
+    int sphere_mat[SD_MAX_CLASSES], n_sphere_mats; /* per size class (one: every class; none: 0) */
+    int log_mat, pipe_mat, bed_mat, wall_mat, rough_mat, gate_mat, pile_mat, box_mat;
     double duration; /* s */
     long seed;
     /* explicit elements */
@@ -208,7 +230,7 @@ struct cJSON;
 struct cJSON *sd_scenario_params_json(const sd_scenario *s);
 /* 1 for the keys that act only from the capture phase on: the dam layout (dam.l_h, dam.l_v,
  * dam.top_beam, dam.columns, dam.beams, dam.n_columns, dam.beam_axes, dam.beam_gaps,
- * dam.members) and the capture-phase settings (phases.capture_limit,
+ * dam.members, dam.material) and the capture-phase settings (phases.capture_limit,
  * quiet_time, ke_fraction, water.probe, water.h_d_floating, water.capture_length,
  * water.capture_end). Runs that differ only in these
  * share their packing and flow, bit for bit: a sweep branches them from one flow-end
@@ -224,5 +246,41 @@ int sd_scenario_in_branch_hash(const char *key);
  * (neither counts solver.threads or output.checkpoint_interval, which change no bit). Stored in
  * a periodic checkpoint. */
 uint64_t sd_scenario_run_hash(const sd_scenario *s);
+
+/* ---- materials (scenario_materials.c) ---- */
+struct sd_ynode;
+/* Where the loader's messages go: file:line:col: message, counted as errors. */
+typedef void (*sd_scenario_report_fn)(void *ctx, int line, int col, const char *msg);
+/* The `materials:` list (names, or {name: NAME}) into s, after "default". */
+void sd_scenario_parse_materials(sd_scenario *s, const struct sd_ynode *list, sd_scenario_report_fn report, void *ctx);
+/* The `contact_pairs:` list into s (materials parsed before). value(k, text, v, why, n): 0 with
+ * *v when text (NULL: not a scalar) is a number in the range of contact.<key k>, else -1 with
+ * why. */
+typedef int (*sd_pair_value_fn)(int key, const char *text, double *v, char *why, size_t n);
+void sd_scenario_parse_pairs(sd_scenario *s, const struct sd_ynode *list, sd_pair_value_fn value,
+                             sd_scenario_report_fn report, void *ctx);
+/* The id of the material called name, -1 if none; then hint gets " (did you mean 'x'?)" or
+ * the declared names. */
+int sd_scenario_material_id(const sd_scenario *s, const char *name, char *hint, size_t hint_len);
+/* The contact constants' keys in sd_pair_def.v's order ("k_n", ...). */
+const char *sd_scenario_pair_key(int k);
+/* The springs of materials a and b: the pair's own where contact_pairs gives them, the others
+ * from contact.*; *own (may be NULL): 1 when the pair is in contact_pairs. */
+sd_contact_def sd_scenario_pair_contact(const sd_scenario *s, int a, int b, int *own);
+/* Gives w the springs of every pair in contact_pairs. */
+sd_status sd_scenario_apply_materials(const sd_scenario *s, sd_world *w);
+/* What uses each material: bit k of the result for id m is set when the scene's part k
+ * (SD_MATERIAL_USES order) has material m. */
+#define SD_MATERIAL_USES "spheres", "logs", "dam", "bed", "walls", "roughness", "gate", "pile", "box", "elements", "meshes"
+void sd_scenario_material_uses(const sd_scenario *s, unsigned uses[SD_MATERIALS_MAX]);
+/* The largest stable time step of the scene (sd_world_stable_dt's rule on the scenario's
+ * masses): *a, *b the pair that sets it, *mmin its lightest moving mass (kg). */
+double sd_scenario_stable_dt(const sd_scenario *s, int *a, int *b, double *mmin);
+/* The materials and the springs of each pair of used materials, as JSON ({"materials": [...],
+ * "contact_pairs": [...]}: summary.json) or as text (`sabodem check`). */
+struct cJSON *sd_scenario_materials_json(const sd_scenario *s);
+void sd_scenario_materials_report(FILE *f, const sd_scenario *s);
+/* The materials and the pairs hashed into h (sd_hash_bytes). */
+uint64_t sd_scenario_materials_hash(const sd_scenario *s, uint64_t h);
 
 #endif

@@ -74,6 +74,7 @@ void sd_scene_report(FILE *f, const sd_scenario *s, const sd_build_info *info, i
         fprintf(f, "mesh %s (%s STL), role %s: %d triangles, x %.4g to %.4g, y %.4g to %.4g, z %.4g to %.4g m\n",
                 m->file, m->binary ? "binary" : "ASCII", role[m->role], m->n_tri, lo.x, hi.x, lo.y, hi.y, lo.z, hi.z);
     }
+    sd_scenario_materials_report(f, s);
     if (!s->flume_on) return;
     fprintf(f, "flume: %.3f m to the end of the bed, %.3f m wide, walls %.3f m high, slope %.1f deg; gate at x = %.3f m, "
                "dam face at x = %.3f m\n",

@@ -182,6 +182,7 @@ sd_status sd_slab_create(const sd_world *whole, const sd_grid_def *g, const sd_s
         sd_world_triangle(whole, t, c, &group, &active);
         if (sd_world_add_triangle(s->w, c[0], c[1], c[2], group) != t) st = SD_ERR_ARG;
     }
+    if (!st) st = sd_world_copy_materials(s->w, whole);
     for (int t = 0; t < nt && !st; t++) {
         sd_vec3 c[3];
         int group, active;

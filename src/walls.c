@@ -19,6 +19,7 @@ sd_status sd_walls_reserve(sd_walls *w, int cap)
     SD_GROW(tri)
     SD_GROW(group)
     SD_GROW(active)
+    SD_GROW(mat)
     SD_GROW(edge_id)
     SD_GROW(vert_id)
     SD_GROW(force)
@@ -36,6 +37,7 @@ void sd_walls_free(sd_walls *w)
     free(w->tri);
     free(w->group);
     free(w->active);
+    free(w->mat);
     free(w->edge_id);
     free(w->vert_id);
     free(w->edge_vert);

@@ -135,10 +135,11 @@ void sd_world_destroy(sd_world *w)
 }
 
 static int add_body(sd_world *w, int shape, sd_vec3 pos, sd_vec3 vel, sd_vec3 omega, sd_vec3 axis, double r, double hl,
-                    double density, int fixed, int tag)
+                    double density, int fixed, int tag, int material)
 {
     if (!(r > 0.0) || !(density > 0.0) || !(hl >= 0.0) || !finite3(pos) || !finite3(vel) || !finite3(omega) ||
-        !finite3(axis) || !isfinite(r) || !isfinite(hl) || !isfinite(density))
+        !finite3(axis) || !isfinite(r) || !isfinite(hl) || !isfinite(density) || material < 0 ||
+        material >= SD_MATERIALS_MAX)
         return -SD_ERR_ARG;
     if (shape == SD_SHAPE_CYLINDER && !(v3_norm(axis) > 0.0)) return -SD_ERR_ARG;
     /* history taken before the store grows; pairs are rebuilt before the next force pass */
@@ -153,6 +154,7 @@ static int add_body(sd_world *w, int shape, sd_vec3 pos, sd_vec3 vel, sd_vec3 om
     b->gid[i] = gid;
     b->shape[i] = (uint8_t)shape;
     b->fixed[i] = (uint8_t)(fixed != 0);
+    b->mat[i] = (uint8_t)material;
     b->tag[i] = tag;
     b->pos[i] = pos;
     b->vel[i] = fixed ? v3(0, 0, 0) : vel;
@@ -202,14 +204,14 @@ static int add_body(sd_world *w, int shape, sd_vec3 pos, sd_vec3 vel, sd_vec3 om
 int sd_world_add_sphere(sd_world *w, const sd_sphere_def *d)
 {
     return add_body(w, SD_SHAPE_SPHERE, d->pos, d->vel, d->omega, v3(0, 0, 1), d->radius, 0.0, d->density, d->fixed,
-                    d->tag);
+                    d->tag, d->material);
 }
 
 int sd_world_add_cylinder(sd_world *w, const sd_cylinder_def *d)
 {
     if (!(d->length > 0.0)) return -SD_ERR_ARG;
     return add_body(w, SD_SHAPE_CYLINDER, d->pos, d->vel, d->omega, d->axis, d->radius, 0.5 * d->length, d->density,
-                    d->fixed, d->tag);
+                    d->fixed, d->tag, d->material);
 }
 
 int sd_world_add_triangle(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, int group)
@@ -223,6 +225,7 @@ int sd_world_add_triangle(sd_world *w, sd_vec3 a, sd_vec3 b, sd_vec3 c, int grou
     sd_tri_init(&wl->tri[t], a, b, c);
     wl->group[t] = group;
     wl->active[t] = 1;
+    wl->mat[t] = 0;
     wl->force[t] = v3(0, 0, 0);
     wl->dirty = 1;
     w->need_rebuild = 1;
@@ -243,6 +246,56 @@ sd_status sd_world_set_group_active(sd_world *w, int group, int active)
     if (st) return st;
     w->w.dirty = 1;
     w->need_rebuild = 1;
+    return SD_OK;
+}
+
+sd_status sd_world_set_triangle_material(sd_world *w, int t, int material)
+{
+    if (!w || t < 0 || t >= w->w.n) return SD_ERR_NOTFOUND;
+    if (material < 0 || material >= SD_MATERIALS_MAX) return SD_ERR_ARG;
+    w->w.mat[t] = (uint8_t)material;
+    w->checked = 0;
+    return SD_OK;
+}
+
+int sd_world_triangle_material(const sd_world *w, int t) { return w && t >= 0 && t < w->w.n ? w->w.mat[t] : -1; }
+
+/* the checks of sd_world_create on a contact definition */
+static int contact_ok(const sd_contact_def *c)
+{
+    return c->k_n > 0.0 && c->k_s >= 0.0 && c->damping >= 0.0 && c->tan_phi >= 0.0 && c->cohesion >= 0.0 &&
+           isfinite(c->k_n) && isfinite(c->k_s) && isfinite(c->damping) && isfinite(c->tan_phi) && isfinite(c->cohesion);
+}
+
+sd_status sd_world_set_pair_contact(sd_world *w, int a, int b, const sd_contact_def *c)
+{
+    if (!w || a < 0 || b < 0 || a >= SD_MATERIALS_MAX || b >= SD_MATERIALS_MAX || (c && !contact_ok(c))) return SD_ERR_ARG;
+    const int k[2] = {sd_mat_pair(a, b), sd_mat_pair(b, a)};
+    for (int s = 0; s < 2; s++) {
+        w->mat_set[k[s]] = c != NULL;
+        memset(&w->mat_pair[k[s]], 0, sizeof w->mat_pair[k[s]]);
+        if (c) w->mat_pair[k[s]] = *c;
+    }
+    w->mat_version++;
+    w->checked = 0;
+    return SD_OK;
+}
+
+int sd_world_pair_contact(const sd_world *w, int a, int b, sd_contact_def *c)
+{
+    if (!w || a < 0 || b < 0 || a >= SD_MATERIALS_MAX || b >= SD_MATERIALS_MAX) return -1;
+    if (c) *c = *sd_mat_contact(w, a, b);
+    return w->mat_set[sd_mat_pair(a, b)];
+}
+
+sd_status sd_world_copy_materials(sd_world *dst, const sd_world *src)
+{
+    if (!dst || !src || dst->w.n != src->w.n) return SD_ERR_ARG;
+    memcpy(dst->mat_pair, src->mat_pair, sizeof dst->mat_pair);
+    memcpy(dst->mat_set, src->mat_set, sizeof dst->mat_set);
+    if (src->w.n > 0) memcpy(dst->w.mat, src->w.mat, (size_t)src->w.n);
+    dst->mat_version++;
+    dst->checked = 0;
     return SD_OK;
 }
 
@@ -277,15 +330,45 @@ double sd_stable_dt_max(double k_n, double k_s, double m_min)
     return M_PI / omega / 8.0;
 }
 
+double sd_world_stable_dt(const sd_world *w, int *pa, int *pb)
+{
+    /* each moving material's smallest mass, and the materials present (bodies, triangles) */
+    double mmin[SD_MATERIALS_MAX];
+    uint8_t present[SD_MATERIALS_MAX] = {0};
+    for (int m = 0; m < SD_MATERIALS_MAX; m++)
+        mmin[m] = INFINITY;
+    /* (by the mass alone, a log as a sphere: the modes of a contact at a log's end rim, where
+     * rotation adds hl² m/I_tr and r² m/I_ax to the 1 of translation, are left out) */
+    for (int i = 0; i < w->b.n; i++) {
+        const int m = w->b.mat[i];
+        present[m] = 1;
+        if (!w->b.fixed[i] && w->b.mass[i] < mmin[m]) mmin[m] = w->b.mass[i];
+    }
+    for (int t = 0; t < w->w.n; t++)
+        present[w->w.mat[t]] = 1;
+    /* the pair's m* taken as two of a's smallest spheres': a bound for any partner of a */
+    double dt = INFINITY;
+    int best_a = 0, best_b = 0;
+    for (int a = 0; a < SD_MATERIALS_MAX; a++)
+        for (int b = 0; b < SD_MATERIALS_MAX && isfinite(mmin[a]); b++) {
+            if (!present[b]) continue;
+            const sd_contact_def *c = sd_mat_contact(w, a, b);
+            const double d = sd_stable_dt_max(c->k_n, c->k_s, mmin[a]);
+            if (d < dt) {
+                dt = d;
+                best_a = a;
+                best_b = b;
+            }
+        }
+    if (pa) *pa = best_a;
+    if (pb) *pb = best_b;
+    return dt;
+}
+
 sd_status sd_world_check(const sd_world *w)
 {
     if (!w->def.check_dt) return SD_OK;
-    double mmin = INFINITY;
-    /* (by the mass alone, a log as a sphere: the modes of a contact at a log's end rim, where
-     * rotation adds hl² m/I_tr and r² m/I_ax to the 1 of translation, are left out) */
-    for (int i = 0; i < w->b.n; i++)
-        if (!w->b.fixed[i] && w->b.mass[i] < mmin) mmin = w->b.mass[i];
-    return w->def.dt > sd_stable_dt_max(w->def.contact.k_n, w->def.contact.k_s, mmin) ? SD_ERR_UNSTABLE : SD_OK;
+    return w->def.dt > sd_world_stable_dt(w, NULL, NULL) ? SD_ERR_UNSTABLE : SD_OK;
 }
 
 static sd_status health(const sd_world *w)
@@ -416,6 +499,7 @@ sd_status sd_world_body_at(const sd_world *w, int i, sd_body_state *o)
     o->radius = b->radius[i];
     o->length = 2.0 * b->hl[i];
     o->mass = b->mass[i];
+    o->material = b->mat[i];
     return SD_OK;
 }
 
@@ -470,14 +554,14 @@ double sd_world_potential_energy(const sd_world *w)
  * tangential springs (½ |P_s|² / K_s). Recomputed from geometry, so exact for the state.
  * Triangle contacts go through the same mesh rule as the force pass, so that a sphere over a
  * shared edge counts one spring, not two. */
-static double manifold_energy(const sd_world *w, const sd_pair *p, const sd_hist *hist, const sd_manifold *m)
+static double manifold_energy(const sd_contact_def *c, const sd_pair *p, const sd_hist *hist, const sd_manifold *m)
 {
     double e = 0.0;
     for (int k2 = 0; k2 < m->n; k2++)
-        e += 0.5 * w->def.contact.k_n * m->overlap[k2] * m->overlap[k2];
-    if (w->def.contact.k_s > 0.0)
+        e += 0.5 * c->k_n * m->overlap[k2] * m->overlap[k2];
+    if (c->k_s > 0.0)
         for (int s = 0; s < p->cap; s++)
-            if (hist[p->off + s].feature >= 0) e += 0.5 * v3_norm2(hist[p->off + s].shear) / w->def.contact.k_s;
+            if (hist[p->off + s].feature >= 0) e += 0.5 * v3_norm2(hist[p->off + s].shear) / c->k_s;
     return e;
 }
 
@@ -498,7 +582,7 @@ double sd_world_spring_energy(const sd_world *w)
             sd_cyl c1 = sd_body_cyl(b, p->a), c2 = sd_body_cyl(b, p->b);
             sd_geom_cyl_cyl(&c1, &c2, &m);
         }
-        e += manifold_energy(w, p, w->bb.hist, &m);
+        e += manifold_energy(sd_mat_contact(w, b->mat[p->a], b->mat[p->b]), p, w->bb.hist, &m);
     }
     if (w->bt.n == 0) return e;
     sd_manifold *man = malloc((size_t)w->bt.n * sizeof(*man));
@@ -521,7 +605,9 @@ double sd_world_spring_energy(const sd_world *w)
         }
         if (multi > 1) sd_contact_mesh_dedup(&w->w, w->bt.p, man, from, to);
         for (int k = from; k < to; k++)
-            if (w->w.active[w->bt.p[k].b]) e += manifold_energy(w, &w->bt.p[k], w->bt.hist, &man[k]);
+            if (w->w.active[w->bt.p[k].b])
+                e += manifold_energy(sd_mat_contact(w, b->mat[i], w->w.mat[w->bt.p[k].b]), &w->bt.p[k], w->bt.hist,
+                                     &man[k]);
     }
     free(man);
     return e;

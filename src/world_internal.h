@@ -18,6 +18,7 @@ typedef struct {
     int32_t *gid;
     uint8_t *shape; /* SD_SHAPE_* */
     uint8_t *fixed;
+    uint8_t *mat; /* material id (sd_world_set_pair_contact) */
     int32_t *tag;
     sd_vec3 *pos;
     sd_vec3 *vel;
@@ -44,6 +45,7 @@ typedef struct {
     sd_tri *tri;
     int32_t *group;
     uint8_t *active;
+    uint8_t *mat; /* material id */
     int32_t (*edge_id)[3]; /* welded global ids: shared edges and vertices get one id */
     int32_t (*vert_id)[3];
     int32_t (*edge_vert)[2]; /* per edge id: its two vertex ids (sized n_edges) */
@@ -227,13 +229,25 @@ sd_law sd_law_make(const sd_contact_def *d);
 typedef struct {
     double k_n, c_n, c_s, tan_phi, coh, mks_dt;
 } sd_lane_law;
+/* The law table's index of a contact between materials a and b. */
+static inline int sd_mat_pair(int a, int b) { return a * SD_MATERIALS_MAX + b; }
 /* What a step's stages read of the definition, made once a step (sd_law_ctx_ready): the time
- * step, the contact law's constants and their lane form. */
+ * step, the contact law's constants and their lane form; with several materials, each pair's. */
 typedef struct {
     double dt;
     sd_law law;
     sd_lane_law lane;
     long step; /* the step it was made for */
+    /* multi: a pair of materials has springs of its own other than def.contact's, so the
+     * contact pass takes each contact's law from laws / lanes at sd_mat_pair of its materials;
+     * 0: every contact has law and lane, and the pass never reads the table (no cost for one
+     * material). Remade when the pairs, def.contact or dt change (made: it was ever made). */
+    int multi, made;
+    long version;
+    double made_dt;
+    sd_contact_def made_base;
+    sd_law laws[SD_MATERIALS_MAX * SD_MATERIALS_MAX];
+    sd_lane_law lanes[SD_MATERIALS_MAX * SD_MATERIALS_MAX];
 } sd_step_ctx;
 /* contact_law.c: w->ctx for the coming step, made unless it already is */
 const sd_step_ctx *sd_law_ctx_ready(sd_world *w);
@@ -307,6 +321,10 @@ struct sd_world {
     int ext_any;         /* a body's external force was ever set non-zero (else the moves skip the
                           * store's zeros; a checkpoint's read sets it from the forces) */
     double ref_drift; /* the same bound as near_drift since the last rebuild (pos_ref) */
+    /* the springs of each pair of materials a, b: mat_pair[sd_mat_pair(a, b)] where mat_set is
+     * 1 there (set for both orders at once), else def.contact (sd_world_set_pair_contact) */
+    sd_contact_def mat_pair[SD_MATERIALS_MAX * SD_MATERIALS_MAX];
+    uint8_t mat_set[SD_MATERIALS_MAX * SD_MATERIALS_MAX];
     /* ---- how it runs, and scratch ---- */
     int nthreads;             /* this world's OpenMP threads (def.threads, or the runtime's default) */
     int simd;                 /* the SIMD level its kernels run at (SD_SIMD_*, resolved) */
@@ -314,6 +332,7 @@ struct sd_world {
     int sw[SD_SWITCH_COUNT];  /* sd_world_switch */
     const sd_contact_kernels *kern; /* the contact pass's SIMD kernels at this level (contact_internal.h) */
     sd_step_ctx ctx;                /* (sd_law_ctx_ready) */
+    long mat_version; /* changed by every sd_world_set_pair_contact (the step's law table follows it) */
     sd_ext_force_fn ext_fn; /* NULL: ext_force applies (set by the driver, not saved) */
     void *ext_ctx;
     sd_owned *owned;  /* NULL until a parallel pass needs it */
@@ -517,6 +536,12 @@ void sd_near_springs_home(sd_world *w);
  * cylinders) are summed. */
 /* Whether body i is of the bed (a fixed sphere). */
 static inline int sd_body_is_bed(const sd_bodies *b, int i) { return b->fixed[i] && b->shape[i] == SD_SHAPE_SPHERE; }
+/* The springs of a contact between materials a and b (sd_world_set_pair_contact). */
+static inline const sd_contact_def *sd_mat_contact(const sd_world *w, int a, int b)
+{
+    const int k = sd_mat_pair(a, b);
+    return w->mat_set[k] ? &w->mat_pair[k] : &w->def.contact;
+}
 static inline int sd_body_is_ghost(const sd_world *w, int i)
 {
     const int g = w->b.gid[i];

@@ -175,7 +175,13 @@ for pat in "clear gaps across \(wall, between columns, wall\): 39.0, 50.0, 50.0,
            "spheres class 2: d = 10.0 mm, 3010, solid volume 1.576 L"; do
   if grep -Eq -- "$pat" "$tmp/out"; then pass=$((pass + 1)); else echo "FAIL check report: no '$pat'"; cat "$tmp/out"; fail=$((fail + 1)); fi
 done
+expect check-one-material 0 "materials: one: every contact K_n = 10000 N/m, K_s = 4000 N/m, h = 0.2, tan phi = 0.404, c = 0 N" check "$src_dir/examples/shibuya2009.yaml"
 expect check-no-beam 0 "no intermediate beam: bed to the top beam 118.0 mm = 5.90 d_max" check "$src_dir/examples/shibuya2009.yaml" --set dam.l_v=0
+# materials: what uses each, and each pair's springs (* given in contact_pairs, the rest contact.*'s)
+expect check-materials 0 "materials: default \(unused\), rock \(spheres, roughness\), wood \(logs\), steel \(dam, gate\), concrete \(bed, walls\)" check "$src_dir/examples/flume_materials.yaml"
+for pat in " rock-rock +10000 +4000 +0.2 +0.404 +0$" "\*rock-steel +20000 +8000 +0.2 +0.3 +0$" "\*wood-steel +10000 +4000 +0.3 +0.25 +0$"; do
+  if grep -Eq -- "$pat" "$tmp/out"; then pass=$((pass + 1)); else echo "FAIL check materials: no '$pat'"; cat "$tmp/out"; fail=$((fail + 1)); fi
+done
 # the dam of examples/shibuya2009-members.yaml: 5 columns at 44 + 53 k mm (clear gaps (300 -
 # 5 x 18)/6 = 35 mm), beams by their gaps 30 and 40 mm (axes 30 + 9 = 39, 30 + 18 + 40 + 9 = 97
 # mm) under the top beam (127 mm), a strut of sqrt(160^2 + 110^2) = 194.2 mm at atan(110/160) =

@@ -4,6 +4,7 @@
 # estimate, sweep files, over-long files (docs/reliability.md).
 set -u
 bin="$1"
+src_dir="$(cd "$(dirname "$0")/.." && pwd)"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -195,6 +196,54 @@ expect sweep-runs 2 "runs.yaml:2:7: runs: expected an integer from 1 to 10000" s
 printf 'base: base.yaml\nset: {solver.duration: 1.0e+6}\n' > "$tmp/long.yaml"
 expect sweep-estimate 2 "long.yaml: case 0 is too large" sweep "$tmp/long.yaml" --dry-run -o "$tmp/long-out"
 expect sweep-estimate-raised 0 "1 cases x 1 seeds = 1 runs" sweep "$tmp/long.yaml" --dry-run -o "$tmp/long-out" --max-steps 1e12
+
+# materials and the springs of pairs of them (docs/scenario.md, "Materials")
+y mat 'solver: {dt: 1.0e-5, duration: 0.001}
+materials: [rock, wood, {name: steel}]
+contact_pairs:
+  - {pair: [wood, stel], tan_phi: 0.25}
+  - {pair: [rock, steel], k_n: -5}
+  - {pair: [rock, wood], tan_ph: 0.3}
+  - {pair: [rock]}
+  - {k_n: 5}
+logs: {material: wod}
+elements:
+  - {type: sphere, radius: 0.005, position: [0, 0, 0.1], material: granite}'
+expect mat-pair-unknown 2 "mat.yaml:4:19: contact_pairs.pair: unknown material 'stel' \(did you mean 'steel'\?\)" check "$tmp/mat.yaml"
+expect mat-pair-negative 2 "mat.yaml:5:32: contact_pairs.k_n: must be > 0 and <= inf \(N/m\)" check "$tmp/mat.yaml"
+expect mat-pair-key 2 "mat.yaml:6:26: contact_pairs: unknown key 'tan_ph' \(did you mean 'tan_phi'\?\)" check "$tmp/mat.yaml"
+expect mat-pair-one 2 "mat.yaml:7:12: contact_pairs.pair: expected two material names \[a, b\]" check "$tmp/mat.yaml"
+expect mat-pair-none 2 "mat.yaml:8:5: contact_pairs: each entry needs pair: \[material, material\]" check "$tmp/mat.yaml"
+expect mat-key-unknown 2 "mat.yaml:9:18: logs.material: unknown material 'wod' \(did you mean 'wood'\?\)" check "$tmp/mat.yaml"
+expect mat-element 2 "mat.yaml:11:68: elements.material: unknown material 'granite' \(the materials: default, rock, wood, steel; declare it under materials:\)" check "$tmp/mat.yaml"
+expect mat-run 2 "mat.yaml:4:19: contact_pairs.pair: unknown material 'stel'" run "$tmp/mat.yaml" -o "$tmp/mat-out"
+if [ -e "$tmp/mat-out" ]; then echo "FAIL mat-run: left $tmp/mat-out"; fail=$((fail + 1)); else pass=$((pass + 1)); fi
+y matdup 'solver: {dt: 1.0e-5, duration: 0.001}
+materials:
+  - rock
+  - default
+  - rock
+  - {name: wood, k_n: 3}
+  - 9lives
+contact_pairs:
+  - {pair: [rock, wood], tan_phi: 0.3}
+  - {pair: [wood, rock], k_n: 2.0e4}'
+expect mat-default 2 "matdup.yaml:4:5: materials: 'default' is the material of everything given none" check "$tmp/matdup.yaml"
+expect mat-twice 2 "matdup.yaml:5:5: materials: 'rock' is declared twice" check "$tmp/matdup.yaml"
+expect mat-key 2 "matdup.yaml:6:18: materials: unknown key 'k_n'" check "$tmp/matdup.yaml"
+expect mat-name 2 "matdup.yaml:7:5: materials: '9lives' is not a name" check "$tmp/matdup.yaml"
+expect mat-pair-twice 2 "matdup.yaml:10:12: contact_pairs: the pair \[wood, rock\] is given twice \(first at line 9\)" check "$tmp/matdup.yaml"
+y matdt 'solver: {duration: 0.001}
+materials: [rock, steel]
+contact_pairs:
+  - {pair: [rock, steel], k_n: 1.0e7}
+elements:
+  - {type: sphere, radius: 0.005, position: [0, 0, 0.1], material: rock}
+  - {type: cylinder, radius: 0.009, length: 0.1, position: [0, 0, 0], fixed: true, material: steel}'
+expect mat-dt 2 "matdt.yaml:4:5: solver.dt = 1e-05 is unstable: it must be at most 2.769.*e-06 s .*k_n = 1e\+07 N/m, k_s = 4000 N/m of the pair rock-steel" check "$tmp/matdt.yaml"
+expect mat-dt-ok 0 "ok \(2 elements" check "$tmp/matdt.yaml" --set solver.dt=2.5e-6
+expect mat-set 2 "--set:1:15: logs.material: unknown material 'wod' \(did you mean 'wood'\?\)" check "$tmp/mat.yaml" --set logs.material=wod
+expect mat-classes 2 "spheres.materials has 2 names and the spheres 4 size classes: give one material, or one per class" check "$src_dir/examples/flume_materials.yaml" --set 'spheres.materials=[rock, wood]' --set 'spheres.diameters=[0.02, 0.015, 0.01, 0.005]' --set 'spheres.counts=[1, 1, 1, 1]'
 
 # files are read with a limit: 4 MiB, 500,000 values
 python3 -c "print('#' + 'x' * (4 * 1024 * 1024))" > "$tmp/big.yaml"

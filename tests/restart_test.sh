@@ -11,7 +11,10 @@
 #  4. full disk (a 400 KiB tmpfs, as root; skipped otherwise): a clear error, exit 1, no
 #     half-written summary, and the last good checkpoint restarts to the uninterrupted hash;
 #  5. a run owns its output directory: another run's is refused (exit 2, nothing touched)
-#     unless --overwrite, which clears the old run's files.
+#     unless --overwrite, which clears the old run's files;
+#  6. materials (examples/flume_materials.yaml): a checkpoint keeps the ids and the pairs'
+#     springs, and the restart ends on the uninterrupted hash; a scenario that declares other
+#     materials is refused, naming the checkpoint's.
 set -u
 bin="$1"
 src_dir="$(cd "$(dirname "$0")/.." && pwd)"
@@ -175,6 +178,36 @@ mkdir "$tmp/other" && echo x > "$tmp/other/data.txt"
 "$bin" run "$scen" -o "$tmp/wrong" "${sets[@]}" --set dam.l_v=0.03 --restart "$(newest "$tmp/ref")" > "$tmp/wrong.log" 2>&1
 [ $? -eq 2 ] && grep -q "only solver.threads and output.checkpoint_interval may differ" "$tmp/wrong.log" && [ ! -e "$tmp/wrong" ] \
   && ok || { bad "periodic checkpoint with another scenario"; cat "$tmp/wrong.log"; }
+
+# 6. materials: the restart from the older periodic checkpoint ends where the run did
+ms="$src_dir/examples/flume_materials.yaml"
+"$bin" run "$ms" -o "$tmp/mref" "${sets[@]}" --set output.checkpoint_interval=0.05 > "$tmp/mref.log" 2>&1
+code=$?
+mref=$(hash "$tmp/mref/summary.json")
+ck=$(ls "$tmp/mref"/checkpoint_*.ckpt 2>/dev/null | sort | head -n 1)
+"$bin" run "$ms" -o "$tmp/mres" "${sets[@]}" --restart "$ck" > "$tmp/mres.log" 2>&1
+code2=$?
+echo "materials: hash $mref, restarted from $(basename "$ck"): $(hash "$tmp/mres/summary.json")"
+if [ "$code" -eq 0 ] && [ "$code2" -eq 0 ] && [ -n "$mref" ] && [ "$mref" != "$ref" ] \
+   && [ "$(hash "$tmp/mres/summary.json")" = "$mref" ]; then ok
+else bad "materials restart: exit $code/$code2"; cat "$tmp/mref.log" "$tmp/mres.log"; fi
+# the summary lists the materials, what uses each, and each pair's springs
+/usr/bin/python3 - "$tmp/mref/summary.json" <<'PY' && ok || bad "materials in summary.json"
+import json, sys
+d = json.load(open(sys.argv[1]))
+names = [m["name"] for m in d["materials"]]
+pairs = {tuple(p["pair"]): p for p in d["contact_pairs"]}
+rs, rr = pairs[("rock", "steel")], pairs[("rock", "rock")]
+assert names == ["default", "rock", "wood", "steel", "concrete"], names
+assert d["materials"][3]["used_by"] == ["dam", "gate"], d["materials"][3]
+assert (rs["k_n"], rs["k_s"], rs["tan_phi"], rs["damping"], rs["from"]) == (2e4, 8e3, 0.3, 0.2, "contact_pairs"), rs
+assert (rr["k_n"], rr["tan_phi"], rr["from"], rr["can_meet"]) == (1e4, 0.404, "contact", True), rr
+assert d["parameters"]["dam.material"] == "steel" and d["parameters"]["spheres.materials"] == ["rock"]
+PY
+sed 's/^materials: \[rock, wood, steel, concrete\]/materials: [rock, wood, steel, concrete, mud]/' "$ms" > "$tmp/mud.yaml"
+"$bin" run "$tmp/mud.yaml" -o "$tmp/mud" "${sets[@]}" --restart "$ck" > "$tmp/mud.log" 2>&1
+[ $? -eq 2 ] && grep -q "holds the materials (default, rock, wood, steel, concrete); .*mud.yaml declares others" "$tmp/mud.log" \
+  && [ ! -e "$tmp/mud" ] && ok || { bad "a checkpoint with other materials"; cat "$tmp/mud.log"; }
 
 echo "restart: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

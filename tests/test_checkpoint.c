@@ -487,10 +487,14 @@ static void test_refused(void)
     write_all(bad, data, n);
     check_refused(bad, "wrong magic", "magic");
     memcpy(data, "SABODEMC", 8);
-    uint32_t v = 2;
+    uint32_t v = SD_CHECKPOINT_VERSION + 1;
     memcpy(data + 8, &v, 4);
     write_all(bad, data, n);
     check_refused(bad, "newer version", "version");
+    v = SD_CHECKPOINT_VERSION - 1; /* (version 1: before the materials) */
+    memcpy(data + 8, &v, 4);
+    write_all(bad, data, n);
+    check_refused(bad, "older version", "version");
     v = SD_CHECKPOINT_VERSION;
     memcpy(data + 8, &v, 4);
     write_all(bad, data, n);

@@ -48,6 +48,14 @@ for seed in 2 5; do
   "$bin" run "$here/ckpt_scenario.yaml" --seed $seed --checkpoint-at flow_end -o "$tmp/s$seed" >/dev/null 2>&1
   cp "$tmp/s$seed/flow_end.ckpt" "$c/checkpoint/tiny_flume_seed$seed.ckpt"
 done
+# and one with materials (a MATL section, material ids on the bodies and triangles)
+{ sed -e 's/^spheres: {/spheres: {materials: [rock], /' -e 's/^logs: {/logs: {material: wood, /' \
+      -e 's/^dam: {/dam: {material: steel, /' -e 's/^flume: {on: true,/flume: {on: true, gate_material: steel,/' \
+      "$here/ckpt_scenario.yaml"
+  printf 'materials: [rock, wood, steel]\ncontact_pairs:\n  - {pair: [rock, steel], tan_phi: 0.3, k_n: 2.0e4}\n'
+  printf '  - {pair: [wood, default], damping: 0.3}\n'; } > "$tmp/materials.yaml"
+"$bin" run "$tmp/materials.yaml" --checkpoint-at flow_end -o "$tmp/mat" >/dev/null 2>&1
+cp "$tmp/mat/flow_end.ckpt" "$c/checkpoint/tiny_flume_materials.ckpt"
 # sweeps: the examples' matrices on the harness's base.yaml, and a few shapes
 for f in "$root"/examples/*.yaml; do
   grep -q '^base:' "$f" && sed 's/^base: .*/base: base.yaml/' "$f" > "$c/sweep/$(basename "$f")"
